@@ -1,0 +1,15 @@
+# Writes OUT: a C++ file holding every OpenCL source in KERNELS as a byte array,
+# with a lookup table from kernel file stem ("em" for kernels/em.cl) to source.
+set(body "// Generated from kernels/*.cl at build time. Do not edit.\n#include <cstddef>\n#include <string>\n#include <utility>\n#include <vector>\nnamespace bsdfmix::embedded {\n")
+set(table "")
+foreach(path IN LISTS KERNELS)
+  get_filename_component(stem ${path} NAME_WE)
+  string(MAKE_C_IDENTIFIER ${stem} ident)
+  file(READ ${path} hex HEX)
+  string(REGEX REPLACE "([0-9a-f][0-9a-f])" "0x\\1," bytes "${hex}")
+  string(APPEND body "static const char k_${ident}[] = {${bytes}0x00};\n")
+  string(APPEND table "  {\"${stem}\", std::string(k_${ident}, sizeof(k_${ident}) - 1)},\n")
+endforeach()
+string(APPEND body "const std::vector<std::pair<std::string, std::string>>& kernel_sources() {\n  static const std::vector<std::pair<std::string, std::string>> sources = {\n${table}  };\n  return sources;\n}\n}  // namespace bsdfmix::embedded\n")
+file(WRITE ${OUT}.tmp "${body}")
+file(RENAME ${OUT}.tmp ${OUT})

@@ -1,0 +1,29 @@
+// The subcommands of the bsdfmix CLI; each file host/cli/cmd_<name>.cpp adds one.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace bsdfmix::cli {
+
+// Options every subcommand shares.
+struct Common {
+  std::string device;  // --device: index, name substring, cpu/gpu, all
+  bool quiet = false;  // --quiet: no progress or log lines
+};
+
+void add_devices(CLI::App& app, Common& common);
+void add_inspect(CLI::App& app, Common& common);
+void add_generate(CLI::App& app, Common& common);
+void add_import(CLI::App& app, Common& common);
+void add_fit(CLI::App& app, Common& common);
+void add_sample(CLI::App& app, Common& common);
+void add_converge(CLI::App& app, Common& common);
+void add_run(CLI::App& app, Common& common);
+void add_bench(CLI::App& app, Common& common);
+
+// Adds --device and --quiet to a subcommand.
+void add_common_options(CLI::App& sub, Common& common);
+
+}  // namespace bsdfmix::cli

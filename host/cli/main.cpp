@@ -1,0 +1,60 @@
+// bsdfmix: the command line. Only this file knows about exit codes: every error
+// inside is a typed exception, printed here as one line.
+#include <cstdio>
+#include <exception>
+
+#include "cli/commands.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "device/opencl.hpp"
+
+namespace bsdfmix::cli {
+
+void add_common_options(CLI::App& sub, Common& common) {
+  sub.add_option("--device", common.device,
+                 "OpenCL device(s): index, name substring, cpu, gpu or all, comma-separated "
+                 "(default: $BSDFMIX_DEVICE, else the config's, else 0)");
+  sub.add_flag("-q,--quiet", common.quiet, "no progress or log lines on stderr");
+}
+
+}  // namespace bsdfmix::cli
+
+int main(int argc, char** argv) {
+  using namespace bsdfmix;
+  CLI::App app{"bsdfmix " BSDFMIX_VERSION
+               ": compress tabulated appearance functions into per-slice 2D Gaussian mixtures fitted by "
+               "weighted EM on OpenCL devices, and importance-sample them"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "bsdfmix " BSDFMIX_VERSION);
+  cli::Common common;
+  cli::add_devices(app, common);
+  cli::add_inspect(app, common);
+  cli::add_generate(app, common);
+  cli::add_import(app, common);
+  cli::add_fit(app, common);
+  cli::add_sample(app, common);
+  cli::add_converge(app, common);
+  cli::add_run(app, common);
+  cli::add_bench(app, common);
+  try {
+    app.parse(argc, argv);
+    return 0;
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "bsdfmix: error: %s (see --help)\n", e.what());
+    return 2;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "bsdfmix: error: %s\n", e.what());
+    return 1;
+  } catch (const cl::Error& e) {
+    std::fprintf(stderr, "bsdfmix: error: OpenCL call %s failed with %s\n", e.what(), cl_error_name(e.err()));
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "bsdfmix: error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bsdfmix: internal error: %s\n", e.what());
+    return 3;
+  }
+}

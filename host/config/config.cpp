@@ -1,0 +1,95 @@
+// Loading a config: parse, reject unknown keys, merge the defaults under it, parse each section.
+#include "config/config.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace bsdfmix {
+
+namespace embedded {
+const std::string& config_defaults();
+}
+
+const std::string& default_config_text() { return embedded::config_defaults(); }
+
+namespace {
+
+YAML::Node parse_yaml(const std::string& text, const std::string& name) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    std::string msg = e.msg;
+    throw ConfigError(name + ": invalid YAML at line " + std::to_string(e.mark.line + 1) + ", column " +
+                      std::to_string(e.mark.column + 1) + ": " + msg);
+  }
+}
+
+std::set<std::string> keys_of(const YAML::Node& map) {
+  std::set<std::string> k;
+  for (const auto& kv : map) k.insert(kv.first.Scalar());
+  return k;
+}
+
+// The user's section with every missing key taken from the defaults.
+YAML::Node merged(const YAML::Node& defaults, const YAML::Node& user) {
+  YAML::Node out = YAML::Clone(defaults);
+  if (user && user.IsMap())
+    for (const auto& kv : user) out[kv.first.Scalar()] = kv.second;
+  return out;
+}
+
+const char* kSections[] = {"generate", "import", "fit", "converge", "charts"};
+
+}  // namespace
+
+Config parse_config(const std::string& text, const std::string& name) {
+  const YAML::Node defaults = parse_yaml(default_config_text(), "configs/defaults.yaml");
+  const YAML::Node user = parse_yaml(text, name);
+  if (!user || user.IsNull()) throw ConfigError(name + ": the config is empty");
+  ConfigNode top(name, "", user);
+  top.reject_unknown(keys_of(defaults));
+
+  Config c;
+  c.file = name;
+  // Every section the user names is checked for unknown keys against its defaults.
+  for (const char* s : kSections) {
+    if (!user[s]) continue;
+    if (user[s].IsNull()) {
+      continue;  // `fit:` alone: the section with all defaults
+    }
+    ConfigNode section = top.child(s);
+    section.reject_unknown(keys_of(defaults[s]));
+  }
+  YAML::Node all = YAML::Clone(user);
+  all["device"] = user["device"] && !user["device"].IsNull() ? user["device"] : defaults["device"];
+  ConfigNode root(name, "", all);
+  c.device = root.str("device");
+  if (!root.has("table")) root.fail("table", "missing: name the table file (HDF5)");
+  c.table = root.str("table");
+
+  auto section = [&](const char* s) { return ConfigNode(name, s, merged(defaults[s], user[s])); };
+  if (user["generate"]) c.generate = parse_generate(section("generate"));
+  if (user["import"]) c.import = parse_import(section("import"));
+  if (user["fit"]) c.fit = parse_fit(section("fit"));
+  if (user["converge"]) c.converge = parse_converge(section("converge"));
+  if (user["charts"]) c.charts = parse_charts(section("charts"));
+  if (c.generate && c.import)
+    throw ConfigError(name + ": generate and import both make the table; keep one");
+  if (!c.generate && !c.import && !std::filesystem::exists(c.table))
+    root.fail("table", "file '" + c.table + "' not found (and no generate or import section makes it)");
+  return c;
+}
+
+Config load_config(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw ConfigError(path + ": cannot read config file (missing or not readable)");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return parse_config(ss.str(), path);
+}
+
+}  // namespace bsdfmix

@@ -1,0 +1,81 @@
+// The YAML config of `bsdfmix fit|converge|run`: one struct and one parser per section.
+// Defaults live in configs/defaults.yaml (embedded), merged under the user's config;
+// keys not in the defaults are rejected with their full path.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "config/node.hpp"
+
+namespace bsdfmix {
+
+struct GenerateSection {  // tabulate the fiber model into `table`
+  std::string model, preset;
+  int theta_o = 0, theta_i = 0, phi_i = 0, phi_o = 1;
+  bool symmetry = true;
+  double noise = 0;
+  std::uint64_t seed = 1;
+  bool force = false;
+};
+
+struct ImportSection {  // tabulate an RGL BRDF into `table`
+  std::string rgl;
+  int theta_o = 0, theta_i = 0, phi_i = 0;
+  bool force = false;
+};
+
+struct FitSection {
+  std::string output, report, search_report;
+  int k_min = 1, k_max = 32;
+  std::uint64_t seed = 1;
+  int restarts = 3, final_restarts = 6, iterations = 100, final_iterations = 300;
+  double tolerance = 1e-6;
+  int batch = 0;
+};
+
+struct ConvergeSection {
+  YAML::Node scene;        // null: constant L_i = 1; a mapping: inline scene
+  std::string scene_file;  // set when the scene came from a file
+  std::vector<double> theta_o, phi_o;
+  std::int64_t samples_max = 65536;
+  int runs = 64;
+  std::uint64_t seed = 1;
+  std::string csv;
+};
+
+struct ChartsSection {
+  std::string dir;
+};
+
+struct Config {
+  std::string file;    // the config's path
+  std::string device;  // device selector ("" = environment or 0)
+  std::string table;
+  std::optional<GenerateSection> generate;
+  std::optional<ImportSection> import;
+  std::optional<FitSection> fit;
+  std::optional<ConvergeSection> converge;
+  std::optional<ChartsSection> charts;
+};
+
+// Reads, merges with the defaults and validates a config file; throws ConfigError.
+Config load_config(const std::string& path);
+// The same from YAML text (`name` stands for the file in messages).
+Config parse_config(const std::string& text, const std::string& name);
+
+// The defaults document (configs/defaults.yaml as embedded at build time).
+const std::string& default_config_text();
+
+// One parser per section; each takes the merged section node.
+GenerateSection parse_generate(const ConfigNode& n);
+ImportSection parse_import(const ConfigNode& n);
+FitSection parse_fit(const ConfigNode& n);
+ConvergeSection parse_converge(const ConfigNode& n);
+ChartsSection parse_charts(const ConfigNode& n);
+
+}  // namespace bsdfmix

@@ -1,0 +1,24 @@
+// The `fit` section: the Gaussian-count search and the final fits.
+#include "config/config.hpp"
+
+namespace bsdfmix {
+
+FitSection parse_fit(const ConfigNode& n) {
+  FitSection f;
+  f.output = n.str("output");
+  f.report = n.str("report");
+  f.search_report = n.str("search_report");
+  f.k_min = static_cast<int>(n.integer("k_min", 1, 256));
+  f.k_max = static_cast<int>(n.integer("k_max", 1, 256));
+  if (f.k_max < f.k_min) n.fail("k_max", std::to_string(f.k_max) + " is below k_min " + std::to_string(f.k_min));
+  f.seed = static_cast<std::uint64_t>(n.integer("seed", 0, INT64_MAX));
+  f.restarts = static_cast<int>(n.integer("restarts", 1, 1000));
+  f.final_restarts = static_cast<int>(n.integer("final_restarts", 1, 1000));
+  f.iterations = static_cast<int>(n.integer("iterations", 1, 1000000));
+  f.final_iterations = static_cast<int>(n.integer("final_iterations", 1, 1000000));
+  f.tolerance = n.number("tolerance", 0.0, 1.0);
+  f.batch = static_cast<int>(n.integer("batch", 0, 1000000));
+  return f;
+}
+
+}  // namespace bsdfmix

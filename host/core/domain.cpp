@@ -1,0 +1,57 @@
+// Angular domains, cell grids, Jacobians and integrand weights.
+#include "core/domain.hpp"
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace bsdfmix {
+
+std::string domain_name(Domain d) { return d == Domain::Fiber ? "fiber" : "hemisphere"; }
+
+Domain parse_domain(const std::string& name, const std::string& where) {
+  if (name == "fiber") return Domain::Fiber;
+  if (name == "hemisphere") return Domain::Hemisphere;
+  throw InputError(where + ": unknown domain '" + name + "' (expected fiber or hemisphere)");
+}
+
+double theta_min(Domain d) { return d == Domain::Fiber ? -kPi / 2 : 0.0; }
+double theta_max(Domain) { return kPi / 2; }
+
+double jacobian(Domain d, double theta) {
+  return d == Domain::Fiber ? std::cos(theta) : std::sin(theta);
+}
+
+std::vector<double> uniform_centers(double lo, double hi, std::size_t n) {
+  std::vector<double> c(n);
+  const double step = (hi - lo) / static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i) c[i] = lo + (static_cast<double>(i) + 0.5) * step;
+  return c;
+}
+
+double axis_step(const std::vector<double>& centers) {
+  if (centers.size() < 2) return 2 * kPi;
+  return (centers.back() - centers.front()) / static_cast<double>(centers.size() - 1);
+}
+
+std::vector<double> integrand_weights(Domain d, const std::vector<double>& theta_i,
+                                      const std::vector<double>& phi_i, const float* f) {
+  const std::size_t nt = theta_i.size(), np = phi_i.size();
+  const double area = axis_step(theta_i) * axis_step(phi_i);
+  std::vector<double> w(nt * np);
+  for (std::size_t t = 0; t < nt; ++t) {
+    double g = jacobian(d, theta_i[t]) * area;
+    if (d == Domain::Hemisphere) g *= std::cos(theta_i[t]);
+    for (std::size_t p = 0; p < np; ++p) w[t * np + p] = static_cast<double>(f[t * np + p]) * g;
+  }
+  return w;
+}
+
+double wrap_phi(double phi) {
+  double r = std::fmod(phi + kPi, 2 * kPi);
+  if (r < 0) r += 2 * kPi;
+  r -= kPi;
+  return r >= kPi ? -kPi : r;
+}
+
+}  // namespace bsdfmix

@@ -1,0 +1,40 @@
+// Angular domains, cell grids, Jacobians and integrand weights (DESIGN.md, "Angular conventions").
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace bsdfmix {
+
+constexpr double kPi = 3.14159265358979323846;
+
+enum class Domain { Fiber, Hemisphere };
+
+// "fiber" / "hemisphere"; parse_domain throws InputError naming `where` on anything else.
+std::string domain_name(Domain d);
+Domain parse_domain(const std::string& name, const std::string& where);
+
+// The theta range of a domain: fiber [-pi/2, pi/2], hemisphere [0, pi/2].
+double theta_min(Domain d);
+double theta_max(Domain d);
+
+// d(omega) = J(theta) dtheta dphi: cos(theta) for fiber, sin(theta) for hemisphere.
+double jacobian(Domain d, double theta);
+
+// n cell centers splitting [lo, hi] evenly: lo + (i + 1/2) (hi - lo) / n.
+std::vector<double> uniform_centers(double lo, double hi, std::size_t n);
+
+// Spacing of a uniform axis of centers (2 pi for a single phi_o center).
+double axis_step(const std::vector<double>& centers);
+
+// The integrand weight of each cell of one omega_o slice (row-major [theta_i][phi_i]):
+// f * cos(theta_i) [hemisphere only] * J(theta_i) * dtheta * dphi. Sum = the slice's
+// integral of f over the sphere/hemisphere with L_i = 1.
+std::vector<double> integrand_weights(Domain d, const std::vector<double>& theta_i,
+                                      const std::vector<double>& phi_i, const float* f);
+
+// Wraps phi into [-pi, pi).
+double wrap_phi(double phi);
+
+}  // namespace bsdfmix

@@ -1,0 +1,35 @@
+// Progress of long work on stderr: a live line with rate and ETA on a terminal,
+// periodic plain log lines otherwise (so CI logs stay readable).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <mutex>
+#include <string>
+
+namespace bsdfmix {
+
+class Progress {
+ public:
+  // `what` names the work ("fit silk.h5"), `unit` the items counted ("slices").
+  Progress(std::string what, std::uint64_t total, std::string unit);
+  ~Progress();
+  void advance(std::uint64_t n = 1);  // thread-safe
+  void finish();                      // prints the final line once
+
+  // Off: nothing printed (tests, --quiet). Default: on.
+  static void set_enabled(bool on);
+
+ private:
+  void print(bool final_line);
+  std::string what_, unit_;
+  std::uint64_t total_, done_ = 0;
+  std::chrono::steady_clock::time_point start_, last_print_;
+  bool tty_, finished_ = false;
+  std::mutex mutex_;
+};
+
+// One log line on stderr, prefixed "bsdfmix: ", unless logging is off.
+void log_line(const std::string& text);
+
+}  // namespace bsdfmix

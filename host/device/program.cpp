@@ -1,0 +1,111 @@
+// The one compile entry point for OpenCL programs, and checked launches.
+#include "device/program.hpp"
+
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace bsdfmix {
+
+namespace embedded {
+const std::vector<std::pair<std::string, std::string>>& kernel_sources();
+}
+
+std::string kernel_source(const std::string& name) {
+  if (const char* dir = std::getenv("BSDFMIX_KERNEL_DIR"); dir && *dir) {
+    const std::string path = std::string(dir) + "/" + name + ".cl";
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw DeviceError("BSDFMIX_KERNEL_DIR: cannot read kernel source " + path);
+    std::ostringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+  }
+  for (const auto& [stem, text] : embedded::kernel_sources())
+    if (stem == name) return text;
+  throw DeviceError("no embedded kernel named '" + name + "'");
+}
+
+std::string device_defines(const DeviceInfo& info) {
+  return std::string(" -DBSDFMIX_FP64=") + (info.fp64 ? "1" : "0") +
+         " -DBSDFMIX_CPU=" + (info.is_cpu() ? "1" : "0");
+}
+
+cl::Program build_program(const Device& device, const std::string& name, const std::string& options) {
+  using Key = std::tuple<cl_context, cl_device_id, std::string, std::string>;
+  static std::mutex mutex;
+  static std::map<Key, cl::Program> cache;
+  const std::string full = "-cl-std=CL1.2" + device_defines(device.info()) + " " + options;
+  const Key key{device.context()(), device.cl_device()(), name, full};
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = cache.find(key); it != cache.end()) return it->second;
+  }
+  const std::string source = kernel_source(name);
+  cl::Program program;
+  try {
+    program = cl::Program(device.context(), source);
+  } catch (const cl::Error& e) {
+    throw_device_error(e, "creating program " + name + ".cl");
+  }
+  try {
+    program.build(std::vector<cl::Device>{device.cl_device()}, full.c_str());
+  } catch (const cl::Error& e) {
+    std::string log;
+    try {
+      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device.cl_device());
+    } catch (const cl::Error&) {
+      log = "(no build log)";
+    }
+    while (!log.empty() && (log.back() == '\n' || log.back() == '\0')) log.pop_back();
+    throw DeviceError("building kernels/" + name + ".cl for " + device.info().label() +
+                      " with options '" + full + "' failed with " + cl_error_name(e.err()) +
+                      "; build log:\n" + log);
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  cache.emplace(key, program);
+  return program;
+}
+
+void launch(const cl::CommandQueue& queue, const cl::Kernel& kernel, const std::string& name,
+            const cl::NDRange& global, const cl::NDRange& local) {
+  try {
+    const cl::Device dev = queue.getInfo<CL_QUEUE_DEVICE>();
+    const std::size_t dims = global.dimensions();
+    if (local.dimensions() != 0) {
+      if (local.dimensions() != dims)
+        throw DeviceError("kernel " + name + ": local range has " + std::to_string(local.dimensions()) +
+                          " dimensions, global " + std::to_string(dims));
+      std::size_t local_total = 1;
+      for (std::size_t d = 0; d < dims; ++d) {
+        local_total *= local[d];
+        if (local[d] == 0 || global[d] % local[d] != 0)
+          throw DeviceError("kernel " + name + ": global size " + std::to_string(global[d]) +
+                            " in dimension " + std::to_string(d) + " is not a multiple of local size " +
+                            std::to_string(local[d]));
+      }
+      const std::size_t dev_max = dev.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+      const std::size_t ker_max = kernel.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev);
+      if (local_total > dev_max || local_total > ker_max)
+        throw DeviceError("kernel " + name + ": local size " + std::to_string(local_total) +
+                          " exceeds the maximum work-group size (device " + std::to_string(dev_max) +
+                          ", kernel " + std::to_string(ker_max) + ")");
+    }
+    const cl_ulong local_used = kernel.getWorkGroupInfo<CL_KERNEL_LOCAL_MEM_SIZE>(dev);
+    const cl_ulong local_avail = dev.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
+    if (local_used > local_avail)
+      throw DeviceError("kernel " + name + ": needs " + std::to_string(local_used) +
+                        " bytes of local memory, the device has " + std::to_string(local_avail));
+    queue.enqueueNDRangeKernel(kernel, cl::NullRange, global, local);
+  } catch (const cl::Error& e) {
+    throw_device_error(e, "launching kernel " + name);
+  }
+}
+
+}  // namespace bsdfmix

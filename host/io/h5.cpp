@@ -1,0 +1,211 @@
+// A thin RAII layer over the HDF5 C API.
+#include "io/h5.hpp"
+
+#include <mutex>
+
+#include "core/error.hpp"
+
+namespace bsdfmix::h5 {
+
+void Handle::reset() {
+  if (id_ < 0) return;
+  switch (H5Iget_type(id_)) {
+    case H5I_FILE: H5Fclose(id_); break;
+    case H5I_GROUP: H5Gclose(id_); break;
+    case H5I_DATASET: H5Dclose(id_); break;
+    case H5I_DATASPACE: H5Sclose(id_); break;
+    case H5I_DATATYPE: H5Tclose(id_); break;
+    case H5I_ATTR: H5Aclose(id_); break;
+    case H5I_GENPROP_LST: H5Pclose(id_); break;
+    default: break;
+  }
+  id_ = -1;
+}
+
+void quiet_errors() {
+  static std::once_flag once;
+  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+}
+
+bool is_hdf5(const std::string& path) {
+  quiet_errors();
+  return H5Fis_hdf5(path.c_str()) > 0;
+}
+
+Handle open_file(const std::string& path) {
+  quiet_errors();
+  FILE* probe = std::fopen(path.c_str(), "rb");
+  if (!probe) throw InputError(path + ": cannot open (no such file or not readable)");
+  std::fclose(probe);
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  Handle f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!f.valid()) throw InputError(path + ": cannot open as HDF5 (corrupt or truncated file)");
+  return f;
+}
+
+Handle create_file(const std::string& path) {
+  quiet_errors();
+  Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  if (!f.valid()) throw IoError(path + ": cannot create HDF5 file");
+  return f;
+}
+
+bool exists(hid_t loc, const std::string& name) {
+  return H5Lexists(loc, name.c_str(), H5P_DEFAULT) > 0;
+}
+
+Handle open_group(hid_t loc, const std::string& name, const std::string& where) {
+  if (!exists(loc, name)) throw InputError(where + ": missing group /" + name);
+  Handle g(H5Gopen2(loc, name.c_str(), H5P_DEFAULT));
+  if (!g.valid()) throw InputError(where + ": cannot open group /" + name);
+  return g;
+}
+
+Handle create_group(hid_t loc, const std::string& name, const std::string& where) {
+  Handle g(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  if (!g.valid()) throw IoError(where + ": cannot create group " + name);
+  return g;
+}
+
+Handle open_dataset(hid_t loc, const std::string& name, const std::string& where) {
+  if (!exists(loc, name)) throw InputError(where + ": missing dataset " + name);
+  Handle d(H5Dopen2(loc, name.c_str(), H5P_DEFAULT));
+  if (!d.valid()) throw InputError(where + ": cannot open dataset " + name);
+  return d;
+}
+
+std::vector<hsize_t> shape(hid_t dataset) {
+  Handle space(H5Dget_space(dataset));
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(rank > 0 ? rank : 0);
+  if (rank > 0) H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return dims;
+}
+
+namespace {
+
+template <class T>
+std::vector<T> read_all(hid_t loc, const std::string& name, const std::string& where, hid_t mem_type,
+                        H5T_class_t want, const char* want_name) {
+  Handle d = open_dataset(loc, name, where);
+  Handle type(H5Dget_type(d.get()));
+  const H5T_class_t cls = H5Tget_class(type.get());
+  if (cls != want)
+    throw InputError(where + ": dataset " + name + " has the wrong type (expected " + want_name + ")");
+  hsize_t n = 1;
+  for (hsize_t s : shape(d.get())) n *= s;
+  std::vector<T> out(n);
+  if (n > 0 && H5Dread(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
+    throw InputError(where + ": cannot read dataset " + name + " (corrupt or truncated file)");
+  return out;
+}
+
+void write_all(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims, hid_t file_type,
+               hid_t mem_type, const void* data, const std::string& where) {
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
+  Handle d(H5Dcreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  if (!d.valid()) throw IoError(where + ": cannot create dataset " + name);
+  hsize_t n = 1;
+  for (hsize_t s : dims) n *= s;
+  if (n > 0 && H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+    throw IoError(where + ": cannot write dataset " + name);
+}
+
+}  // namespace
+
+std::vector<double> read_doubles(hid_t loc, const std::string& name, const std::string& where) {
+  return read_all<double>(loc, name, where, H5T_NATIVE_DOUBLE, H5T_FLOAT, "floating point");
+}
+std::vector<float> read_floats(hid_t loc, const std::string& name, const std::string& where) {
+  return read_all<float>(loc, name, where, H5T_NATIVE_FLOAT, H5T_FLOAT, "floating point");
+}
+std::vector<std::int32_t> read_ints(hid_t loc, const std::string& name, const std::string& where) {
+  return read_all<std::int32_t>(loc, name, where, H5T_NATIVE_INT32, H5T_INTEGER, "integer");
+}
+
+void write_doubles(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                   const double* data, const std::string& where) {
+  write_all(loc, name, dims, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, data, where);
+}
+void write_floats(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                  const float* data, const std::string& where) {
+  write_all(loc, name, dims, H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, data, where);
+}
+void write_ints(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                const std::int32_t* data, const std::string& where) {
+  write_all(loc, name, dims, H5T_STD_I32LE, H5T_NATIVE_INT32, data, where);
+}
+
+bool has_attr(hid_t obj, const std::string& name) { return H5Aexists(obj, name.c_str()) > 0; }
+
+std::string read_string_attr(hid_t obj, const std::string& name, const std::string& where) {
+  if (!has_attr(obj, name)) throw InputError(where + ": missing attribute '" + name + "'");
+  Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT));
+  Handle type(H5Aget_type(a.get()));
+  if (H5Tget_class(type.get()) != H5T_STRING)
+    throw InputError(where + ": attribute '" + name + "' is not a string");
+  if (H5Tis_variable_str(type.get()) > 0) {
+    Handle mem(H5Tcopy(H5T_C_S1));
+    H5Tset_size(mem.get(), H5T_VARIABLE);
+    char* s = nullptr;
+    if (H5Aread(a.get(), mem.get(), &s) < 0 || !s)
+      throw InputError(where + ": cannot read attribute '" + name + "'");
+    std::string out(s);
+    H5free_memory(s);
+    return out;
+  }
+  const std::size_t size = H5Tget_size(type.get());
+  std::string out(size, '\0');
+  Handle mem(H5Tcopy(H5T_C_S1));
+  H5Tset_size(mem.get(), size);
+  if (H5Aread(a.get(), mem.get(), out.data()) < 0)
+    throw InputError(where + ": cannot read attribute '" + name + "'");
+  while (!out.empty() && out.back() == '\0') out.pop_back();
+  return out;
+}
+
+void write_string_attr(hid_t obj, const std::string& name, const std::string& value,
+                       const std::string& where) {
+  Handle type(H5Tcopy(H5T_C_S1));
+  H5Tset_size(type.get(), H5T_VARIABLE);
+  H5Tset_cset(type.get(), H5T_CSET_UTF8);
+  Handle space(H5Screate(H5S_SCALAR));
+  Handle a(H5Acreate2(obj, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT));
+  const char* p = value.c_str();
+  if (!a.valid() || H5Awrite(a.get(), type.get(), &p) < 0)
+    throw IoError(where + ": cannot write attribute '" + name + "'");
+}
+
+double read_double_attr(hid_t obj, const std::string& name, const std::string& where) {
+  if (!has_attr(obj, name)) throw InputError(where + ": missing attribute '" + name + "'");
+  Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT));
+  double v = 0;
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0)
+    throw InputError(where + ": attribute '" + name + "' is not a number");
+  return v;
+}
+
+void write_double_attr(hid_t obj, const std::string& name, double value, const std::string& where) {
+  Handle space(H5Screate(H5S_SCALAR));
+  Handle a(H5Acreate2(obj, name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT));
+  if (!a.valid() || H5Awrite(a.get(), H5T_NATIVE_DOUBLE, &value) < 0)
+    throw IoError(where + ": cannot write attribute '" + name + "'");
+}
+
+std::vector<std::string> attr_names(hid_t obj) {
+  std::vector<std::string> names;
+  H5O_info_t info;
+#if H5_VERSION_GE(1, 12, 0)
+  H5Oget_info3(obj, &info, H5O_INFO_NUM_ATTRS);
+#else
+  H5Oget_info2(obj, &info, H5O_INFO_NUM_ATTRS);
+#endif
+  for (hsize_t i = 0; i < info.num_attrs; ++i) {
+    char buf[256];
+    if (H5Aget_name_by_idx(obj, ".", H5_INDEX_NAME, H5_ITER_INC, i, buf, sizeof buf, H5P_DEFAULT) >= 0)
+      names.emplace_back(buf);
+  }
+  return names;
+}
+
+}  // namespace bsdfmix::h5

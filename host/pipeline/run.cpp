@@ -1,0 +1,20 @@
+// `bsdfmix run`: every stage the config names, in order.
+#include "core/progress.hpp"
+#include "pipeline/stages.hpp"
+
+namespace bsdfmix {
+
+std::string device_for(const Config& config, const std::string& cli_selector) {
+  return cli_selector.empty() ? config.device : cli_selector;
+}
+
+void run_all(const Config& config, const std::string& device_selector) {
+  const std::string dev = device_for(config, device_selector);
+  stage_table(config, dev);
+  if (config.fit) stage_fit(config, dev);
+  if (config.converge) stage_converge(config, dev);
+  if (config.charts) stage_charts(config);
+  log_line("run " + config.file + ": done");
+}
+
+}  // namespace bsdfmix
