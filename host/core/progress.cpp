@@ -31,7 +31,7 @@ Progress::Progress(std::string what, std::uint64_t total, std::string unit)
       start_(std::chrono::steady_clock::now()), last_print_(start_),
       tty_(::isatty(STDERR_FILENO) != 0) {}
 
-Progress::~Progress() { finish(); }
+Progress::~Progress() = default;  // silent: an unfinished task (an error) prints no summary
 
 void Progress::advance(std::uint64_t n) {
   std::lock_guard<std::mutex> lock(mutex_);

@@ -15,7 +15,7 @@ class Progress {
   Progress(std::string what, std::uint64_t total, std::string unit);
   ~Progress();
   void advance(std::uint64_t n = 1);  // thread-safe
-  void finish();                      // prints the final line once
+  void finish();                      // prints the final line once; not called on errors
 
   // Off: nothing printed (tests, --quiet). Default: on.
   static void set_enabled(bool on);

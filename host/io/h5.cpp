@@ -147,6 +147,7 @@ std::string read_string_attr(hid_t obj, const std::string& name, const std::stri
   if (H5Tis_variable_str(type.get()) > 0) {
     Handle mem(H5Tcopy(H5T_C_S1));
     H5Tset_size(mem.get(), H5T_VARIABLE);
+    H5Tset_cset(mem.get(), H5Tget_cset(type.get()));
     char* s = nullptr;
     if (H5Aread(a.get(), mem.get(), &s) < 0 || !s)
       throw InputError(where + ": cannot read attribute '" + name + "'");
@@ -158,6 +159,7 @@ std::string read_string_attr(hid_t obj, const std::string& name, const std::stri
   std::string out(size, '\0');
   Handle mem(H5Tcopy(H5T_C_S1));
   H5Tset_size(mem.get(), size);
+  H5Tset_cset(mem.get(), H5Tget_cset(type.get()));
   if (H5Aread(a.get(), mem.get(), out.data()) < 0)
     throw InputError(where + ": cannot read attribute '" + name + "'");
   while (!out.empty() && out.back() == '\0') out.pop_back();

@@ -1,0 +1,106 @@
+// Configs: defaults merged under the user's, and every kind of config error.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+#include "config/config.hpp"
+#include "core/error.hpp"
+#include "io/table.hpp"
+
+using namespace bsdfmix;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A table file that exists, so configs that name it pass the missing-file check.
+std::string existing_table() {
+  const fs::path dir = fs::temp_directory_path() / "bsdfmix_config_test";
+  fs::create_directories(dir);
+  const std::string p = (dir / "t.h5").string();
+  if (!fs::exists(p)) {
+    TableMeta m = make_grid(Domain::Fiber, 2, 1, 2, 4, true);
+    write_table(p, m, std::vector<float>(16, 1.0f));
+  }
+  return p;
+}
+
+std::string config_error(const std::string& text) {
+  try {
+    parse_config(text, "cfg.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+TEST_CASE("defaults are merged under the user's keys", "[config]") {
+  const Config c = parse_config("table: " + existing_table() + "\nfit:\n  k_max: 8\n", "cfg.yaml");
+  REQUIRE(c.fit);
+  CHECK(c.fit->k_max == 8);
+  CHECK(c.fit->k_min == 1);
+  CHECK(c.fit->output == "out/mixture.h5");
+  CHECK_FALSE(c.converge);
+  CHECK_FALSE(c.generate);
+  CHECK(c.device.empty());
+}
+
+TEST_CASE("a bare section takes every default", "[config]") {
+  const Config c = parse_config("table: " + existing_table() + "\nfit:\nconverge:\n", "cfg.yaml");
+  REQUIRE(c.fit);
+  REQUIRE(c.converge);
+  CHECK(c.converge->samples_max == 65536);
+  CHECK(c.converge->runs == 64);
+}
+
+TEST_CASE("unknown keys are rejected with their full path", "[config]") {
+  const std::string t = "table: " + existing_table() + "\n";
+  CHECK_THAT(config_error(t + "fitt:\n  k_max: 3\n"), Catch::Contains("cfg.yaml: fitt (line 2): unknown key"));
+  CHECK_THAT(config_error(t + "fit:\n  kmax: 3\n"), Catch::Contains("cfg.yaml: fit.kmax (line 3): unknown key"));
+  CHECK_THAT(config_error(t + "converge:\n  samples: 3\n"), Catch::Contains("converge.samples"));
+}
+
+TEST_CASE("wrong types and impossible values are named", "[config]") {
+  const std::string t = "table: " + existing_table() + "\n";
+  CHECK_THAT(config_error(t + "fit:\n  k_max: many\n"),
+             Catch::Contains("fit.k_max (line 3): expected an integer, got 'many'"));
+  CHECK_THAT(config_error(t + "fit:\n  k_min: 0\n"), Catch::Contains("fit.k_min (line 3): 0 is out of range [1, 256]"));
+  CHECK_THAT(config_error(t + "fit:\n  k_min: 5\n  k_max: 3\n"), Catch::Contains("fit.k_max (line 4): 3 is below k_min 5"));
+  CHECK_THAT(config_error(t + "converge:\n  samples_max: -4\n"), Catch::Contains("converge.samples_max (line 3): -4 is out of range"));
+  CHECK_THAT(config_error(t + "converge:\n  theta_o: [0.1, zero]\n"), Catch::Contains("expected a number or a list of numbers, got 'zero'"));
+  CHECK_THAT(config_error(t + "fit: 3\n"), Catch::Contains("cfg.yaml: fit (line 2): expected a mapping"));
+  CHECK_THAT(config_error(t + "generate:\n  symmetry: maybe\n"), Catch::Contains("generate.symmetry (line 3): expected true or false"));
+}
+
+TEST_CASE("missing files and missing keys are named", "[config]") {
+  CHECK_THAT(config_error("fit:\n  k_max: 3\n"), Catch::Contains("cfg.yaml: table: missing"));
+  CHECK_THAT(config_error("table: nowhere/t.h5\nfit:\n"), Catch::Contains("table (line 1): file 'nowhere/t.h5' not found"));
+  CHECK_THAT(config_error("table: " + existing_table() + "\nconverge:\n  scene: nowhere/scene.yaml\n"),
+             Catch::Contains("converge.scene (line 3): file 'nowhere/scene.yaml' not found"));
+  try {
+    load_config("nowhere/config.yaml");
+    FAIL("no error");
+  } catch (const ConfigError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("nowhere/config.yaml: cannot read config file"));
+  }
+  // A generate section makes the missing table acceptable.
+  CHECK(config_error("table: nowhere/t.h5\ngenerate:\n  preset: silk\n") == "(no error)");
+}
+
+TEST_CASE("invalid YAML is reported with its position", "[config]") {
+  CHECK_THAT(config_error("table: [unclosed\n"), Catch::Contains("cfg.yaml: invalid YAML at line"));
+  CHECK_THAT(config_error(""), Catch::Contains("the config is empty"));
+}
+
+TEST_CASE("the shipped configs parse", "[config]") {
+  for (const auto& e : fs::directory_iterator(fs::path(BSDFMIX_SOURCE_DIR) / "configs")) {
+    if (e.path().extension() != ".yaml" || e.path().filename() == "defaults.yaml") continue;
+    INFO(e.path());
+    const fs::path cwd = fs::current_path();
+    fs::current_path(BSDFMIX_SOURCE_DIR);  // configs name paths relative to the project root
+    CHECK_NOTHROW(load_config(e.path().string()));
+    fs::current_path(cwd);
+  }
+}
