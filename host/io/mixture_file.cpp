@@ -1,0 +1,170 @@
+// The HDF5 mixture file: write atomically, read with validation.
+#include "io/mixture_file.hpp"
+
+#include <cmath>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "io/h5.hpp"
+
+namespace bsdfmix {
+
+void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
+                            const std::vector<double>& w, const std::vector<double>& mean,
+                            const std::vector<double>& cov) {
+  const int kk = static_cast<int>(w.size());
+  if (mean.size() != 2 * w.size() || cov.size() != 3 * w.size())
+    throw Error("MixtureFile::add_slice: inconsistent component arrays");
+  if (kk > kmax) {  // widen every stored slice
+    const std::size_t s = slices();
+    std::vector<float> nw(s * kk, 0.f), nm(s * kk * 2, 0.f), nc(s * kk * 3, 0.f);
+    for (std::size_t i = 0; i < s; ++i)
+      for (int j = 0; j < kmax; ++j) {
+        nw[i * kk + j] = weights[i * kmax + j];
+        for (int d = 0; d < 2; ++d) nm[(i * kk + j) * 2 + d] = means[(i * kmax + j) * 2 + d];
+        for (int d = 0; d < 3; ++d) nc[(i * kk + j) * 3 + d] = covariances[(i * kmax + j) * 3 + d];
+      }
+    weights.swap(nw);
+    means.swap(nm);
+    covariances.swap(nc);
+    kmax = kk;
+  }
+  theta_o.push_back(theta_o_);
+  phi_o.push_back(phi_o_);
+  scale.push_back(scale_);
+  loglik.push_back(loglik_);
+  l1_rel.push_back(l1_rel_);
+  k.push_back(kk);
+  for (int j = 0; j < kmax; ++j) {
+    const bool used = j < kk;
+    weights.push_back(used ? float(w[j]) : 0.f);
+    for (int d = 0; d < 2; ++d) means.push_back(used ? float(mean[2 * j + d]) : 0.f);
+    for (int d = 0; d < 3; ++d) covariances.push_back(used ? float(cov[3 * j + d]) : 0.f);
+  }
+}
+
+std::uint64_t MixtureFile::payload_bytes() const {
+  std::uint64_t b = 0;
+  for (auto kk : k) b += std::uint64_t(kk) * 6 * sizeof(float);  // weight, mean (2), covariance (3)
+  b += slices() * (2 * sizeof(double) + sizeof(double) + sizeof(std::int32_t));  // direction, scale, k
+  return b;
+}
+
+void write_mixture_file(const std::string& path, const MixtureFile& m) {
+  const std::size_t s = m.slices();
+  AtomicOutput out(path);
+  {
+    h5::Handle f = h5::create_file(out.temp_path());
+    h5::Handle g = h5::create_group(f.get(), "mixture", path);
+    const hid_t id = g.get();
+    const hsize_t S = s, K = static_cast<hsize_t>(m.kmax);
+    h5::write_doubles(id, "theta_o", {S}, m.theta_o.data(), path);
+    h5::write_doubles(id, "phi_o", {S}, m.phi_o.data(), path);
+    h5::write_ints(id, "k", {S}, m.k.data(), path);
+    h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
+    h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
+    h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
+    h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
+    h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
+    h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
+    h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
+    h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
+    h5::write_string_attr(id, "domain", domain_name(m.domain), path);
+    h5::write_string_attr(id, "symmetry", m.azimuthal ? "azimuthal" : "none", path);
+    h5::write_string_attr(id, "table_source", m.table_source, path);
+    h5::write_string_attr(id, "fit_settings", m.fit_settings, path);
+    if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0) throw IoError(path + ": flush failed (disk full?)");
+  }
+  out.commit();
+}
+
+MixtureFile read_mixture_file(const std::string& path) {
+  h5::Handle f = h5::open_file(path);
+  h5::Handle g = h5::open_group(f.get(), "mixture", path);
+  const std::string where = path + ": /mixture";
+  const hid_t id = g.get();
+  MixtureFile m;
+  m.domain = parse_domain(h5::read_string_attr(id, "domain", where), where + " attribute 'domain'");
+  const std::string sym = h5::read_string_attr(id, "symmetry", where);
+  if (sym != "azimuthal" && sym != "none") throw InputError(where + ": unknown symmetry '" + sym + "'");
+  m.azimuthal = sym == "azimuthal";
+  m.table_source = h5::read_string_attr(id, "table_source", where);
+  if (h5::has_attr(id, "fit_settings")) m.fit_settings = h5::read_string_attr(id, "fit_settings", where);
+  m.theta_o = h5::read_doubles(id, "theta_o", where);
+  m.phi_o = h5::read_doubles(id, "phi_o", where);
+  m.k = h5::read_ints(id, "k", where);
+  m.scale = h5::read_doubles(id, "scale", where);
+  m.loglik = h5::read_doubles(id, "loglik", where);
+  m.l1_rel = h5::read_doubles(id, "l1_rel", where);
+  const std::size_t S = m.theta_o.size();
+  for (const auto* v : {&m.phi_o, &m.scale, &m.loglik, &m.l1_rel})
+    if (v->size() != S) throw InputError(where + ": per-slice datasets disagree in length (theta_o has " + std::to_string(S) + ")");
+  if (m.k.size() != S) throw InputError(where + "/k: length " + std::to_string(m.k.size()) + ", expected " + std::to_string(S));
+  {
+    h5::Handle d = h5::open_dataset(id, "weights", where);
+    const auto dims = h5::shape(d.get());
+    if (dims.size() != 2 || dims[0] != S) throw InputError(where + "/weights: expected shape [S, Kmax] with S = " + std::to_string(S));
+    m.kmax = static_cast<int>(dims[1]);
+  }
+  m.weights = h5::read_floats(id, "weights", where);
+  m.means = h5::read_floats(id, "means", where);
+  m.covariances = h5::read_floats(id, "covariances", where);
+  const std::size_t K = static_cast<std::size_t>(m.kmax);
+  if (m.means.size() != S * K * 2) throw InputError(where + "/means: expected shape [S, Kmax, 2]");
+  if (m.covariances.size() != S * K * 3) throw InputError(where + "/covariances: expected shape [S, Kmax, 3]");
+  if (h5::exists(id, "table_theta_o")) {
+    m.table_theta_o = h5::read_doubles(id, "table_theta_o", where);
+    m.table_phi_o = h5::read_doubles(id, "table_phi_o", where);
+  } else {  // a file without the grid: its own slices form the grid
+    m.table_theta_o = m.theta_o;
+    m.table_phi_o = m.azimuthal ? std::vector<double>{0.0} : m.phi_o;
+  }
+  for (std::size_t s = 0; s < S; ++s) {
+    const std::string at = where + " slice " + std::to_string(s);
+    if (m.k[s] < 1 || m.k[s] > m.kmax) throw InputError(at + ": k = " + std::to_string(m.k[s]) + " outside [1, Kmax]");
+    if (!std::isfinite(m.scale[s]) || m.scale[s] < 0) throw InputError(at + ": scale is not a finite non-negative number");
+    double wsum = 0;
+    for (int j = 0; j < m.k[s]; ++j) {
+      const float w = m.weights[s * K + j];
+      const float* c = &m.covariances[(s * K + j) * 3];
+      const float* mu = &m.means[(s * K + j) * 2];
+      if (!std::isfinite(w) || w < 0) throw InputError(at + " component " + std::to_string(j) + ": weight is not a finite non-negative number");
+      if (!std::isfinite(mu[0]) || !std::isfinite(mu[1])) throw InputError(at + " component " + std::to_string(j) + ": mean is not finite");
+      if (!(c[0] > 0) || !(c[2] > 0) || !(double(c[0]) * c[2] - double(c[1]) * c[1] > 0))
+        throw InputError(at + " component " + std::to_string(j) + ": covariance is not positive definite");
+      wsum += w;
+    }
+    if (std::abs(wsum - 1.0) > 1e-3) throw InputError(at + ": weights sum to " + std::to_string(wsum) + ", expected 1");
+  }
+  return m;
+}
+
+mix::MixtureSet to_mixture_set(const MixtureFile& m) {
+  mix::MixtureSet set;
+  set.domain = m.domain == Domain::Fiber ? mix::Domain::Fiber : mix::Domain::Hemisphere;
+  set.azimuthal = m.azimuthal;
+  set.grid_theta_o = m.table_theta_o;
+  set.grid_phi_o = m.table_phi_o;
+  const std::size_t K = static_cast<std::size_t>(m.kmax);
+  for (std::size_t s = 0; s < m.slices(); ++s) {
+    mix::SliceMixture sm;
+    sm.theta_o = m.theta_o[s];
+    sm.phi_o = m.phi_o[s];
+    sm.scale = m.scale[s];
+    for (int j = 0; j < m.k[s]; ++j) {
+      mix::Gaussian g;
+      g.weight = m.weights[s * K + j];
+      g.mu_t = m.means[(s * K + j) * 2];
+      g.mu_p = m.means[(s * K + j) * 2 + 1];
+      g.s_tt = m.covariances[(s * K + j) * 3];
+      g.s_tp = m.covariances[(s * K + j) * 3 + 1];
+      g.s_pp = m.covariances[(s * K + j) * 3 + 2];
+      sm.components.push_back(g);
+    }
+    set.slices.push_back(std::move(sm));
+  }
+  set.prepare();
+  return set;
+}
+
+}  // namespace bsdfmix

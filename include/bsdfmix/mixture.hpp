@@ -1,0 +1,280 @@
+// bsdfmix/mixture.hpp: evaluate and importance-sample the Gaussian mixtures of a bsdfmix
+// mixture file on the CPU. Self-contained: needs only the C++17 standard library, so a
+// renderer can copy this one header. Read the file with any HDF5 reader and fill a
+// MixtureSet (see bsdfmix's DESIGN.md, "Mixture file"), or use bsdfmix's own reader.
+//
+// Conventions. A slice mixture is a density over (theta, phi) in radians, phi periodic
+// in [-pi, pi): the density at a point is the sum over components and over the phi
+// images phi + 2 pi m of the 2D normal density. Samples whose theta leaves the domain
+// ([-pi/2, pi/2] for fibers, [0, pi/2] for the hemisphere) are invalid; pdf() is the
+// true density of what sample() returns, so its integral over the domain is
+// 1 - P(invalid). pdf_omega = pdf_param / J(theta), J = cos(theta) (fiber) or sin(theta)
+// (hemisphere). The stand-in for f is scale * pdf_omega [/ cos(theta_i) for the hemisphere].
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+namespace bsdfmix {
+namespace mix {
+
+constexpr double kPi = 3.14159265358979323846;
+
+enum class Domain { Fiber, Hemisphere };
+
+inline double theta_lo(Domain d) { return d == Domain::Fiber ? -kPi / 2 : 0.0; }
+inline double theta_hi(Domain) { return kPi / 2; }
+inline double jacobian(Domain d, double theta) { return d == Domain::Fiber ? std::cos(theta) : std::sin(theta); }
+
+inline double wrap_phi(double phi) {
+  double r = std::fmod(phi + kPi, 2 * kPi);
+  if (r < 0) r += 2 * kPi;
+  r -= kPi;
+  return r >= kPi ? -kPi : r;
+}
+
+// One 2D Gaussian with precomputed inverse, normalization and Cholesky factor.
+struct Gaussian {
+  double weight = 0, mu_t = 0, mu_p = 0;
+  double s_tt = 0, s_tp = 0, s_pp = 0;
+  // derived by prepare()
+  double i_tt = 0, i_tp = 0, i_pp = 0;  // inverse covariance
+  double norm = 0;                      // 1 / (2 pi sqrt(det))
+  double l_tt = 0, l_pt = 0, l_pp = 0;  // Cholesky: [l_tt 0; l_pt l_pp]
+  int images = 1;                       // phi images on each side that matter
+
+  // Throws std::invalid_argument when the covariance is not positive definite.
+  void prepare() {
+    const double det = s_tt * s_pp - s_tp * s_tp;
+    if (!(s_tt > 0) || !(s_pp > 0) || !(det > 0) || !std::isfinite(det))
+      throw std::invalid_argument("bsdfmix::mix::Gaussian: covariance is not positive definite");
+    i_tt = s_pp / det;
+    i_tp = -s_tp / det;
+    i_pp = s_tt / det;
+    norm = 1.0 / (2 * kPi * std::sqrt(det));
+    l_tt = std::sqrt(s_tt);
+    l_pt = s_tp / l_tt;
+    l_pp = std::sqrt(std::max(s_pp - l_pt * l_pt, 0.0));
+    // Images m with |m| <= images cover every phi in [-pi, pi) to within 9 sigma.
+    images = static_cast<int>(std::ceil((9.0 * std::sqrt(s_pp) + kPi) / (2 * kPi)));
+  }
+
+  // Density at (theta, phi), phi in [-pi, pi), summed over the phi images.
+  double density(double theta, double phi) const {
+    const double dt = theta - mu_t;
+    double sum = 0;
+    for (int m = -images; m <= images; ++m) {
+      const double dp = phi + 2 * kPi * m - mu_p;
+      const double q = i_tt * dt * dt + 2 * i_tp * dt * dp + i_pp * dp * dp;
+      sum += std::exp(-0.5 * q);
+    }
+    return norm * sum;
+  }
+};
+
+// The mixture of one omega_o slice.
+struct SliceMixture {
+  double theta_o = 0, phi_o = 0;
+  double scale = 0;  // the slice's integral of the integrand weight
+  std::vector<Gaussian> components;
+  std::vector<double> cdf;  // cumulative weights, built by prepare()
+
+  void prepare() {
+    cdf.clear();
+    double acc = 0;
+    for (auto& g : components) {
+      g.prepare();
+      acc += g.weight;
+      cdf.push_back(acc);
+    }
+    if (!(acc > 0)) throw std::invalid_argument("bsdfmix::mix::SliceMixture: weights sum to zero");
+    for (auto& c : cdf) c /= acc;
+    for (auto& g : components) g.weight /= acc;
+  }
+
+  double pdf_param(double theta, double phi) const {
+    double p = 0;
+    for (const auto& g : components) p += g.weight * g.density(theta, phi);
+    return p;
+  }
+
+  // Component index for u in [0, 1): binary search of the CDF.
+  std::size_t pick(double u) const {
+    const auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
+    return std::min(static_cast<std::size_t>(it - cdf.begin()), components.size() - 1);
+  }
+};
+
+struct Sample {
+  double theta = 0, phi = 0;  // radians; phi wrapped into [-pi, pi)
+  double pdf_omega = 0;       // density per steradian of what was sampled
+  bool valid = false;         // false when theta left the domain: zero contribution
+};
+
+// Unit normal pair from two uniforms (Box-Muller), u1 in [0, 1).
+inline void normal_pair(double u1, double u2, double& z0, double& z1) {
+  const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
+  z0 = r * std::cos(2 * kPi * u2);
+  z1 = r * std::sin(2 * kPi * u2);
+}
+
+// All fitted slices of a mixture file, on the table's omega_o grid.
+class MixtureSet {
+ public:
+  Domain domain = Domain::Fiber;
+  bool azimuthal = true;       // f depends on phi_i - phi_o only
+  std::vector<double> grid_theta_o, grid_phi_o;  // the table's omega_o axes (cell centers)
+  std::vector<SliceMixture> slices;              // fitted slices
+  std::vector<int> slice_of;  // [grid_theta_o x grid_phi_o] -> index into slices, -1 if not fitted
+
+  // Prepares components and the grid lookup. Call once after filling the fields.
+  void prepare() {
+    for (auto& s : slices) s.prepare();
+    const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
+    slice_of.assign(grid_theta_o.size() * np, -1);
+    for (std::size_t s = 0; s < slices.size(); ++s) {
+      const std::size_t t = nearest(grid_theta_o, slices[s].theta_o);
+      const std::size_t p = azimuthal ? 0 : nearest(grid_phi_o, slices[s].phi_o);
+      slice_of[t * np + p] = static_cast<int>(s);
+    }
+  }
+
+  // The slices serving omega_o and their bilinear weights (thesis eq. 3.7): up to 4
+  // (2 with azimuthal symmetry). Weights of missing slices go to the present ones.
+  struct Blend {
+    int slice[4] = {-1, -1, -1, -1};
+    double weight[4] = {0, 0, 0, 0};
+    int count = 0;
+    double rotate = 0;  // phi_o to add to the sampled phi (azimuthal symmetry)
+  };
+
+  Blend blend(double theta_o, double phi_o) const {
+    Blend b;
+    std::size_t t0, t1;
+    double ft;
+    bracket(grid_theta_o, theta_o, false, t0, t1, ft);
+    std::size_t p0 = 0, p1 = 0;
+    double fp = 0;
+    if (azimuthal) b.rotate = phi_o;
+    else bracket(grid_phi_o, wrap_phi(phi_o), true, p0, p1, fp);
+    const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
+    const std::size_t ts[2] = {t0, t1}, ps[2] = {p0, p1};
+    const double wt[2] = {1 - ft, ft}, wp[2] = {1 - fp, fp};
+    double total = 0;
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < (azimuthal ? 1 : 2); ++j) {
+        const double w = wt[i] * (azimuthal ? 1.0 : wp[j]);
+        const int s = slice_of[ts[i] * np + ps[j]];
+        if (w <= 0 || s < 0) continue;
+        int k = 0;
+        while (k < b.count && b.slice[k] != s) ++k;
+        if (k == b.count) {
+          b.slice[k] = s;
+          ++b.count;
+        }
+        b.weight[k] += w;
+        total += w;
+      }
+    if (b.count == 0) throw std::out_of_range("bsdfmix::mix::MixtureSet: no fitted slice near this omega_o");
+    for (int k = 0; k < b.count; ++k) b.weight[k] /= total;
+    return b;
+  }
+
+  // Density over (theta, phi) of what sample() returns for omega_o.
+  double pdf_param(double theta_o, double phi_o, double theta, double phi) const {
+    if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
+    const Blend b = blend(theta_o, phi_o);
+    double p = 0;
+    for (int k = 0; k < b.count; ++k) p += b.weight[k] * slices[b.slice[k]].pdf_param(theta, wrap_phi(phi - b.rotate));
+    return p;
+  }
+
+  double pdf_omega(double theta_o, double phi_o, double theta, double phi) const {
+    const double j = jacobian(domain, theta);
+    return j > 0 ? pdf_param(theta_o, phi_o, theta, phi) / j : 0.0;
+  }
+
+  // The mixture as a stand-in for f: scale * pdf_omega [/ cos(theta_i) for the hemisphere],
+  // each slice with its own scale, blended.
+  double eval_f(double theta_o, double phi_o, double theta, double phi) const {
+    if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
+    const double j = jacobian(domain, theta);
+    if (!(j > 0)) return 0;
+    const Blend b = blend(theta_o, phi_o);
+    double f = 0;
+    for (int k = 0; k < b.count; ++k) {
+      const SliceMixture& s = slices[b.slice[k]];
+      f += b.weight[k] * s.scale * s.pdf_param(theta, wrap_phi(phi - b.rotate));
+    }
+    f /= j;
+    if (domain == Domain::Hemisphere) f /= std::cos(theta);
+    return f;
+  }
+
+  // A sample for omega_o from four uniforms in [0, 1): u0 picks the slice, u1 the
+  // component, (u2, u3) the point.
+  Sample sample(double theta_o, double phi_o, double u0, double u1, double u2, double u3) const {
+    const Blend b = blend(theta_o, phi_o);
+    int k = 0;
+    double acc = b.weight[0];
+    while (k + 1 < b.count && u0 >= acc) acc += b.weight[++k];
+    const SliceMixture& s = slices[b.slice[k]];
+    const Gaussian& g = s.components[s.pick(u1)];
+    double z0, z1;
+    normal_pair(u2, u3, z0, z1);
+    Sample out;
+    out.theta = g.mu_t + g.l_tt * z0;
+    out.phi = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1 + b.rotate);
+    out.valid = out.theta >= theta_lo(domain) && out.theta <= theta_hi(domain);
+    out.pdf_omega = out.valid ? pdf_omega(theta_o, phi_o, out.theta, out.phi) : 0.0;
+    if (!(out.pdf_omega > 0)) out.valid = false;
+    return out;
+  }
+
+ private:
+  static std::size_t nearest(const std::vector<double>& axis, double x) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < axis.size(); ++i)
+      if (std::abs(axis[i] - x) < std::abs(axis[best] - x)) best = i;
+    return best;
+  }
+
+  // The two axis cells around x and the fraction toward the second; periodic axes wrap.
+  static void bracket(const std::vector<double>& axis, double x, bool periodic, std::size_t& i0,
+                      std::size_t& i1, double& f) {
+    const std::size_t n = axis.size();
+    if (n == 1) {
+      i0 = i1 = 0;
+      f = 0;
+      return;
+    }
+    const double step = (axis.back() - axis.front()) / double(n - 1);
+    double u = (x - axis.front()) / step;
+    if (periodic) {
+      u = std::fmod(u, double(n));
+      if (u < 0) u += double(n);
+      i0 = std::min(static_cast<std::size_t>(u), n - 1);
+      i1 = (i0 + 1) % n;
+      f = u - double(i0);
+      return;
+    }
+    if (u <= 0) {
+      i0 = i1 = 0;
+      f = 0;
+    } else if (u >= double(n - 1)) {
+      i0 = i1 = n - 1;
+      f = 0;
+    } else {
+      i0 = static_cast<std::size_t>(u);
+      i1 = i0 + 1;
+      f = u - double(i0);
+    }
+  }
+};
+
+}  // namespace mix
+}  // namespace bsdfmix
