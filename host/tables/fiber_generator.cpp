@@ -1,0 +1,317 @@
+// The fiber table generator: kernels/fiber.cl driven batch by batch into a TableWriter.
+#include "tables/fiber_generator.hpp"
+
+#include <Random123/philox.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "core/domain.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "device/program.hpp"
+#include "tables/fiber_presets.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+// Mirrors the FiberParams struct of kernels/fiber.cl (floats only, no padding).
+struct KernelParams {
+  cl_float eta, sigma_a, s, logistic_norm;
+  cl_float v[kFiberLobes];
+  cl_float tilt[kFiberLobes];
+};
+static_assert(sizeof(KernelParams) == 12 * sizeof(cl_float), "KernelParams must match kernels/fiber.cl");
+
+std::string fmt(double x) {
+  // The shortest of %.15g / %.17g that reads back exactly.
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.15g", x);
+  if (std::strtod(buf, nullptr) != x) std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
+constexpr std::uint32_t kNoiseStream = 0x66696265u;  // "fibe": third counter word
+constexpr std::size_t kBatchBytes = std::size_t(64) << 20;
+
+}  // namespace
+
+void validate_fiber_options(const FiberGenerateOptions& opt) {
+  auto fail = [](const std::string& what) { throw ConfigError("generate fiber: " + what); };
+  fiber_preset(opt.preset);
+  if (opt.n_theta_o < 1 || opt.n_theta_o > 100000) fail("theta_o resolution must be in [1, 100000]");
+  if (opt.n_theta_i < 2 || opt.n_theta_i > 100000) fail("theta_i resolution must be in [2, 100000]");
+  if (opt.n_phi_i < 2 || opt.n_phi_i > 100000) fail("phi_i resolution must be in [2, 100000]");
+  if (!opt.symmetry && opt.n_phi_o > 100000) fail("phi_o resolution must be in [1, 100000]");
+  if (opt.symmetry && opt.n_phi_o > 1) fail("phi_o resolution must be 1 with azimuthal symmetry");
+  if (!(opt.noise >= 0.0 && opt.noise <= 10.0)) fail("noise level must be in [0, 10]");
+  if (opt.h_nodes < 2 || opt.h_nodes > 4096) fail("h_nodes must be in [2, 4096]");
+}
+
+std::string fiber_source_json(const FiberGenerateOptions& opt) {
+  const FiberParams& p = fiber_preset(opt.preset).params;
+  std::ostringstream s;
+  s << "{\"model\": \"chiang2016\", \"preset\": \"" << opt.preset << "\", \"eta\": " << fmt(p.eta)
+    << ", \"beta_m\": " << fmt(p.beta_m) << ", \"beta_n\": " << fmt(p.beta_n) << ", \"alpha\": " << fmt(p.alpha)
+    << ", \"sigma_a\": " << fmt(p.sigma_a) << ", \"noise\": " << fmt(opt.noise) << ", \"seed\": " << opt.seed
+    << ", \"h_nodes\": " << opt.h_nodes << "}";
+  return s.str();
+}
+
+TableMeta fiber_table_meta(const FiberGenerateOptions& opt) {
+  validate_fiber_options(opt);
+  const std::size_t n_phi_o = opt.symmetry ? 1 : (opt.n_phi_o == 0 ? opt.n_phi_i : opt.n_phi_o);
+  TableMeta meta = make_grid(Domain::Fiber, opt.n_theta_o, n_phi_o, opt.n_theta_i, opt.n_phi_i, opt.symmetry);
+  meta.source = fiber_source_json(opt);
+  return meta;
+}
+
+FiberModel fiber_model_for(const FiberGenerateOptions& opt) {
+  const FiberPreset& preset = fiber_preset(opt.preset);
+  const std::string where = "fiber preset " + preset.name;
+  return FiberModel(preset.params, opt.h_nodes, where.c_str());
+}
+
+double fiber_noise_factor(std::uint64_t cell, std::uint64_t seed, double level) {
+  if (level <= 0.0) return 1.0;
+  r123::Philox4x32 rng;
+  const r123::Philox4x32::ctr_type ctr = {
+      {std::uint32_t(cell), std::uint32_t(cell >> 32), kNoiseStream, 0u}};
+  const r123::Philox4x32::key_type key = {{std::uint32_t(seed), std::uint32_t(seed >> 32)}};
+  const auto r = rng(ctr, key);
+  const double u1 = (double(r.v[0] >> 8) + 0.5) / 16777216.0;
+  const double u2 = (double(r.v[1] >> 8) + 0.5) / 16777216.0;
+  const double z = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+  return std::exp(level * z - 0.5 * level * level);
+}
+
+std::vector<double> tabulate_fiber_slice_cpu(const FiberModel& model, const TableMeta& meta, std::size_t t_o,
+                                             std::size_t p_o, double noise, std::uint64_t seed) {
+  if (t_o >= meta.theta_o.size() || p_o >= meta.phi_o.size())
+    throw InputError("fiber slice (" + std::to_string(t_o) + ", " + std::to_string(p_o) + ") outside the table");
+  const double th_o = meta.theta_o[t_o], ph_o = meta.phi_o[p_o];
+  const std::size_t n_ti = meta.theta_i.size(), n_pi = meta.phi_i.size();
+  std::vector<double> dphi(n_pi);
+  for (std::size_t j = 0; j < n_pi; ++j) dphi[j] = meta.phi_i[j] - ph_o;
+  const auto nbar = model.azimuthal_factors(th_o, dphi);
+  std::vector<double> out(n_ti * n_pi);
+  const std::uint64_t first_cell = std::uint64_t(meta.slice_index(t_o, p_o)) * meta.cells_per_slice();
+  for (std::size_t i = 0; i < n_ti; ++i) {
+    std::array<double, kFiberLobes> m{};
+    for (int p = 0; p < kFiberLobes; ++p) m[std::size_t(p)] = model.longitudinal(p, th_o, meta.theta_i[i]);
+    for (std::size_t j = 0; j < n_pi; ++j) {
+      double v = 0;
+      for (std::size_t p = 0; p < kFiberLobes; ++p) v += m[p] * nbar[p][j];
+      out[i * n_pi + j] = v * fiber_noise_factor(first_cell + i * n_pi + j, seed, noise);
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+
+struct FiberDeviceTabulator::Impl {
+  const Device* device = nullptr;
+  TableMeta meta;
+  std::size_t max_batch = 1;
+  double noise = 0;
+  std::uint64_t seed = 1;
+  cl::CommandQueue queue;
+  cl::Kernel k_azimuthal, k_longitudinal, k_combine;
+  cl::Buffer theta_o, phi_o, theta_i, phi_i, h_rule, nbar, m, f;
+  std::vector<cl::Event> pending;
+  ~Impl() {
+    // Reads still in flight write into the caller's memory: let them land first.
+    try {
+      if (queue()) queue.finish();
+    } catch (const cl::Error&) {
+    }
+  }
+};
+
+FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberModel& model, const TableMeta& meta,
+                                           double noise, std::uint64_t seed, std::size_t max_batch)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.device = &device;
+  d.meta = meta;
+  d.noise = noise;
+  d.seed = seed;
+  const std::size_t cells = meta.cells_per_slice();
+  const std::uint64_t max_alloc = std::max<std::uint64_t>(device.info().max_alloc, 1 << 20);
+  const std::size_t by_alloc = std::max<std::size_t>(1, std::size_t(max_alloc / (cells * sizeof(float))));
+  d.max_batch = std::max<std::size_t>(1, std::min({max_batch, meta.n_slices(), by_alloc}));
+  if (meta.n_slices() > 0xFFFFFFFFull || cells > 0xFFFFFFFFull)
+    throw ConfigError("generate fiber: table too large for 32-bit slice and cell indices");
+
+  const FiberParams& fp = model.params();
+  KernelParams kp{};
+  kp.eta = cl_float(fp.eta);
+  kp.sigma_a = cl_float(fp.sigma_a);
+  kp.s = cl_float(model.logistic_scale());
+  kp.logistic_norm = cl_float(1 / (1 + std::exp(-kPi / model.logistic_scale())) -
+                              1 / (1 + std::exp(kPi / model.logistic_scale())));
+  const double tilt[kFiberLobes] = {-2 * fp.alpha, fp.alpha, 4 * fp.alpha, 0.0};
+  for (int p = 0; p < kFiberLobes; ++p) {
+    kp.v[p] = cl_float(model.variance(p));
+    kp.tilt[p] = cl_float(tilt[p]);
+  }
+
+  auto to_float = [](const std::vector<double>& v) { return std::vector<cl_float>(v.begin(), v.end()); };
+  const auto& gl = model.h_quadrature();
+  std::vector<cl_float2> rule(gl.nodes.size());
+  for (std::size_t k = 0; k < rule.size(); ++k) {
+    rule[k].s[0] = cl_float(gl.nodes[k]);
+    rule[k].s[1] = cl_float(gl.weights[k]);
+  }
+  try {
+    cl::Program program = build_program(device, "fiber");
+    d.queue = device.make_queue();
+    const cl::Context& ctx = device.context();
+    auto upload = [&](const std::vector<cl_float>& v) {
+      return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, v.size() * sizeof(cl_float),
+                        const_cast<cl_float*>(v.data()));
+    };
+    const auto th_o = to_float(meta.theta_o), ph_o = to_float(meta.phi_o), th_i = to_float(meta.theta_i),
+               ph_i = to_float(meta.phi_i);
+    d.theta_o = upload(th_o);
+    d.phi_o = upload(ph_o);
+    d.theta_i = upload(th_i);
+    d.phi_i = upload(ph_i);
+    d.h_rule = cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rule.size() * sizeof(cl_float2),
+                          rule.data());
+    d.nbar = cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.phi_i.size() * sizeof(cl_float));
+    d.m = cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.theta_i.size() * sizeof(cl_float));
+    d.f = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, d.max_batch * cells * sizeof(cl_float));
+
+    const cl_uint n_h = cl_uint(rule.size()), n_phi_o = cl_uint(meta.phi_o.size()),
+                  n_theta_i = cl_uint(meta.theta_i.size()), n_phi_i = cl_uint(meta.phi_i.size());
+    d.k_azimuthal = cl::Kernel(program, "fiber_azimuthal");
+    d.k_azimuthal.setArg(0, sizeof(KernelParams), &kp);
+    d.k_azimuthal.setArg(1, d.theta_o);
+    d.k_azimuthal.setArg(2, d.phi_o);
+    d.k_azimuthal.setArg(3, d.phi_i);
+    d.k_azimuthal.setArg(4, d.h_rule);
+    d.k_azimuthal.setArg(5, n_h);
+    d.k_azimuthal.setArg(6, n_phi_o);
+    d.k_azimuthal.setArg(7, n_phi_i);
+    d.k_azimuthal.setArg(10, d.nbar);
+    d.k_longitudinal = cl::Kernel(program, "fiber_longitudinal");
+    d.k_longitudinal.setArg(0, sizeof(KernelParams), &kp);
+    d.k_longitudinal.setArg(1, d.theta_o);
+    d.k_longitudinal.setArg(2, d.theta_i);
+    d.k_longitudinal.setArg(3, n_phi_o);
+    d.k_longitudinal.setArg(4, n_theta_i);
+    d.k_longitudinal.setArg(7, d.m);
+    d.k_combine = cl::Kernel(program, "fiber_combine");
+    d.k_combine.setArg(0, d.m);
+    d.k_combine.setArg(1, d.nbar);
+    d.k_combine.setArg(2, n_theta_i);
+    d.k_combine.setArg(3, n_phi_i);
+    d.k_combine.setArg(6, cl_float(noise));
+    d.k_combine.setArg(7, cl_ulong(seed));
+    d.k_combine.setArg(8, d.f);
+  } catch (const cl::Error& e) {
+    throw_device_error(e, "fiber tabulation setup on " + device.info().label());
+  }
+}
+
+FiberDeviceTabulator::~FiberDeviceTabulator() = default;
+
+std::size_t FiberDeviceTabulator::max_batch() const { return impl_->max_batch; }
+
+void FiberDeviceTabulator::enqueue(std::size_t first, std::size_t count, float* out) {
+  Impl& d = *impl_;
+  if (count == 0 || count > d.max_batch || first + count > d.meta.n_slices())
+    throw ConfigError("fiber tabulation: batch [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                      ") invalid (max batch " + std::to_string(d.max_batch) + ", " +
+                      std::to_string(d.meta.n_slices()) + " slices)");
+  const std::size_t n_ti = d.meta.theta_i.size(), n_pi = d.meta.phi_i.size();
+  try {
+    const cl_uint first_u = cl_uint(first), count_u = cl_uint(count);
+    d.k_azimuthal.setArg(8, first_u);
+    d.k_azimuthal.setArg(9, count_u);
+    launch(d.queue, d.k_azimuthal, "fiber_azimuthal", cl::NDRange(n_pi, count));
+    d.k_longitudinal.setArg(5, first_u);
+    d.k_longitudinal.setArg(6, count_u);
+    launch(d.queue, d.k_longitudinal, "fiber_longitudinal", cl::NDRange(n_ti, count));
+    d.k_combine.setArg(4, first_u);
+    d.k_combine.setArg(5, count_u);
+    launch(d.queue, d.k_combine, "fiber_combine", cl::NDRange(n_pi, n_ti, count));
+    cl::Event ev;
+    d.queue.enqueueReadBuffer(d.f, CL_FALSE, 0, count * n_ti * n_pi * sizeof(cl_float), out, nullptr, &ev);
+    d.pending.push_back(ev);
+  } catch (const cl::Error& e) {
+    throw_device_error(e, "fiber tabulation of slices " + std::to_string(first) + ".." +
+                              std::to_string(first + count - 1) + " on " + d.device->info().label());
+  }
+}
+
+void FiberDeviceTabulator::wait() {
+  Impl& d = *impl_;
+  try {
+    for (auto& ev : d.pending) ev.wait();
+    d.pending.clear();
+  } catch (const cl::Error& e) {
+    d.pending.clear();
+    throw_device_error(e, "fiber tabulation on " + d.device->info().label());
+  }
+}
+
+void FiberDeviceTabulator::compute(std::size_t first, std::size_t count, float* out) {
+  enqueue(first, count, out);
+  wait();
+}
+
+// ---------------------------------------------------------------------------------------
+
+void generate_fiber_table(const FiberGenerateOptions& opt, const std::string& device_selector,
+                          const std::string& out_path) {
+  const TableMeta meta = fiber_table_meta(opt);
+  const FiberModel model = fiber_model_for(opt);
+  std::vector<Device> devices = select_devices(device_selector);
+  if (devices.empty()) throw DeviceError("generate fiber: no OpenCL device selected by '" + device_selector + "'");
+  const Device& device = devices.front();
+  const std::size_t cells = meta.cells_per_slice();
+  const std::size_t batch = std::max<std::size_t>(1, kBatchBytes / (cells * sizeof(float)));
+  // Two host buffers (declared before the tabulator, which finishes its reads into them
+  // when destroyed): the device fills one while the other is written to disk.
+  std::array<std::vector<float>, 2> host;
+  FiberDeviceTabulator tab(device, model, meta, opt.noise, opt.seed, batch);
+  const std::size_t n_slices = meta.n_slices(), b = tab.max_batch();
+
+  log_line("generate fiber " + opt.preset + ": " + std::to_string(meta.theta_o.size()) + " x " +
+           std::to_string(meta.phi_o.size()) + " x " + std::to_string(meta.theta_i.size()) + " x " +
+           std::to_string(meta.phi_i.size()) + " cells on " + device.info().label() + " -> " + out_path);
+  TableWriter writer(out_path, meta);
+  Progress progress("generate fiber " + opt.preset, n_slices, "slices");
+  host[0].resize(b * cells);
+  if (n_slices > b) host[1].resize(b * cells);
+  std::size_t first = 0, which = 0;
+  std::size_t count = std::min(b, n_slices);
+  tab.enqueue(first, count, host[0].data());
+  while (first < n_slices) {
+    tab.wait();
+    const std::size_t next_first = first + count;
+    const std::size_t next_count = std::min(b, n_slices - std::min(n_slices, next_first));
+    if (next_count > 0) tab.enqueue(next_first, next_count, host[1 - which].data());
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t s = first + k;
+      writer.write_slice(s / meta.phi_o.size(), s % meta.phi_o.size(), host[which].data() + k * cells);
+    }
+    progress.advance(count);
+    first = next_first;
+    count = next_count;
+    which = 1 - which;
+  }
+  writer.commit();
+  progress.finish();
+}
+
+}  // namespace bsdfmix

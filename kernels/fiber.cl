@@ -1,0 +1,165 @@
+// Tabulation of the Chiang et al. 2016 fiber BCSDF (docs/fiber.md), a batch of
+// omega_o slices at a time, in float. CPU reference: host/tables/fiber_model.cpp;
+// test: tests/fiber_test.cpp.
+//
+// f(theta_o, theta_i, dphi) = sum_p M_p(theta_o, theta_i) * Nbar_p(theta_o, dphi), where
+// Nbar_p = (1/2) sum_k w_k A_p(theta_o, h_k) N_p(dphi; theta_o, h_k) is the h-averaged
+// azimuthal factor (Gauss-Legendre nodes h_k, weights w_k). Three kernels:
+//   fiber_azimuthal:    Nbar[b][p][j]   for each slice b of the batch and phi_i cell j
+//   fiber_longitudinal: M[b][p][i]      for each theta_i cell i
+//   fiber_combine:      f[b][i][j] = sum_p M[b][p][i] Nbar[b][p][j], times the noise factor
+// Slice s of the table (s = t_o * n_phi_o + p_o) is batch entry b = s - first_slice.
+
+#ifndef I0_SERIES_TERMS
+#define I0_SERIES_TERMS 30  // power-series terms of I0 below I0_ASYMPTOTIC_FROM
+#endif
+#ifndef I0_ASYMPTOTIC_FROM
+#define I0_ASYMPTOTIC_FROM 15.0f  // above: the asymptotic expansion with 5 terms
+#endif
+#ifndef LOBES
+#define LOBES 4  // R, TT, TRT, residual
+#endif
+
+#define FIBER_PI 3.14159265358979323846f
+
+// Model parameters, identical for every work item.
+typedef struct {
+  float eta, sigma_a, s, logistic_norm;  // logistic_norm = CDF(pi) - CDF(-pi)
+  float v[LOBES];                         // longitudinal variances
+  float tilt[LOBES];                      // theta_o shift of each lobe: -2a, a, 4a, 0
+} FiberParams;
+
+// log(I0(x) exp(-x)), x >= 0.
+float log_i0_scaled(const float x) {
+  if (x < I0_ASYMPTOTIC_FROM) {
+    const float q = 0.25f * x * x;
+    float term = 1.0f, sum = 1.0f;
+    for (int i = 1; i <= I0_SERIES_TERMS; ++i) {
+      term *= q / (float)(i * i);
+      sum += term;
+    }
+    return log(sum) - x;
+  }
+  const float t = 1.0f / (8.0f * x);
+  const float poly = 1.0f + t * (1.0f + t * (4.5f + t * (37.5f + t * (459.375f + t * 7441.875f))));
+  return -0.5f * log(2.0f * FIBER_PI * x) + log(poly);
+}
+
+float fresnel_dielectric(float cos_i, const float eta) {
+  cos_i = clamp(cos_i, 0.0f, 1.0f);
+  const float sin_t = sqrt(fmax(0.0f, 1.0f - cos_i * cos_i)) / eta;
+  const float cos_t = sqrt(fmax(0.0f, 1.0f - sin_t * sin_t));
+  const float r_par = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+  const float r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+  return 0.5f * (r_par * r_par + r_perp * r_perp);
+}
+
+float wrap_pi(const float x) {
+  return x - 2.0f * FIBER_PI * floor((x + FIBER_PI) / (2.0f * FIBER_PI));
+}
+
+float trimmed_logistic(const float x, const float s, const float norm) {
+  const float e = exp(-fabs(x) / s);
+  return e / (s * (1.0f + e) * (1.0f + e) * norm);
+}
+
+// M_p with the tilted theta_o' mirrored back into [-pi/2, pi/2] (same as |cos theta_o'|).
+float longitudinal(const float v, const float theta_op_raw, const float theta_i) {
+  float theta_op = theta_op_raw;
+  if (theta_op > 0.5f * FIBER_PI) theta_op = FIBER_PI - theta_op;
+  if (theta_op < -0.5f * FIBER_PI) theta_op = -FIBER_PI - theta_op;
+  const float a = cos(theta_i) * cos(theta_op) / v;
+  const float sh = sin(0.5f * (theta_i + theta_op));
+  // a - b - 1/v = (cos(theta_i + theta_o') - 1) / v
+  const float log_m = log_i0_scaled(a) - 2.0f * sh * sh / v - log(v) - log1p(-exp(-2.0f / v));
+  return exp(log_m);
+}
+
+// Philox4x32-10 (Salmon et al. 2011), the generator of Random123's philox4x32.
+uint4 philox4x32_10(uint4 c, uint2 k) {
+  for (int r = 0; r < 10; ++r) {
+    if (r > 0) {
+      k.x += 0x9E3779B9u;
+      k.y += 0xBB67AE85u;
+    }
+    const uint hi0 = mul_hi(0xD2511F53u, c.x), lo0 = 0xD2511F53u * c.x;
+    const uint hi1 = mul_hi(0xCD9E8D57u, c.z), lo1 = 0xCD9E8D57u * c.z;
+    c = (uint4)(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
+  }
+  return c;
+}
+
+// Multiplicative log-normal noise factor of table cell `cell` (mean 1, never negative).
+float noise_factor(const ulong cell, const ulong seed, const float level) {
+  const uint4 r = philox4x32_10((uint4)((uint)cell, (uint)(cell >> 32), 0x66696265u, 0u),
+                                (uint2)((uint)seed, (uint)(seed >> 32)));
+  const float u1 = ((float)(r.x >> 8) + 0.5f) * (1.0f / 16777216.0f);
+  const float u2 = ((float)(r.y >> 8) + 0.5f) * (1.0f / 16777216.0f);
+  const float z = sqrt(-2.0f * log(u1)) * cos(2.0f * FIBER_PI * u2);
+  return exp(level * z - 0.5f * level * level);
+}
+
+// global (n_phi_i, batch)
+__kernel void fiber_azimuthal(const FiberParams prm, __global const float* theta_o, __global const float* phi_o,
+                              __global const float* phi_i, __global const float2* h_rule, const uint n_h,
+                              const uint n_phi_o, const uint n_phi_i, const uint first_slice, const uint batch,
+                              __global float* nbar) {
+  const uint j = get_global_id(0), b = get_global_id(1);
+  if (j >= n_phi_i || b >= batch) return;
+  const uint s_idx = first_slice + b;
+  const float th_o = theta_o[s_idx / n_phi_o];
+  const float dphi = phi_i[j] - phi_o[s_idx % n_phi_o];
+  const float sin_o = sin(th_o), cos_o = fmax(cos(th_o), 1e-7f);
+  const float sin_t = sin_o / prm.eta, cos_t = sqrt(fmax(0.0f, 1.0f - sin_t * sin_t));
+  const float etap = sqrt(prm.eta * prm.eta - sin_o * sin_o) / cos_o;
+  float acc0 = 0.0f, acc1 = 0.0f, acc2 = 0.0f, acc3 = 0.0f;
+  for (uint k = 0; k < n_h; ++k) {
+    const float h = h_rule[k].x, w = h_rule[k].y;
+    const float sin_gt = h / etap, cos_gt = sqrt(fmax(0.0f, 1.0f - sin_gt * sin_gt));
+    const float gamma_o = asin(clamp(h, -1.0f, 1.0f)), gamma_t = asin(clamp(sin_gt, -1.0f, 1.0f));
+    const float T = exp(-prm.sigma_a * (2.0f * cos_gt / cos_t));
+    const float F = fresnel_dielectric(cos_o * sqrt(fmax(0.0f, 1.0f - h * h)), prm.eta);
+    const float a0 = F, a1 = (1.0f - F) * (1.0f - F) * T, a2 = a1 * T * F, a3 = a2 * F * T / (1.0f - T * F);
+    const float n0 = trimmed_logistic(wrap_pi(dphi + 2.0f * gamma_o), prm.s, prm.logistic_norm);
+    const float n1 = trimmed_logistic(wrap_pi(dphi - (2.0f * gamma_t - 2.0f * gamma_o + FIBER_PI)), prm.s,
+                                      prm.logistic_norm);
+    const float n2 = trimmed_logistic(wrap_pi(dphi - (4.0f * gamma_t - 2.0f * gamma_o + 2.0f * FIBER_PI)), prm.s,
+                                      prm.logistic_norm);
+    acc0 += w * a0 * n0;
+    acc1 += w * a1 * n1;
+    acc2 += w * a2 * n2;
+    acc3 += w * a3;
+  }
+  __global float* out = nbar + (size_t)b * LOBES * n_phi_i;
+  out[0 * n_phi_i + j] = 0.5f * acc0;
+  out[1 * n_phi_i + j] = 0.5f * acc1;
+  out[2 * n_phi_i + j] = 0.5f * acc2;
+  out[3 * n_phi_i + j] = 0.5f * acc3 / (2.0f * FIBER_PI);
+}
+
+// global (n_theta_i, batch)
+__kernel void fiber_longitudinal(const FiberParams prm, __global const float* theta_o, __global const float* theta_i,
+                                 const uint n_phi_o, const uint n_theta_i, const uint first_slice, const uint batch,
+                                 __global float* m) {
+  const uint i = get_global_id(0), b = get_global_id(1);
+  if (i >= n_theta_i || b >= batch) return;
+  const float th_o = theta_o[(first_slice + b) / n_phi_o], th_i = theta_i[i];
+  __global float* out = m + (size_t)b * LOBES * n_theta_i;
+  for (int p = 0; p < LOBES; ++p) out[p * n_theta_i + i] = longitudinal(prm.v[p], th_o + prm.tilt[p], th_i);
+}
+
+// global (n_phi_i, n_theta_i, batch)
+__kernel void fiber_combine(__global const float* m, __global const float* nbar, const uint n_theta_i,
+                            const uint n_phi_i, const uint first_slice, const uint batch, const float noise,
+                            const ulong seed, __global float* f) {
+  const uint j = get_global_id(0), i = get_global_id(1), b = get_global_id(2);
+  if (j >= n_phi_i || i >= n_theta_i || b >= batch) return;
+  __global const float* mb = m + (size_t)b * LOBES * n_theta_i;
+  __global const float* nb = nbar + (size_t)b * LOBES * n_phi_i;
+  float v = 0.0f;
+  for (int p = 0; p < LOBES; ++p) v += mb[p * n_theta_i + i] * nb[p * n_phi_i + j];
+  const ulong cells = (ulong)n_theta_i * n_phi_i;
+  const ulong local_cell = (ulong)i * n_phi_i + j;
+  if (noise > 0.0f) v *= noise_factor((ulong)(first_slice + b) * cells + local_cell, seed, noise);
+  f[(size_t)b * cells + local_cell] = v;
+}
