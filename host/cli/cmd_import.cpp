@@ -1,15 +1,33 @@
 // `bsdfmix import rgl FILE.bsdf`: tabulates a measured RGL BRDF.
 #include "cli/commands.hpp"
-#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "tables/rgl_import.hpp"
 
 namespace bsdfmix::cli {
 
 void add_import(CLI::App& app, Common& common) {
   auto* sub = app.add_subcommand("import", "tabulate measured data into a table file");
-  auto* rgl = sub->add_subcommand("rgl", "a measured BRDF of the RGL material database (.bsdf)");
+  auto* rgl = sub->add_subcommand(
+      "rgl", "a measured isotropic BRDF of the RGL material database (.bsdf): luminance in `values`, "
+             "RGB beside it, hemisphere domain, azimuthal symmetry");
+  static RglImportOptions opt;
+  static std::string output;
+  rgl->add_option("file", opt.file, "the RGL .bsdf file")->required()->check(CLI::ExistingFile);
+  rgl->add_option("--theta-o", opt.n_theta_o, "theta_o slices over [0, pi/2]")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  rgl->add_option("--theta-i", opt.n_theta_i, "theta_i cells over [0, pi/2]")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  rgl->add_option("--phi-i", opt.n_phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  rgl->add_option("--threads", opt.threads, "worker threads (0: all cores)")->capture_default_str();
+  rgl->add_option("-o,--output", output, "the table file to write (HDF5)")->required();
   add_common_options(*rgl, common);
   sub->require_subcommand(1);
-  rgl->callback([] { throw UnavailableError("import rgl is not yet available in this build"); });
+  rgl->callback([&common] {
+    Progress::set_enabled(!common.quiet);
+    import_rgl_table(opt, output);
+    log_line("wrote " + output);
+  });
 }
 
 }  // namespace bsdfmix::cli

@@ -1,0 +1,83 @@
+// The RGL importer: evaluates the measured BRDF on every cell center, slices in parallel.
+#include "tables/rgl_import.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <thread>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "io/table.hpp"
+#include "tables/rgl_brdf.hpp"
+
+namespace bsdfmix {
+
+void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) {
+  if (opt.n_theta_o < 1 || opt.n_theta_i < 1 || opt.n_phi_i < 1)
+    throw InputError("import rgl " + opt.file + ": resolutions must be >= 1 (theta_o " +
+                     std::to_string(opt.n_theta_o) + ", theta_i " + std::to_string(opt.n_theta_i) + ", phi_i " +
+                     std::to_string(opt.n_phi_i) + ")");
+  const RglBrdf brdf(opt.file);
+
+  TableMeta meta = make_grid(Domain::Hemisphere, opt.n_theta_o, 1, opt.n_theta_i, opt.n_phi_i, true);
+  meta.rgb = true;
+  const std::string name = std::filesystem::path(opt.file).filename().string();
+  meta.source = "{\"model\": \"rgl\", \"file\": \"" + name + "\", \"sha256\": \"" + brdf.sha256() + "\"}";
+
+  const std::size_t n_to = meta.theta_o.size(), n_ti = meta.theta_i.size(), n_pi = meta.phi_i.size();
+  const std::size_t cells = n_ti * n_pi;
+  // Light directions of the cells, shared by every slice.
+  std::vector<std::array<double, 3>> wi(cells);
+  for (std::size_t t = 0; t < n_ti; ++t)
+    for (std::size_t p = 0; p < n_pi; ++p) {
+      const double st = std::sin(meta.theta_i[t]), ct = std::cos(meta.theta_i[t]);
+      wi[t * n_pi + p] = {st * std::cos(meta.phi_i[p]), st * std::sin(meta.phi_i[p]), ct};
+    }
+
+  unsigned threads = opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t batch = std::max<std::size_t>(threads, 1) * 2;
+  TableWriter writer(out_path, meta);
+  Progress progress("import " + name, n_to, "slices");
+  std::atomic<std::size_t> negative{0};
+
+  std::vector<std::vector<float>> values(batch), rgb(batch);
+  for (std::size_t first = 0; first < n_to; first += batch) {
+    const std::size_t count = std::min(batch, n_to - first);
+    std::atomic<std::size_t> next{0};
+    auto work = [&] {
+      for (std::size_t j; (j = next++) < count;) {
+        const double to = meta.theta_o[first + j];
+        const std::array<double, 3> wo = {std::sin(to), 0.0, std::cos(to)};  // phi_o = 0
+        auto& v = values[j];
+        auto& c = rgb[j];
+        v.assign(cells, 0.0f);
+        c.assign(cells * 3, 0.0f);
+        std::size_t neg = 0;
+        for (std::size_t k = 0; k < cells; ++k) {
+          const RglValue f = brdf.eval(wo, wi[k]);
+          // The fit target is a density: a (noise) negative luminance would make it
+          // invalid, so it is stored as 0 and counted; rgb keeps the measured values.
+          if (f.y < 0.0) ++neg;
+          v[k] = float(std::max(0.0, f.y));
+          for (int ch = 0; ch < 3; ++ch) c[k * 3 + ch] = float(f.rgb[ch]);
+        }
+        negative += neg;
+        progress.advance();
+      }
+    };
+    std::vector<std::thread> pool;
+    const unsigned n_threads = unsigned(std::min<std::size_t>(threads, count));
+    for (unsigned t = 1; t < n_threads; ++t) pool.emplace_back(work);
+    work();
+    for (auto& th : pool) th.join();
+    for (std::size_t j = 0; j < count; ++j) writer.write_slice(first + j, 0, values[j].data(), rgb[j].data());
+  }
+  writer.commit();
+  progress.finish();
+  if (negative) log_line(name + ": " + std::to_string(negative.load()) + " cells with negative luminance stored as 0");
+}
+
+}  // namespace bsdfmix

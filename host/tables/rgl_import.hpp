@@ -1,0 +1,21 @@
+// Tabulates a measured RGL BRDF on the hemisphere grid of DESIGN.md (azimuthal symmetry).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace bsdfmix {
+
+struct RglImportOptions {
+  std::string file;  // the .bsdf file
+  std::size_t n_theta_o = 90, n_theta_i = 90, n_phi_i = 180;
+  unsigned threads = 0;  // 0: std::thread::hardware_concurrency()
+};
+
+// Writes the table (atomically) to out_path: `values` the luminance of f, `rgb` beside
+// it, one slice per theta_o at phi_o = 0, cells at the grid's centers. Cells below the
+// horizon cannot occur (centers lie inside the hemisphere). Throws InputError on a bad
+// file or options, IoError on a write failure.
+void import_rgl_table(const RglImportOptions& opt, const std::string& out_path);
+
+}  // namespace bsdfmix
