@@ -206,17 +206,57 @@ TEST_CASE("the sampling density of the warps integrates to at most 1", "[rgl]") 
   }
 }
 
+// Albedo by importance sampling with the file's own warps: stratified n x n samples of
+// f cos / pdf. Independent of any grid, so it resolves the sharp lobes the midpoint rule
+// on a 90 x 180 grid underestimates (cg_sunflower by up to 6% near 60 degrees).
+double albedo_is(const RglBrdf& b, double theta_o, int n) {
+  const std::array<double, 3> wo = {std::sin(theta_o), 0.0, std::cos(theta_o)};
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const auto smp = b.sample(wo, (i + 0.5) / n, (j + 0.5) / n);
+      if (smp.valid) sum += b.eval(wo, smp.omega_i).y * smp.omega_i[2] / smp.pdf;
+    }
+  return sum / (double(n) * n);
+}
+
+TEST_CASE("sampling the warps: pdf of the samples agrees with pdf()", "[rgl]") {
+  for (const char* stem : kFiles) {
+    RglBrdf b(rgl_path(stem));
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    double worst = 0.0;
+    int valid = 0;
+    for (int k = 0; k < 2000; ++k) {
+      const double to = deg(80.0) * U(rng);
+      const std::array<double, 3> wo = {std::sin(to), 0.0, std::cos(to)};
+      const auto smp = b.sample(wo, U(rng), U(rng));
+      if (!smp.valid) continue;
+      ++valid;
+      worst = std::max(worst, std::abs(b.pdf(wo, smp.omega_i) - smp.pdf) / smp.pdf);
+    }
+    INFO(stem << ": " << valid << " valid samples, max pdf rel diff " << worst);
+    CHECK(valid > 1500);
+    CHECK(worst < 1e-4);
+  }
+}
+
 TEST_CASE("albedo at most 1 up to 75 degrees; grazing values reported", "[rgl]") {
-  // Tolerance: the midpoint rule on the 90 x 180 grid against a 360 x 720 grid differs by
-  // at most ~0.3% (measured, sharpest lobe: cg_sunflower at normal view), so 1 + 0.005.
+  // Two estimates of the albedo integral of f cos over the light hemisphere:
+  // - the imported table at the default resolution (90 x 90 x 180, 1 degree slices),
+  //   sum of integrand weights: <= 1 + 0.005 (its own quadrature error is below 0.5% for
+  //   the two smooth files and negative, an underestimate, for the sharp lobes);
+  // - importance sampling with the warps (64 x 64 stratified): <= 1 + 0.01 at every
+  //   degree from 0 to 75. satin_rosaline's converged albedo at 75 degrees is 1.0006
+  //   (midpoint rule on 360 x 720), so 1% covers that measurement excess plus the
+  //   estimator's noise (~0.2%).
   Progress::set_enabled(false);
-  const double tol = 0.005;
   for (const char* stem : kFiles) {
     INFO(stem);
     const std::string out = temp_path(std::string(stem) + ".h5");
     RglImportOptions opt;
     opt.file = rgl_path(stem);
-    opt.n_theta_o = 90;  // 1 degree slices: centers 0.5 .. 89.5 degrees
+    opt.n_theta_o = 90;
     opt.n_theta_i = 90;
     opt.n_phi_i = 180;
     import_rgl_table(opt, out);
@@ -232,21 +272,28 @@ TEST_CASE("albedo at most 1 up to 75 degrees; grazing values reported", "[rgl]")
       const auto v = r.read_slice(t, 0);  // checks NaN, Inf, negative
       double a = 0.0;
       for (double w : integrand_weights(m.domain, m.theta_i, m.phi_i, v.data())) a += w;
-      if (m.theta_o[t] <= deg(75.0)) max_le75 = std::max(max_le75, a);
       max_all = std::max(max_all, a);
       if (m.theta_o[t] <= deg(75.0)) {
-        INFO("theta_o " << m.theta_o[t] * 180 / kPi << " deg: albedo " << a);
-        CHECK(a <= 1.0 + tol);
+        max_le75 = std::max(max_le75, a);
+        INFO("table slice theta_o " << m.theta_o[t] * 180 / kPi << " deg: albedo " << a);
+        CHECK(a <= 1.005);
         CHECK(a > 0.01);
       }
     }
     RglBrdf b(opt.file);
+    double max_is = 0.0;
+    for (int d = 0; d <= 75; ++d) {
+      const double a = albedo_is(b, deg(d), 64);
+      INFO("importance-sampled albedo at " << d << " deg: " << a);
+      CHECK(a <= 1.01);
+      max_is = std::max(max_is, a);
+    }
     std::ostringstream report;
-    report << stem << " albedo:";
-    for (double to : {0.0, 45.0, 60.0, 75.0, 80.0, 85.0}) report << " " << to << "deg " << albedo(b, deg(to), 90, 180);
-    report << " | max over slices <= 75deg " << max_le75 << ", over all " << max_all;
+    report << stem << " albedo (90x180 grid / importance sampled):";
+    for (double to : {0.0, 45.0, 75.0, 85.0})
+      report << "  " << to << " deg " << albedo(b, deg(to), 90, 180) << " / " << albedo_is(b, deg(to), 64);
+    report << " | max <= 75 deg: table slices " << max_le75 << ", sampled " << max_is << "; all slices " << max_all;
     WARN(report.str());
-    CHECK(albedo(b, deg(75.0), 90, 180) <= 1.0 + tol);
   }
 }
 
@@ -259,11 +306,12 @@ TEST_CASE("satin_rosaline exceeds albedo 1 at grazing view, kept as measured", "
 }
 
 TEST_CASE("reciprocity within measurement tolerance", "[rgl]") {
-  // f(omega_o, omega_i) vs f(omega_i, omega_o) on random direction pairs up to 75 degrees.
-  // The two values come from different view elevations of the measurement (and different
-  // interpolation between them), so they agree only to measurement accuracy: the median
-  // relative difference is a few percent (see docs/rgl.md); 10% bounds it with margin,
-  // while a mix-up of the directions or of the cosine would give tens of percent.
+  // f(omega_o, omega_i) vs f(omega_i, omega_o) on 4000 random direction pairs up to 75
+  // degrees. The two values come from different view elevations of the measurement (and
+  // different interpolation between its 8 of them), so they agree to measurement accuracy
+  // only: median relative difference 1.3-1.6%, 90th percentile 4-6% on the three files.
+  // Bounds: 5% and 15%. Leaving the light cosine in f (Mitsuba's eval) would make the
+  // median |cos a - cos b| / mean, about 40% on these pairs.
   for (const char* stem : kFiles) {
     RglBrdf b(rgl_path(stem));
     std::mt19937_64 rng(11);
@@ -280,8 +328,8 @@ TEST_CASE("reciprocity within measurement tolerance", "[rgl]") {
     const double median = rel[rel.size() / 2], p90 = rel[rel.size() * 9 / 10];
     WARN(stem << " reciprocity: median relative difference " << median << ", 90th percentile " << p90 << " over "
               << rel.size() << " pairs");
-    CHECK(median < 0.10);
-    CHECK(p90 < 0.35);
+    CHECK(median < 0.05);
+    CHECK(p90 < 0.15);
   }
 }
 

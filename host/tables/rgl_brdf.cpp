@@ -343,4 +343,23 @@ double RglBrdf::pdf(const std::array<double, 3>& wo, const std::array<double, 3>
   return s[2] * lum_pdf / jac;
 }
 
+RglBrdf::Sample RglBrdf::sample(const std::array<double, 3>& wo, double u1, double u2) const {
+  Sample out;
+  if (!(wo[2] > 0.0)) return out;
+  const double theta_v = elevation(wo), phi_v = std::atan2(wo[1], wo[0]);
+  const double params[2] = {phi_v, theta_v};
+  // Luminance warp first, then the VNDF warp: a half vector in (u_theta, u_phi).
+  const auto l = luminance_.sample(u2, u1, params);
+  const auto um = vndf_.sample(l[0], l[1], params);
+  const double theta_m = um[0] * um[0] * (kPi / 2), phi_m = (2.0 * um[1] - 1.0) * kPi + phi_v;
+  const std::array<double, 3> m = {std::sin(theta_m) * std::cos(phi_m), std::sin(theta_m) * std::sin(phi_m),
+                                   std::cos(theta_m)};
+  const double dot = wo[0] * m[0] + wo[1] * m[1] + wo[2] * m[2];
+  for (int k = 0; k < 3; ++k) out.omega_i[k] = 2.0 * dot * m[k] - wo[k];
+  const double jac = std::max(2.0 * kPi * kPi * um[0] * std::sin(theta_m), 1e-12) * 4.0 * dot;
+  out.pdf = um[2] * l[2] / jac;
+  out.valid = out.omega_i[2] > 0.0 && dot > 0.0 && out.pdf > 0.0;
+  return out;
+}
+
 }  // namespace bsdfmix

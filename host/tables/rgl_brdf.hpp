@@ -79,6 +79,14 @@ class RglBrdf {
   // light direction for the view direction omega_o: luminance warp, then VNDF warp
   // (Mitsuba's `pdf`). Its integral over the upper hemisphere is <= 1.
   double pdf(const std::array<double, 3>& omega_o, const std::array<double, 3>& omega_i) const;
+  // Samples a light direction for the view omega_o from (u1, u2) in [0, 1)^2 with the
+  // warps (Mitsuba's `sample`). `valid` is false when it falls below the horizon.
+  struct Sample {
+    std::array<double, 3> omega_i{};
+    double pdf = 0.0;
+    bool valid = false;
+  };
+  Sample sample(const std::array<double, 3>& omega_o, double u1, double u2) const;
 
  private:
   std::string path_, description_, sha256_;
