@@ -119,7 +119,7 @@ __kernel void fiber_azimuthal(const FiberParams prm, __global const float* theta
     const float gamma_o = asin(clamp(h, -1.0f, 1.0f)), gamma_t = asin(clamp(sin_gt, -1.0f, 1.0f));
     const float T = exp(-prm.sigma_a * (2.0f * cos_gt / cos_t));
     const float F = fresnel_dielectric(cos_o * sqrt(fmax(0.0f, 1.0f - h * h)), prm.eta);
-    const float a0 = F, a1 = (1.0f - F) * (1.0f - F) * T, a2 = a1 * T * F, a3 = a2 * F * T / (1.0f - T * F);
+    const float a0 = F, a1 = (1.0f - F) * (1.0f - F) * T, a2 = a1 * T * F, a3 = a2 * F * T / fmax(1.0f - T * F, 1e-30f);
     const float n0 = trimmed_logistic(wrap_pi(dphi + 2.0f * gamma_o), prm.s, prm.logistic_norm);
     const float n1 = trimmed_logistic(wrap_pi(dphi - (2.0f * gamma_t - 2.0f * gamma_o + FIBER_PI)), prm.s,
                                       prm.logistic_norm);

@@ -176,7 +176,10 @@ std::array<double, kFiberLobes> FiberModel::attenuation(double theta_o, double h
   a[0] = F;
   a[1] = sqr(1 - F) * T;
   a[2] = a[1] * T * F;
-  a[3] = a[2] * F * T / (1 - T * F);
+  // Geometric series of the orders p >= 3; at grazing h = +-1 with no absorption T F = 1,
+  // where (1 - F)^2 = 0 already: the residual is 0.
+  const double denom = 1 - T * F;
+  a[3] = denom > 0 ? a[2] * F * T / denom : 0.0;
   return a;
 }
 
