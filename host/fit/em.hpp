@@ -1,0 +1,87 @@
+// Weighted EM fits of 2D Gaussian mixtures to slices: the OpenCL engine and its CPU reference.
+// docs/em.md gives the equations, the periodic-phi method and the tolerances.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "device/device.hpp"
+#include "fit/gmm.hpp"
+#include "fit/slices.hpp"
+
+namespace bsdfmix {
+
+class Progress;
+
+struct EmSettings {
+  int iterations = 100;      // at most this many EM iterations (M-steps) per restart
+  double tolerance = 1e-6;   // stop when |L_t - L_(t-1)| <= tolerance * max(1, |L_t|); <= 0: never
+  int restarts = 3;          // initializations per task; the best final log-likelihood is kept
+  std::uint64_t seed = 1;    // initializations depend on (seed, slice, k, restart) only
+  double cov_floor = -1;     // rad^2 added to both variances every M-step; < 0: (min cell step / 4)^2
+  double min_weight = 1e-6;  // a component with less responsibility mass is re-seeded
+};
+
+// One (slice, K) problem.
+struct EmTask {
+  std::size_t slice = 0;
+  int k = 1;
+  EmSettings settings;
+};
+
+struct EmResult {
+  Gmm gmm;
+  double loglik = 0;  // sum_i w_i log p(x_i), w normalized to sum 1, p = gmm_density
+  int iterations = 0;  // EM iterations of the kept restart
+  bool ok = false;
+  std::string failure;  // why, when !ok
+};
+
+// The largest K a task may ask for.
+constexpr int kEmMaxK = 128;
+
+// The CPU reference: the same initialization and EM in double precision (Eigen),
+// one task after the other. Throws InputError/ConfigError on invalid input.
+std::vector<EmResult> em_fit_reference(const SliceSet& set, const std::vector<EmTask>& tasks);
+
+enum class EmPrecision { Auto, Fp32, Fp64 };  // Auto: fp64 where the device has it
+
+// Seconds spent by the last fit(): wall time, and per phase summed over batches.
+struct EmTiming {
+  double seconds = 0, init_seconds = 0, iterate_seconds = 0, finish_seconds = 0;
+  std::size_t batches = 0;
+  long long iterations = 0;  // EM iterations launched, summed over batches
+};
+
+// The OpenCL engine: batches of problems (task x restart) handed to work queues,
+// queues_per_device on each device, one host thread per queue.
+class EmEngine {
+ public:
+  explicit EmEngine(std::vector<Device> devices, int queues_per_device = 1,
+                    EmPrecision precision = EmPrecision::Auto);
+
+  std::vector<EmResult> fit(const SliceSet& set, const std::vector<EmTask>& tasks,
+                            Progress* progress = nullptr);
+
+  // Upper bound on the point-component updates of one EM iteration of a batch
+  // (sum over its problems of padded cells x K bucket); at least one problem per batch.
+  void set_batch_budget(std::uint64_t point_components) { batch_budget_ = point_components; }
+  std::size_t queue_count() const { return devices_.size() * static_cast<std::size_t>(queues_per_device_); }
+  const std::vector<Device>& devices() const { return devices_; }
+  bool uses_fp64(std::size_t device) const;
+  const EmTiming& last_timing() const { return timing_; }
+
+ private:
+  std::vector<Device> devices_;
+  int queues_per_device_;
+  EmPrecision precision_;
+  std::uint64_t batch_budget_ = std::uint64_t(1) << 25;
+  EmTiming timing_;
+};
+
+std::string precision_name(EmPrecision p);  // auto, fp32, fp64
+EmPrecision parse_precision(const std::string& name);  // throws ConfigError
+
+}  // namespace bsdfmix

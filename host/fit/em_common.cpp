@@ -1,0 +1,204 @@
+// EM pieces shared by the engine and the reference: slices, tasks, initialization.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+#include "fit/em_internal.hpp"
+
+namespace bsdfmix {
+
+std::string precision_name(EmPrecision p) {
+  switch (p) {
+    case EmPrecision::Fp32: return "fp32";
+    case EmPrecision::Fp64: return "fp64";
+    default: return "auto";
+  }
+}
+
+EmPrecision parse_precision(const std::string& name) {
+  if (name == "auto") return EmPrecision::Auto;
+  if (name == "fp32") return EmPrecision::Fp32;
+  if (name == "fp64") return EmPrecision::Fp64;
+  throw ConfigError("unknown EM precision '" + name + "' (expected auto, fp32 or fp64)");
+}
+
+namespace em_detail {
+
+PreparedSlice prepare_slice(const SliceSet& set, std::size_t slice) {
+  PreparedSlice p;
+  const auto& w = set.weights[slice];
+  double total = 0;
+  for (double v : w) total += v;
+  if (!(total > 0) || !std::isfinite(total)) {
+    p.failure = "slice " + std::to_string(slice) + " has zero total weight";
+    return p;
+  }
+  p.w.resize(w.size());
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    p.w[i] = w[i] / total;
+    if (p.w[i] > 0) ++p.positive;
+  }
+  return p;
+}
+
+std::string task_failure(const PreparedSlice& s, std::size_t slice, int k) {
+  if (!s.failure.empty()) return s.failure;
+  if (s.positive < static_cast<std::size_t>(k))
+    return "slice " + std::to_string(slice) + " has " + std::to_string(s.positive) +
+           " cells with positive weight, fewer than K = " + std::to_string(k);
+  return "";
+}
+
+void validate_tasks(const SliceSet& set, const std::vector<EmTask>& tasks) {
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    const EmTask& t = tasks[i];
+    const std::string where = "EM task " + std::to_string(i) + ": ";
+    if (t.slice >= set.weights.size())
+      throw ConfigError(where + "slice " + std::to_string(t.slice) + " out of range (" +
+                        std::to_string(set.weights.size()) + " slices)");
+    if (t.k < 1 || t.k > kEmMaxK)
+      throw ConfigError(where + "K = " + std::to_string(t.k) + " outside 1.." + std::to_string(kEmMaxK));
+    if (t.settings.iterations < 1)
+      throw ConfigError(where + "iterations must be at least 1");
+    if (t.settings.restarts < 1) throw ConfigError(where + "restarts must be at least 1");
+    if (!std::isfinite(t.settings.tolerance)) throw ConfigError(where + "tolerance must be finite");
+    if (!(t.settings.min_weight >= 0) || !(t.settings.min_weight < 1))
+      throw ConfigError(where + "min_weight must be in [0, 1)");
+    if (!std::isfinite(t.settings.cov_floor)) throw ConfigError(where + "cov_floor must be finite");
+  }
+}
+
+double cov_floor(const SliceGrid& grid, const EmSettings& s) {
+  if (s.cov_floor >= 0) return s.cov_floor;
+  const double step = std::min(axis_step(grid.theta), axis_step(grid.phi));
+  return 0.0625 * step * step;
+}
+
+int k_bucket(int k) {
+  int b = 4;
+  while (b < k) b *= 2;
+  return b;
+}
+
+namespace {
+
+std::uint64_t splitmix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+struct Rng {
+  std::uint64_t state;
+  double uniform() {  // [0, 1)
+    state = splitmix(state);
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  }
+};
+
+// Index i with probability p_i / sum p (p >= 0, sum > 0).
+std::size_t sample(const std::vector<double>& p, double total, Rng& rng) {
+  const double u = rng.uniform() * total;
+  double c = 0;
+  std::size_t last = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p[i] <= 0) continue;
+    c += p[i];
+    last = i;
+    if (u < c) return i;
+  }
+  return last;
+}
+
+}  // namespace
+
+Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t slice, int k,
+               int restart, const EmSettings& settings) {
+  const std::size_t nt = grid.theta.size(), np = grid.phi.size(), n = nt * np;
+  Rng rng{splitmix(splitmix(splitmix(splitmix(settings.seed) ^ (slice * 0xD6E8FEB86659FD93ULL)) ^
+                            (static_cast<std::uint64_t>(k) * 0xA0761D6478BD642FULL)) ^
+                   (static_cast<std::uint64_t>(restart) * 0xE7037ED1A0B428DBULL))};
+  std::vector<double> ct(k), cp(k);
+  std::vector<double> d2(n, std::numeric_limits<double>::infinity()), p(n);
+  std::vector<int> assign(n, 0);
+  auto add_center = [&](int j, std::size_t cell) {
+    ct[j] = grid.theta[cell / np];
+    cp[j] = grid.phi[cell % np];
+    for (std::size_t i = 0; i < n; ++i) {
+      const double dt = grid.theta[i / np] - ct[j];
+      const double dp = wrap_phi(grid.phi[i % np] - cp[j]);
+      const double d = dt * dt + dp * dp;
+      if (d < d2[i]) {
+        d2[i] = d;
+        assign[i] = j;
+      }
+    }
+  };
+  double total = 0;
+  for (double v : w) total += v;
+  add_center(0, sample(w, total, rng));
+  for (int j = 1; j < k; ++j) {
+    double t = 0;
+    for (std::size_t i = 0; i < n; ++i) t += (p[i] = w[i] * d2[i]);
+    if (t > 0) {
+      add_center(j, sample(p, t, rng));
+    } else {  // every weighted cell is a center already: the heaviest non-center cell
+      std::size_t best = n;
+      for (std::size_t i = 0; i < n; ++i)
+        if (d2[i] > 0 && (best == n || w[i] > w[best])) best = i;
+      add_center(j, best == n ? 0 : best);
+    }
+  }
+  // One hard-assignment pass.
+  std::vector<double> s(6 * static_cast<std::size_t>(k), 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (w[i] <= 0) continue;
+    const int j = assign[i];
+    const double dt = grid.theta[i / np] - ct[j];
+    const double dp = wrap_phi(grid.phi[i % np] - cp[j]);
+    double* a = &s[6 * j];
+    a[0] += w[i];
+    a[1] += w[i] * dt;
+    a[2] += w[i] * dp;
+    a[3] += w[i] * dt * dt;
+    a[4] += w[i] * dt * dp;
+    a[5] += w[i] * dp * dp;
+  }
+  const double floor = cov_floor(grid, settings);
+  Gmm g;
+  g.weight.resize(k);
+  g.mean.resize(2 * k);
+  g.cov.resize(3 * k);
+  double wsum = 0;
+  for (int j = 0; j < k; ++j) {
+    const double* a = &s[6 * j];
+    const double m = std::max(a[0], std::numeric_limits<double>::min());
+    const double dt = a[1] / m, dp = a[2] / m;
+    g.weight[j] = a[0];
+    wsum += a[0];
+    g.mean[2 * j] = ct[j] + dt;
+    g.mean[2 * j + 1] = wrap_phi(cp[j] + dp);
+    double stt = std::max(a[3] / m - dt * dt, 0.0), spp = std::max(a[5] / m - dp * dp, 0.0);
+    double stp = a[4] / m - dt * dp;
+    const double lim = std::sqrt(stt * spp);
+    stp = std::min(std::max(stp, -lim), lim);
+    g.cov[3 * j] = stt + floor;
+    g.cov[3 * j + 1] = stp;
+    g.cov[3 * j + 2] = spp + floor;
+  }
+  for (int j = 0; j < k; ++j) g.weight[j] = wsum > 0 ? g.weight[j] / wsum : 1.0 / k;
+  return g;
+}
+
+double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm) {
+  const std::size_t np = grid.phi.size();
+  double l = 0;
+  for (std::size_t i = 0; i < w.size(); ++i)
+    if (w[i] > 0) l += w[i] * gmm_log_density(gmm, grid.theta[i / np], grid.phi[i % np]);
+  return l;
+}
+
+}  // namespace em_detail
+}  // namespace bsdfmix

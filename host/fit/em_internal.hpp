@@ -1,0 +1,49 @@
+// Shared by the EM engine, its CPU reference and the benchmark: slice preparation,
+// initialization, and the reference iteration.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fit/em.hpp"
+
+namespace bsdfmix::em_detail {
+
+// A slice ready to fit: weights normalized to sum 1 (empty when the slice is zero).
+struct PreparedSlice {
+  std::vector<double> w;
+  std::size_t positive = 0;  // cells with w > 0
+  std::string failure;       // non-empty: the slice cannot be fitted at all
+};
+
+PreparedSlice prepare_slice(const SliceSet& set, std::size_t slice);
+
+// Why a task cannot run on this slice ("" when it can).
+std::string task_failure(const PreparedSlice& s, std::size_t slice, int k);
+
+// Checks tasks against the set (slice index, 1 <= k <= kEmMaxK, settings). Throws ConfigError.
+void validate_tasks(const SliceSet& set, const std::vector<EmTask>& tasks);
+
+// The covariance floor in effect (rad^2).
+double cov_floor(const SliceGrid& grid, const EmSettings& s);
+
+// Deterministic initialization from (seed, slice, k, restart): weighted k-means++
+// seeding (phi distances to the nearest image), then one hard-assignment pass
+// giving weights, means and covariances (+ floor) of the k clusters.
+Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t slice, int k,
+               int restart, const EmSettings& settings);
+
+// The reference EM from `init` (double precision); loglik of the final state with
+// the exact periodic density. `iterate_seconds` receives the time of the iterations.
+EmResult run_reference(const SliceGrid& grid, const std::vector<double>& w, const Gmm& init,
+                       const EmSettings& settings, double* iterate_seconds = nullptr);
+
+// sum_i w_i log gmm_density(x_i) over the grid.
+double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm);
+
+// Smallest power of two >= max(k, 4): the K_MAX a problem of k components runs under.
+int k_bucket(int k);
+
+}  // namespace bsdfmix::em_detail

@@ -1,0 +1,49 @@
+// The density of a periodic-phi 2D Gaussian mixture.
+#include "fit/gmm.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/domain.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+// log of weight_k * N(theta, phi + 2 pi m) for each component and image, into `out`.
+void component_logs(const Gmm& g, double theta, double phi, std::vector<double>& out) {
+  out.clear();
+  for (int k = 0; k < g.k(); ++k) {
+    const double a = g.cov[3 * k], b = g.cov[3 * k + 1], c = g.cov[3 * k + 2];
+    const double det = a * c - b * b;
+    if (!(det > 0) || !(g.weight[k] > 0)) continue;
+    const double lognorm = std::log(g.weight[k]) - std::log(2 * kPi) - 0.5 * std::log(det);
+    const double dt = theta - g.mean[2 * k];
+    const double d0 = wrap_phi(phi - g.mean[2 * k + 1]);
+    for (int m = -1; m <= 1; ++m) {
+      const double dp = d0 + 2 * kPi * m;
+      const double q = (c * dt * dt - 2 * b * dt * dp + a * dp * dp) / det;
+      out.push_back(lognorm - 0.5 * q);
+    }
+  }
+}
+
+}  // namespace
+
+double gmm_log_density(const Gmm& gmm, double theta, double phi) {
+  thread_local std::vector<double> logs;
+  component_logs(gmm, theta, phi, logs);
+  if (logs.empty()) return -std::numeric_limits<double>::infinity();
+  const double m = *std::max_element(logs.begin(), logs.end());
+  if (!std::isfinite(m)) return m;
+  double s = 0;
+  for (double l : logs) s += std::exp(l - m);
+  return m + std::log(s);
+}
+
+double gmm_density(const Gmm& gmm, double theta, double phi) {
+  return std::exp(gmm_log_density(gmm, theta, phi));
+}
+
+}  // namespace bsdfmix

@@ -1,0 +1,425 @@
+// Weighted EM for 2D Gaussian mixtures over (theta, phi) cell grids, phi periodic.
+// See docs/em.md for the equations; host/fit/em_reference.cpp is the CPU reference.
+//
+// Batched: one launch serves P problems (a problem = one slice, one K, one restart).
+// A problem's cells are split into G chunks of WG * CPW * VEC cells; work-group
+// (g, p) handles chunk g of problem p. Each work-item walks CPW vectors of VEC
+// consecutive cells (explicit SIMD across cells, so a CPU compiler vectorizes the
+// per-component work without having to vectorize across work-items) and keeps the
+// weighted sufficient statistics of every component in private accumulators: the
+// N x K responsibilities never reach memory.
+//
+// Defines (the host passes them; the defaults build stand-alone):
+//   K_MAX   largest K of the problems in the launch (arrays are sized by it)
+//   VEC     cells per work-item vector: 16, 8, 4 or 1
+//   WG      work-group size (1 on CPUs: the vector is the parallelism)
+//   CPW     cell vectors per work-item per chunk
+//   EM_FP64 1: statistics above the lane level, the M-step and the state in double
+//   BSDFMIX_FP64 whether the device has cl_khr_fp64 (added by the host)
+
+#ifndef K_MAX
+#define K_MAX 16
+#endif
+#ifndef VEC
+#define VEC 16
+#endif
+#ifndef WG
+#define WG 1
+#endif
+#ifndef CPW
+#define CPW 32
+#endif
+#ifndef EM_FP64
+#define EM_FP64 0
+#endif
+#ifndef BSDFMIX_FP64
+#define BSDFMIX_FP64 0
+#endif
+
+#if EM_FP64
+#if !BSDFMIX_FP64
+#error "EM_FP64 needs a device with cl_khr_fp64"
+#endif
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double real_t;
+#define R(x) (x)
+#else
+typedef float real_t;
+#define R(x) (x##f)
+#endif
+
+// Statistics per component and their layout in a partial record of NSTAT values:
+// q * K_MAX + k for q = 0..5 (S0, St, Sp, Stt, Stp, Spp), then the log-likelihood.
+#define NSTAT (6 * K_MAX + 1)
+#define LL_INDEX (6 * K_MAX)
+// Component state (double or float): q * K_MAX + k for q = 0..5 (weight, mean theta,
+// mean phi, s_tt, s_tp, s_pp).
+#define NSTATE (6 * K_MAX)
+// E-step constants (float): q * K_MAX + k for q = 0..5 (mean theta, mean phi, qa, qb, qc, c0);
+// log2 of the weighted density is c0 + qa dt^2 + qb dt dp + qc dp^2.
+#define NCONST (6 * K_MAX)
+
+#define TWO_PI_F 6.283185307179586f
+#define INV_TWO_PI_F 0.15915494309189535f
+#define LOG2E_F 1.4426950408889634f
+#define LN2_R R(0.6931471805599453)
+#define PI_R R(3.141592653589793)
+#define TWO_PI_R R(6.283185307179586)
+
+#if VEC == 16
+typedef float16 floatv;
+#define VLOADV vload16
+#define LANES ((float16)(0.f, 1.f, 2.f, 3.f, 4.f, 5.f, 6.f, 7.f, 8.f, 9.f, 10.f, 11.f, 12.f, 13.f, 14.f, 15.f))
+#elif VEC == 8
+typedef float8 floatv;
+#define VLOADV vload8
+#define LANES ((float8)(0.f, 1.f, 2.f, 3.f, 4.f, 5.f, 6.f, 7.f))
+#elif VEC == 4
+typedef float4 floatv;
+#define VLOADV vload4
+#define LANES ((float4)(0.f, 1.f, 2.f, 3.f))
+#elif VEC == 1
+typedef float floatv;
+#define VLOADV(i, p) ((p)[i])
+#define LANES 0.f
+#else
+#error "VEC must be 16, 8, 4 or 1"
+#endif
+
+// Sum of the lanes of a vector, each lane converted to real_t first.
+inline real_t hsum(floatv v) {
+#if VEC == 1
+  return (real_t)v;
+#else
+  real_t s = R(0.0);
+  for (int i = 0; i < VEC; ++i) s += (real_t)(((float*)&v)[i]);
+  return s;
+#endif
+}
+
+// Coordinates of the cells c .. c + VEC - 1 of a row-major [theta][phi] grid,
+// computed from the index (no coordinate arrays in memory). Exact for c < 2^24.
+inline void cell_coords(uint c, float inv_nphi, float nphi, float theta0, float dtheta,
+                        float phi0, float dphi, floatv* t, floatv* ph) {
+  const floatv cf = (float)c + LANES;
+  const floatv row = floor((cf + 0.5f) * inv_nphi);
+  const floatv col = cf - row * nphi;
+  *t = theta0 + row * dtheta;
+  *ph = phi0 + col * dphi;
+}
+
+// Nearest-image phi difference, in [-pi, pi].
+inline floatv wrap_diff(floatv d) { return d - TWO_PI_F * rint(d * INV_TWO_PI_F); }
+
+// Writes the E-step constants of component k of a problem from its state.
+inline void component_constants(__global const real_t* st, __global float* cp, int k) {
+  const real_t w = st[0 * K_MAX + k], mt = st[1 * K_MAX + k], mp = st[2 * K_MAX + k];
+  const real_t stt = st[3 * K_MAX + k], stp = st[4 * K_MAX + k], spp = st[5 * K_MAX + k];
+  const real_t det = stt * spp - stp * stp;
+  const real_t l2e = R(1.4426950408889634);
+  cp[0 * K_MAX + k] = (float)mt;
+  cp[1 * K_MAX + k] = (float)mp;
+  cp[2 * K_MAX + k] = (float)(-R(0.5) * l2e * spp / det);
+  cp[3 * K_MAX + k] = (float)(l2e * stp / det);
+  cp[4 * K_MAX + k] = (float)(-R(0.5) * l2e * stt / det);
+  cp[5 * K_MAX + k] = (float)(log2(w) - log2(TWO_PI_R) - R(0.5) * log2(det));
+}
+
+// Status per problem: [2p] = 0 running, 1 done, 2 failed; [2p + 1] = iterations (M-steps) done.
+
+__kernel void em_constants(const uint n_problems, __global const int* prob_k,
+                           __global const real_t* state, __global float* cparams) {
+  const uint p = get_global_id(0);
+  if (p >= n_problems) return;
+  const int k = prob_k[p];
+  for (int j = 0; j < k; ++j) component_constants(state + p * NSTATE, cparams + p * NCONST, j);
+}
+
+// E-step fused with the accumulation of the weighted sufficient statistics, centred
+// on the current means (phi offsets to the nearest image), and the weighted
+// log-likelihood (in log2 units). Global size (G * WG, P), local (WG, 1).
+__kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
+void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
+              const float theta0, const float dtheta, const float phi0, const float dphi,
+              __global const float* restrict weights, __global const int* restrict prob_slice,
+              __global const int* restrict prob_k, __global const int* restrict status,
+              __global const float* restrict cparams, __global real_t* restrict partials) {
+  const uint p = get_group_id(1);
+  const uint g = get_group_id(0);
+  const uint G = get_num_groups(0);
+  const uint lid = get_local_id(0);
+  if (status[2 * p] != 0) return;
+  const int k = prob_k[p];
+  __global const float* cp = cparams + p * NCONST;
+  __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
+  const float nphi = (float)n_phi;
+
+  floatv a0[K_MAX], a1[K_MAX], a2[K_MAX], a3[K_MAX], a4[K_MAX], a5[K_MAX];
+  floatv e[K_MAX];
+  for (int j = 0; j < k; ++j) a0[j] = a1[j] = a2[j] = a3[j] = a4[j] = a5[j] = (floatv)0.f;
+  floatv ll = (floatv)0.f;
+
+  const uint base = g * (WG * CPW * VEC);
+  for (uint it = 0; it < CPW; ++it) {
+    const uint c = base + (it * WG + lid) * VEC;
+    const floatv wv = VLOADV(0, w + c);
+    floatv t, ph;
+    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    floatv m = (floatv)(-INFINITY);
+    for (int j = 0; j < k; ++j) {
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
+      const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+                            fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+      e[j] = ej;
+      m = fmax(m, ej);
+    }
+    floatv s = (floatv)0.f;
+    for (int j = 0; j < k; ++j) {
+      const floatv r = native_exp2(e[j] - m);
+      e[j] = r;
+      s += r;
+    }
+    const floatv f = wv / s;
+    ll = fma(wv, m + native_log2(s), ll);
+    for (int j = 0; j < k; ++j) {
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
+      const floatv rw = f * e[j];
+      const floatv rwt = rw * dt, rwp = rw * dp;
+      a0[j] += rw;
+      a1[j] += rwt;
+      a2[j] += rwp;
+      a3[j] = fma(rwt, dt, a3[j]);
+      a4[j] = fma(rwt, dp, a4[j]);
+      a5[j] = fma(rwp, dp, a5[j]);
+    }
+  }
+
+  __global real_t* out = partials + (p * G + g) * NSTAT;
+#if WG == 1
+  for (int j = 0; j < k; ++j) {
+    out[0 * K_MAX + j] = hsum(a0[j]);
+    out[1 * K_MAX + j] = hsum(a1[j]);
+    out[2 * K_MAX + j] = hsum(a2[j]);
+    out[3 * K_MAX + j] = hsum(a3[j]);
+    out[4 * K_MAX + j] = hsum(a4[j]);
+    out[5 * K_MAX + j] = hsum(a5[j]);
+  }
+  out[LL_INDEX] = hsum(ll);
+#else
+  __local real_t scratch[WG];
+  for (int q = 0; q <= 6 * k; ++q) {
+    const int j = q % k;
+    const int which = q / k;
+    floatv v;
+    if (which == 0) v = a0[j];
+    else if (which == 1) v = a1[j];
+    else if (which == 2) v = a2[j];
+    else if (which == 3) v = a3[j];
+    else if (which == 4) v = a4[j];
+    else if (which == 5) v = a5[j];
+    else v = ll;
+    scratch[lid] = hsum(v);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint half = WG / 2; half > 0; half >>= 1) {
+      if (lid < half) scratch[lid] += scratch[lid + half];
+      barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    if (lid == 0) out[which < 6 ? which * K_MAX + j : LL_INDEX] = scratch[0];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+#endif
+}
+
+// Sum over the G chunks of one statistic: plain in double, compensated (Kahan) in float.
+inline real_t sum_chunks(__global const real_t* partials, uint p, uint G, int index) {
+  real_t s = R(0.0);
+#if EM_FP64
+  for (uint g = 0; g < G; ++g) s += partials[(p * G + g) * NSTAT + index];
+#else
+  real_t comp = R(0.0);
+  for (uint g = 0; g < G; ++g) {
+    const real_t y = partials[(p * G + g) * NSTAT + index] - comp;
+    const real_t t = s + y;
+    comp = (t - s) - y;
+    s = t;
+  }
+#endif
+  return s;
+}
+
+inline real_t wrap_phi_r(real_t x) {
+  real_t r = x - TWO_PI_R * floor((x + PI_R) / TWO_PI_R);
+  return r >= PI_R ? r - TWO_PI_R : r;
+}
+
+// M-step, one work-item per problem: reduces the chunk statistics, tests
+// convergence on the log-likelihood of the current state, updates the state
+// (weights, means with phi wrapped, covariances plus the floor), re-seeds empty
+// components by splitting the heaviest one, and writes the E-step constants.
+__kernel void em_mstep(const uint n_problems, const uint G, const int iter, const int max_iter,
+                       const real_t tol, const real_t cov_floor, const real_t min_weight,
+                       __global const int* prob_k, __global int* status, __global real_t* state,
+                       __global real_t* lprev, __global const real_t* partials,
+                       __global float* cparams) {
+  const uint p = get_global_id(0);
+  if (p >= n_problems) return;
+  if (status[2 * p] != 0) return;
+  const int k = prob_k[p];
+  __global real_t* st = state + p * NSTATE;
+
+  const real_t L = LN2_R * sum_chunks(partials, p, G, LL_INDEX);
+  if (!isfinite(L)) {
+    status[2 * p] = 2;
+    status[2 * p + 1] = iter - 1;
+    return;
+  }
+  if (iter >= 2 && tol > R(0.0) && fabs(L - lprev[p]) <= tol * fmax(R(1.0), fabs(L))) {
+    status[2 * p] = 1;
+    status[2 * p + 1] = iter - 1;
+    lprev[p] = L;
+    return;
+  }
+  lprev[p] = L;
+
+  real_t total = R(0.0);
+  for (int j = 0; j < k; ++j) total += sum_chunks(partials, p, G, 0 * K_MAX + j);
+  if (!(total > R(0.0)) || !isfinite(total)) {
+    status[2 * p] = 2;
+    status[2 * p + 1] = iter - 1;
+    return;
+  }
+  bool empty[K_MAX];
+  for (int j = 0; j < k; ++j) {
+    const real_t s0 = sum_chunks(partials, p, G, 0 * K_MAX + j);
+    empty[j] = !(s0 > min_weight * total);
+    if (empty[j]) continue;
+    const real_t dt = sum_chunks(partials, p, G, 1 * K_MAX + j) / s0;
+    const real_t dp = sum_chunks(partials, p, G, 2 * K_MAX + j) / s0;
+    real_t ctt = sum_chunks(partials, p, G, 3 * K_MAX + j) / s0 - dt * dt;
+    real_t ctp = sum_chunks(partials, p, G, 4 * K_MAX + j) / s0 - dt * dp;
+    real_t cpp = sum_chunks(partials, p, G, 5 * K_MAX + j) / s0 - dp * dp;
+    ctt = fmax(ctt, R(0.0));
+    cpp = fmax(cpp, R(0.0));
+    const real_t lim = sqrt(ctt * cpp);
+    ctp = fmin(fmax(ctp, -lim), lim);
+    st[0 * K_MAX + j] = s0 / total;
+    st[1 * K_MAX + j] += dt;
+    st[2 * K_MAX + j] = wrap_phi_r(st[2 * K_MAX + j] + dp);
+    st[3 * K_MAX + j] = ctt + cov_floor;
+    st[4 * K_MAX + j] = ctp;
+    st[5 * K_MAX + j] = cpp + cov_floor;
+  }
+  // Re-seed each empty component (in index order) by splitting the heaviest
+  // non-empty one along its principal axis: means +- half a standard deviation,
+  // weight halved, covariance kept.
+  for (int j = 0; j < k; ++j) {
+    if (!empty[j]) continue;
+    int h = -1;
+    for (int i = 0; i < k; ++i)
+      if (!empty[i] && (h < 0 || st[0 * K_MAX + i] > st[0 * K_MAX + h])) h = i;
+    if (h < 0) {
+      status[2 * p] = 2;
+      status[2 * p + 1] = iter - 1;
+      return;
+    }
+    const real_t a = st[3 * K_MAX + h], b = st[4 * K_MAX + h], c = st[5 * K_MAX + h];
+    const real_t half_tr = R(0.5) * (a + c);
+    const real_t disc = sqrt(R(0.25) * (a - c) * (a - c) + b * b);
+    const real_t lambda = half_tr + disc;
+    real_t vx, vy;
+    if (fabs(b) > R(0.0)) {
+      vx = lambda - c;
+      vy = b;
+    } else if (a >= c) {
+      vx = R(1.0);
+      vy = R(0.0);
+    } else {
+      vx = R(0.0);
+      vy = R(1.0);
+    }
+    const real_t norm = sqrt(vx * vx + vy * vy);
+    const real_t step = R(0.5) * sqrt(lambda) / norm;
+    const real_t mt = st[1 * K_MAX + h], mp = st[2 * K_MAX + h];
+    st[1 * K_MAX + j] = mt + step * vx;
+    st[2 * K_MAX + j] = wrap_phi_r(mp + step * vy);
+    st[1 * K_MAX + h] = mt - step * vx;
+    st[2 * K_MAX + h] = wrap_phi_r(mp - step * vy);
+    st[0 * K_MAX + h] *= R(0.5);
+    st[0 * K_MAX + j] = st[0 * K_MAX + h];
+    st[3 * K_MAX + j] = a;
+    st[4 * K_MAX + j] = b;
+    st[5 * K_MAX + j] = c;
+    empty[j] = false;
+  }
+  real_t wsum = R(0.0);
+  for (int j = 0; j < k; ++j) wsum += st[0 * K_MAX + j];
+  for (int j = 0; j < k; ++j) st[0 * K_MAX + j] /= wsum;
+  for (int j = 0; j < k; ++j) component_constants(st, cparams + p * NCONST, j);
+  status[2 * p + 1] = iter;
+  if (iter >= max_iter) status[2 * p] = 1;
+}
+
+// The weighted log-likelihood (natural log) of the final state with the exact
+// periodic density: every component summed over the phi images m = -1, 0, 1.
+// One partial per chunk; the host adds them. Same grid as em_estep.
+__kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
+void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
+               const float theta0, const float dtheta, const float phi0, const float dphi,
+               __global const float* restrict weights, __global const int* restrict prob_slice,
+               __global const int* restrict prob_k, __global const int* restrict status,
+               __global const float* restrict cparams, __global real_t* restrict partials) {
+  const uint p = get_group_id(1);
+  const uint g = get_group_id(0);
+  const uint G = get_num_groups(0);
+  const uint lid = get_local_id(0);
+  if (status[2 * p] == 2) return;
+  const int k = prob_k[p];
+  __global const float* cp = cparams + p * NCONST;
+  __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
+  const float nphi = (float)n_phi;
+  floatv ll = (floatv)0.f;
+  const uint base = g * (WG * CPW * VEC);
+  for (uint it = 0; it < CPW; ++it) {
+    const uint c = base + (it * WG + lid) * VEC;
+    const floatv wv = VLOADV(0, w + c);
+    floatv t, ph;
+    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    floatv m = (floatv)(-INFINITY);
+    for (int j = 0; j < k; ++j) {
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
+      for (int img = -1; img <= 1; ++img) {
+        const floatv dp = d0 + (float)img * TWO_PI_F;
+        const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+                              fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+        m = fmax(m, ej);
+      }
+    }
+    floatv s = (floatv)0.f;
+    for (int j = 0; j < k; ++j) {
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
+      for (int img = -1; img <= 1; ++img) {
+        const floatv dp = d0 + (float)img * TWO_PI_F;
+        const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+                              fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+        s += exp2(ej - m);
+      }
+    }
+    ll += wv * (m + log2(s));
+  }
+#if WG == 1
+  partials[p * G + g] = LN2_R * hsum(ll);
+#else
+  __local real_t scratch[WG];
+  scratch[lid] = hsum(ll);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint half = WG / 2; half > 0; half >>= 1) {
+    if (lid < half) scratch[lid] += scratch[lid + half];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (lid == 0) partials[p * G + g] = LN2_R * scratch[0];
+#endif
+}
