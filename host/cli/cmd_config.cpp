@@ -21,17 +21,20 @@ CLI::App* add_config_command(CLI::App& app, Common& common, const char* name, co
 
 void add_fit(CLI::App& app, Common& common) {
   static std::string file;
+  static std::size_t max_batches = SIZE_MAX;
   auto* sub = add_config_command(app, common, "fit",
                                  "the fitting sweep: Gaussian-count search and final fits, writing the "
                                  "mixture file and the fit report CSV",
                                  file);
+  sub->add_option("--max-batches", max_batches,
+                  "commit at most this many batches, then stop (a later run resumes)");
   sub->callback([&common] {
     Progress::set_enabled(!common.quiet);
     const Config c = load_config(file);
     if (!c.fit) throw ConfigError(file + ": fit: section missing (add `fit:` to use the defaults)");
     const std::string dev = device_for(c, common.device);
     stage_table(c, dev);
-    stage_fit(c, dev);
+    stage_fit(c, dev, max_batches);
   });
 }
 

@@ -36,6 +36,10 @@ struct FitSection {
   int restarts = 3, final_restarts = 6, iterations = 100, final_iterations = 300;
   double tolerance = 1e-6;
   int batch = 0;
+  double k_penalty = 0.004;
+  std::optional<double> error_target;
+  int search_pool = 2;
+  std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 
 struct ConvergeSection {

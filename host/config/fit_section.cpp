@@ -1,5 +1,6 @@
 // The `fit` section: the Gaussian-count search and the final fits.
 #include "config/config.hpp"
+#include "core/domain.hpp"
 
 namespace bsdfmix {
 
@@ -18,6 +19,16 @@ FitSection parse_fit(const ConfigNode& n) {
   f.final_iterations = static_cast<int>(n.integer("final_iterations", 1, 1000000));
   f.tolerance = n.number("tolerance", 0.0, 1.0);
   f.batch = static_cast<int>(n.integer("batch", 0, 1000000));
+  f.k_penalty = n.number("k_penalty", 0.0, 1.0);
+  if (n.has("error_target")) f.error_target = n.number("error_target", 1e-6, 2.0);
+  f.search_pool = static_cast<int>(n.integer("search_pool", 1, 16));
+  if (n.has("theta_o")) {
+    f.theta_o = n.numbers("theta_o");
+    for (double t : f.theta_o)
+      if (t < -kPi / 2 || t > kPi / 2) n.fail("theta_o", "angle " + std::to_string(t) + " rad is outside [-pi/2, pi/2]");
+  }
+  if (n.has("phi_o")) f.phi_o = n.numbers("phi_o");
+  if (!f.phi_o.empty() && f.theta_o.empty()) n.fail("phi_o", "needs theta_o");
   return f;
 }
 

@@ -50,29 +50,33 @@ std::uint64_t MixtureFile::payload_bytes() const {
   return b;
 }
 
-void write_mixture_file(const std::string& path, const MixtureFile& m) {
+void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& path) {
   const std::size_t s = m.slices();
+  h5::Handle g = h5::create_group(file, "mixture", path);
+  const hid_t id = g.get();
+  const hsize_t S = s, K = static_cast<hsize_t>(m.kmax);
+  h5::write_doubles(id, "theta_o", {S}, m.theta_o.data(), path);
+  h5::write_doubles(id, "phi_o", {S}, m.phi_o.data(), path);
+  h5::write_ints(id, "k", {S}, m.k.data(), path);
+  h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
+  h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
+  h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
+  h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
+  h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
+  h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
+  h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
+  h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
+  h5::write_string_attr(id, "domain", domain_name(m.domain), path);
+  h5::write_string_attr(id, "symmetry", m.azimuthal ? "azimuthal" : "none", path);
+  h5::write_string_attr(id, "table_source", m.table_source, path);
+  h5::write_string_attr(id, "fit_settings", m.fit_settings, path);
+}
+
+void write_mixture_file(const std::string& path, const MixtureFile& m) {
   AtomicOutput out(path);
   {
     h5::Handle f = h5::create_file(out.temp_path());
-    h5::Handle g = h5::create_group(f.get(), "mixture", path);
-    const hid_t id = g.get();
-    const hsize_t S = s, K = static_cast<hsize_t>(m.kmax);
-    h5::write_doubles(id, "theta_o", {S}, m.theta_o.data(), path);
-    h5::write_doubles(id, "phi_o", {S}, m.phi_o.data(), path);
-    h5::write_ints(id, "k", {S}, m.k.data(), path);
-    h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
-    h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
-    h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
-    h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
-    h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
-    h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
-    h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
-    h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
-    h5::write_string_attr(id, "domain", domain_name(m.domain), path);
-    h5::write_string_attr(id, "symmetry", m.azimuthal ? "azimuthal" : "none", path);
-    h5::write_string_attr(id, "table_source", m.table_source, path);
-    h5::write_string_attr(id, "fit_settings", m.fit_settings, path);
+    write_mixture_group(f.get(), m, path);
     if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0) throw IoError(path + ": flush failed (disk full?)");
   }
   out.commit();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <bsdfmix/mixture.hpp>
+#include <hdf5.h>
 
 #include <cstdint>
 #include <string>
@@ -34,6 +35,9 @@ struct MixtureFile {
   // components, and the per-slice scalars), the measure of compression.
   std::uint64_t payload_bytes() const;
 };
+
+// Writes group /mixture into an open HDF5 file (`path` names it in errors).
+void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& path);
 
 // Writes the file under a temporary name and renames it into place.
 void write_mixture_file(const std::string& path, const MixtureFile& m);

@@ -1,11 +1,17 @@
 // The fit stage: Gaussian-count search and final fits over the table's slices.
-#include "core/error.hpp"
+#include <cstdio>
+
 #include "pipeline/stages.hpp"
+#include "sweep/sweep.hpp"
 
 namespace bsdfmix {
 
-void stage_fit(const Config& config, const std::string&) {
-  throw UnavailableError(config.file + ": fit: the fitting sweep is not yet available in this build");
+void stage_fit(const Config& config, const std::string& device_selector, std::size_t max_batches) {
+  const SweepSummary s = run_sweep(config.table, *config.fit, device_selector, max_batches);
+  if (!s.complete) return;
+  std::printf("fit %s -> %s, %s, %s\n%s", config.table.c_str(), config.fit->output.c_str(), config.fit->report.c_str(),
+              config.fit->search_report.c_str(), s.text().c_str());
+  std::fflush(stdout);
 }
 
 }  // namespace bsdfmix

@@ -13,7 +13,7 @@ void run_all(const Config& config, const std::string& device_selector) {
   stage_table(config, dev);
   if (config.fit) stage_fit(config, dev);
   if (config.converge) stage_converge(config, dev);
-  if (config.charts) stage_charts(config);
+  if (config.charts) stage_charts(config, dev);
   log_line("run " + config.file + ": done");
 }
 

@@ -1,19 +1,39 @@
 // The table stage: generate or import the config's table when it is missing.
 #include <filesystem>
 
-#include "core/error.hpp"
 #include "core/progress.hpp"
 #include "pipeline/stages.hpp"
+#include "tables/fiber_generator.hpp"
+#include "tables/rgl_import.hpp"
 
 namespace bsdfmix {
 
-void stage_table(const Config& config, const std::string&) {
+void stage_table(const Config& config, const std::string& device_selector) {
   const bool present = std::filesystem::exists(config.table);
-  if (config.generate && (!present || config.generate->force))
-    throw UnavailableError(config.file + ": generate: the fiber generator is not yet available in this build");
-  if (config.import && (!present || config.import->force))
-    throw UnavailableError(config.file + ": import: the RGL importer is not yet available in this build");
-  if (present) log_line("table " + config.table + ": present");
+  if (config.generate && (!present || config.generate->force)) {
+    const GenerateSection& g = *config.generate;
+    FiberGenerateOptions opt;
+    opt.preset = g.preset;
+    opt.n_theta_o = std::size_t(g.theta_o);
+    opt.n_theta_i = std::size_t(g.theta_i);
+    opt.n_phi_i = std::size_t(g.phi_i);
+    opt.symmetry = g.symmetry;
+    opt.n_phi_o = g.symmetry ? 0 : std::size_t(g.phi_o);
+    opt.noise = g.noise;
+    opt.seed = g.seed;
+    validate_fiber_options(opt);
+    generate_fiber_table(opt, device_selector, config.table);
+  } else if (config.import && (!present || config.import->force)) {
+    const ImportSection& s = *config.import;
+    RglImportOptions opt;
+    opt.file = s.rgl;
+    opt.n_theta_o = std::size_t(s.theta_o);
+    opt.n_theta_i = std::size_t(s.theta_i);
+    opt.n_phi_i = std::size_t(s.phi_i);
+    import_rgl_table(opt, config.table);
+  } else if (present) {
+    log_line("table " + config.table + ": present");
+  }
 }
 
 }  // namespace bsdfmix

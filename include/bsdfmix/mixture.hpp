@@ -46,6 +46,7 @@ struct Gaussian {
   double norm = 0;                      // 1 / (2 pi sqrt(det))
   double l_tt = 0, l_pt = 0, l_pp = 0;  // Cholesky: [l_tt 0; l_pt l_pp]
   int images = 1;                       // phi images on each side that matter
+  double cut = 0;                       // 9 sigma_phi: images farther than this add < 1e-17
 
   // Throws std::invalid_argument when the covariance is not positive definite.
   void prepare() {
@@ -60,7 +61,8 @@ struct Gaussian {
     l_pt = s_tp / l_tt;
     l_pp = std::sqrt(std::max(s_pp - l_pt * l_pt, 0.0));
     // Images m with |m| <= images cover every phi in [-pi, pi) to within 9 sigma.
-    images = static_cast<int>(std::ceil((9.0 * std::sqrt(s_pp) + kPi) / (2 * kPi)));
+    cut = 9.0 * std::sqrt(s_pp);
+    images = static_cast<int>(std::ceil((cut + kPi) / (2 * kPi)));
   }
 
   // Density at (theta, phi), phi in [-pi, pi), summed over the phi images.
@@ -69,6 +71,7 @@ struct Gaussian {
     double sum = 0;
     for (int m = -images; m <= images; ++m) {
       const double dp = phi + 2 * kPi * m - mu_p;
+      if (std::abs(dp) > cut) continue;
       const double q = i_tt * dt * dt + 2 * i_tp * dt * dp + i_pp * dp * dp;
       sum += std::exp(-0.5 * q);
     }

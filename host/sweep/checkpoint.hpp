@@ -1,0 +1,48 @@
+// Crash-safe progress of a sweep: each finished batch is committed as its own part file
+// (atomically) in `<output>.parts/`; a rerun with the same table and settings reuses them,
+// so an interrupted sweep resumes where it stopped. Parts made under other settings
+// (another fingerprint) are discarded.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "io/mixture_file.hpp"
+
+namespace bsdfmix {
+
+// One committed batch: its slices' mixtures (a MixtureFile holding only them), their
+// table slice indices, and their rows of the fit report and search CSVs.
+struct BatchPart {
+  std::vector<std::size_t> slice_index;
+  MixtureFile mixture;
+  std::string report_rows, search_rows;  // CSV rows, newline-terminated, no header
+};
+
+class Checkpoint {
+ public:
+  // Opens (or starts) the parts directory of `output`; `fingerprint` identifies the
+  // table and every setting that changes results.
+  Checkpoint(const std::string& output, const std::string& fingerprint);
+
+  // The committed parts, by the first slice index they hold.
+  const std::map<std::size_t, BatchPart>& parts() const { return parts_; }
+  bool done(std::size_t slice_index) const;
+
+  // Commits one part atomically (write to a temporary, then rename).
+  void commit(const BatchPart& part);
+
+  // Removes the parts directory once the final outputs are in place.
+  void remove();
+
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_, fingerprint_;
+  std::map<std::size_t, BatchPart> parts_;
+  std::vector<bool> done_;
+};
+
+}  // namespace bsdfmix

@@ -1,0 +1,68 @@
+// Relative L1 error of a slice mixture, and pooled slices.
+#include "sweep/fit_error.hpp"
+
+#include <cmath>
+
+#include "core/domain.hpp"
+
+namespace bsdfmix {
+
+double WeightedSlice::total() const {
+  double t = 0;
+  for (double x : w) t += x;
+  return t;
+}
+
+WeightedSlice pool_slice(const WeightedSlice& s, std::size_t f) {
+  const std::size_t nt = s.theta.size(), np = s.phi.size();
+  if (f <= 1 || nt % f != 0 || np % f != 0) return s;
+  WeightedSlice out;
+  for (std::size_t t = 0; t < nt; t += f) {
+    double c = 0;
+    for (std::size_t k = 0; k < f; ++k) c += s.theta[t + k];
+    out.theta.push_back(c / double(f));
+  }
+  for (std::size_t p = 0; p < np; p += f) {
+    double c = 0;
+    for (std::size_t k = 0; k < f; ++k) c += s.phi[p + k];
+    out.phi.push_back(c / double(f));
+  }
+  const std::size_t mt = nt / f, mp = np / f;
+  out.w.assign(mt * mp, 0.0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (std::size_t p = 0; p < np; ++p) out.w[(t / f) * mp + p / f] += s.w[t * np + p];
+  return out;
+}
+
+mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const std::vector<double>& mean,
+                                     const std::vector<double>& cov) {
+  mix::SliceMixture m;
+  for (std::size_t j = 0; j < weight.size(); ++j) {
+    mix::Gaussian g;
+    g.weight = weight[j];
+    g.mu_t = mean[2 * j];
+    g.mu_p = mean[2 * j + 1];
+    g.s_tt = cov[3 * j];
+    g.s_tp = cov[3 * j + 1];
+    g.s_pp = cov[3 * j + 2];
+    m.components.push_back(g);
+  }
+  m.prepare();
+  return m;
+}
+
+double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
+  const double total = s.total();
+  if (!(total > 0)) return 0.0;
+  const double area = axis_step(s.theta) * axis_step(s.phi);
+  const std::size_t np = s.phi.size();
+  double err = 0;
+  for (std::size_t t = 0; t < s.theta.size(); ++t)
+    for (std::size_t p = 0; p < np; ++p) {
+      const double model = total * m.pdf_param(s.theta[t], s.phi[p]) * area;
+      err += std::abs(s.w[t * np + p] - model);
+    }
+  return err / total;
+}
+
+}  // namespace bsdfmix

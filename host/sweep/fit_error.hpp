@@ -1,0 +1,31 @@
+// How well a slice mixture reproduces its slice: relative L1 error of the cell masses,
+// and the pooled (coarser) slices the Gaussian-count search runs on.
+#pragma once
+
+#include <bsdfmix/mixture.hpp>
+
+#include <cstddef>
+#include <vector>
+
+namespace bsdfmix {
+
+// A slice's integrand weights on a uniform (theta, phi) grid of cell centers.
+struct WeightedSlice {
+  std::vector<double> theta, phi;  // cell centers; phi a full period
+  std::vector<double> w;           // row-major [theta][phi]
+  double total() const;
+};
+
+// The slice with blocks of `factor` x `factor` cells merged: centers averaged,
+// weights summed. `factor` must divide both axis lengths (else the slice is returned as is).
+WeightedSlice pool_slice(const WeightedSlice& s, std::size_t factor);
+
+// A mixture from parameter arrays (weights K, means 2K, covariances 3K), prepared.
+mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const std::vector<double>& mean,
+                                     const std::vector<double>& cov);
+
+// sum_i |w_i - W p(x_i) A| / W, W = sum w, p the mixture's density at the cell center,
+// A the cell area: the relative L1 error of the mixture as a stand-in for the slice.
+double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m);
+
+}  // namespace bsdfmix

@@ -1,0 +1,387 @@
+// The fitting sweep: Gaussian-count search, final fits, crash-safe batches, outputs.
+#include "sweep/sweep.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "device/device.hpp"
+#include "fit/em.hpp"
+#include "io/table.hpp"
+#include "sweep/checkpoint.hpp"
+#include "sweep/criterion.hpp"
+#include "sweep/fit_error.hpp"
+#include "sweep/slice_plan.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+constexpr const char* kReportHeader = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device\n";
+constexpr const char* kSearchHeader = "slice,k,restart,loglik,l1_rel,score,chosen\n";
+
+std::uint64_t splitmix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// The seed of one (slice, K, restart) problem: independent of batching and devices.
+std::uint64_t task_seed(std::uint64_t seed, std::size_t slice, int k, int restart) {
+  return splitmix(splitmix(splitmix(seed) ^ slice) ^ (std::uint64_t(k) << 32 | std::uint32_t(restart)));
+}
+
+std::string num(double v, const char* f = "%.9g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, std::isfinite(v) ? v : 0.0);
+  return buf;
+}
+
+std::string fit_settings_json(const FitSection& f) {
+  std::ostringstream s;
+  s << "{\"k_min\": " << f.k_min << ", \"k_max\": " << f.k_max << ", \"seed\": " << f.seed
+    << ", \"restarts\": " << f.restarts << ", \"final_restarts\": " << f.final_restarts
+    << ", \"iterations\": " << f.iterations << ", \"final_iterations\": " << f.final_iterations
+    << ", \"tolerance\": " << num(f.tolerance) << ", \"k_penalty\": " << num(f.k_penalty)
+    << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
+    << ", \"search_pool\": " << f.search_pool << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
+  return s.str();
+}
+
+// A single Gaussian matched to the slice's moments: the fallback when EM fails.
+void moment_gaussian(const WeightedSlice& s, std::vector<double>& w, std::vector<double>& mean,
+                     std::vector<double>& cov) {
+  const std::size_t np = s.phi.size();
+  double W = 0, mt = 0, cx = 0, cy = 0;
+  for (std::size_t t = 0; t < s.theta.size(); ++t)
+    for (std::size_t p = 0; p < np; ++p) {
+      const double x = s.w[t * np + p];
+      W += x;
+      mt += x * s.theta[t];
+      cx += x * std::cos(s.phi[p]);
+      cy += x * std::sin(s.phi[p]);
+    }
+  const double mp = W > 0 ? std::atan2(cy, cx) : 0.0;
+  mt = W > 0 ? mt / W : 0.5 * (s.theta.front() + s.theta.back());
+  double stt = 0, stp = 0, spp = 0;
+  for (std::size_t t = 0; t < s.theta.size(); ++t)
+    for (std::size_t p = 0; p < np; ++p) {
+      const double x = s.w[t * np + p];
+      const double dt = s.theta[t] - mt, dp = wrap_phi(s.phi[p] - mp);
+      stt += x * dt * dt;
+      stp += x * dt * dp;
+      spp += x * dp * dp;
+    }
+  const double floor = std::pow(0.5 * axis_step(s.theta), 2);
+  if (W > 0) {
+    stt /= W;
+    stp /= W;
+    spp /= W;
+  } else {
+    stt = spp = 1.0;
+    stp = 0;
+  }
+  stt = std::max(stt, floor);
+  spp = std::max(spp, floor);
+  if (stt * spp - stp * stp <= 0) stp = 0;
+  w = {1.0};
+  mean = {mt, wrap_phi(mp)};
+  cov = {stt, stp, spp};
+}
+
+struct SliceWork {
+  SliceRef ref;
+  WeightedSlice full, pooled;
+  double total = 0;
+};
+
+SliceSet make_set(Domain domain, const std::vector<SliceWork>& work, bool pooled) {
+  SliceSet set;
+  const WeightedSlice& first = pooled ? work.front().pooled : work.front().full;
+  set.grid.domain = domain;
+  set.grid.theta = first.theta;
+  set.grid.phi = first.phi;
+  for (const auto& w : work) set.weights.push_back(pooled ? w.pooled.w : w.full.w);
+  return set;
+}
+
+}  // namespace
+
+std::string SweepSummary::text() const {
+  auto size = [](double b) {
+    char buf[32];
+    const char* u[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+    int i = 0;
+    while (b >= 1024 && i < 4) b /= 1024, ++i;
+    std::snprintf(buf, sizeof buf, "%.1f %s", b, u[i]);
+    return std::string(buf);
+  };
+  std::ostringstream s;
+  std::size_t total_k = 0;
+  s << "  slices           " << slices << " fitted (" << resumed << " resumed from checkpoint, " << failed
+    << " failed)\n  K per slice     ";
+  for (auto [k, n] : k_histogram) {
+    s << " " << k << "x" << n;
+    total_k += std::size_t(k) * n;
+  }
+  char buf[256];
+  std::snprintf(buf, sizeof buf, " (mean %.1f)\n", slices ? double(total_k) / double(slices) : 0.0);
+  s << buf;
+  std::snprintf(buf, sizeof buf, "  relative L1      median %.2f%%, p90 %.2f%%, max %.2f%%\n", 100 * l1_median,
+                100 * l1_p90, 100 * l1_max);
+  s << buf;
+  s << "  size             mixture " << size(double(mixture_bytes)) << "; table slices as stored "
+    << size(double(table_bytes)) << " (" << num(double(table_bytes) / double(std::max<std::uint64_t>(mixture_bytes, 1)), "%.0f")
+    << "x); full 4D table " << size(double(full_bytes)) << " ("
+    << num(double(full_bytes) / double(std::max<std::uint64_t>(mixture_bytes, 1)), "%.0f") << "x)\n";
+  std::snprintf(buf, sizeof buf, "  wall time        %.1f s on %s\n", seconds, devices.c_str());
+  s << buf;
+  return s.str();
+}
+
+SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
+                       std::size_t max_batches) {
+  const auto t_start = std::chrono::steady_clock::now();
+  TableReader reader(table_path);
+  const TableMeta& meta = reader.meta();
+  const std::vector<SliceRef> plan = plan_slices(meta, fit.theta_o, fit.phi_o);
+  for (const auto* out : {&fit.output, &fit.report, &fit.search_report}) prepare_output(*out, 1 << 20);
+
+  const std::size_t batch = fit.batch > 0 ? std::size_t(fit.batch)
+                                          : std::clamp<std::size_t>(plan.size() / 32, 4, 64);
+  std::ostringstream fp;
+  fp << "table " << std::filesystem::absolute(table_path).string() << " size " << std::filesystem::file_size(table_path)
+     << " source " << meta.source << "\nslices";
+  for (const auto& r : plan) fp << ' ' << r.index;
+  fp << "\nsettings " << fit_settings_json(fit) << "\nbatch " << batch << "\n";
+  Checkpoint checkpoint(fit.output, fp.str());
+
+  const std::vector<Device> devices = select_devices(device_selector);
+  std::string device_names;
+  for (const auto& d : devices) device_names += (device_names.empty() ? "" : "+") + d.info().name;
+  EmEngine engine(devices);
+
+  // Batches are fixed ranges of the plan, so a resumed sweep rebuilds exactly the
+  // batches it did not commit: the same problems, the same results.
+  std::vector<std::vector<SliceRef>> batches;
+  std::size_t resumed = 0;
+  for (std::size_t b0 = 0; b0 < plan.size(); b0 += batch) {
+    std::vector<SliceRef> b(plan.begin() + b0, plan.begin() + std::min(plan.size(), b0 + batch));
+    const bool done = std::all_of(b.begin(), b.end(), [&](const SliceRef& r) { return checkpoint.done(r.index); });
+    if (done) resumed += b.size();
+    else batches.push_back(std::move(b));
+  }
+  const std::vector<int> ks = candidate_ks(fit.k_min, fit.k_max);
+  const bool search = fit.k_min != fit.k_max;
+
+  log_line("fit " + table_path + ": " + std::to_string(plan.size()) + " slice(s), " +
+           (search ? std::to_string(ks.size()) + " candidate K in [" + std::to_string(fit.k_min) + ", " +
+                         std::to_string(fit.k_max) + "]"
+                   : "K = " + std::to_string(fit.k_min)) +
+           ", on " + device_names);
+  Progress progress("fit " + table_path, plan.size(), "slices");
+  progress.advance(resumed);
+
+  std::size_t batches_run = 0;
+  for (const auto& refs : batches) {
+    if (batches_run++ == max_batches) {
+      SweepSummary partial;
+      partial.complete = false;
+      partial.resumed = resumed;
+      partial.slices = checkpoint.parts().size();
+      partial.devices = device_names;
+      log_line("fit " + table_path + ": stopped after " + std::to_string(max_batches) + " batch(es); rerun to resume");
+      return partial;
+    }
+    const auto tb = std::chrono::steady_clock::now();
+    std::vector<SliceWork> work;
+    for (const SliceRef& ref : refs) {
+      SliceWork w;
+      w.ref = ref;
+      const auto f = reader.read_slice(w.ref.t_o, w.ref.p_o);
+      w.full.theta = meta.theta_i;
+      w.full.phi = meta.phi_i;
+      w.full.w = integrand_weights(meta.domain, meta.theta_i, meta.phi_i, f.data());
+      w.total = w.full.total();
+      w.pooled = pool_slice(w.full, std::size_t(fit.search_pool));
+      work.push_back(std::move(w));
+    }
+    std::vector<int> chosen(work.size(), fit.k_min);
+    std::ostringstream search_rows, report_rows;
+
+    // The search: every candidate K and restart of every slice in one submission.
+    if (search) {
+      std::vector<EmTask> tasks;
+      for (std::size_t s = 0; s < work.size(); ++s) {
+        if (!(work[s].total > 0)) continue;
+        for (int k : ks)
+          for (int r = 0; r < fit.restarts; ++r) {
+            EmTask t;
+            t.slice = s;
+            t.k = k;
+            t.settings.iterations = fit.iterations;
+            t.settings.tolerance = fit.tolerance;
+            t.settings.restarts = 1;
+            t.settings.seed = task_seed(fit.seed, work[s].ref.index, k, r);
+            tasks.push_back(t);
+          }
+      }
+      const std::vector<EmResult> results = engine.fit(make_set(meta.domain, work, true), tasks);
+      std::size_t ti = 0;
+      for (std::size_t s = 0; s < work.size(); ++s) {
+        if (!(work[s].total > 0)) continue;
+        std::vector<Candidate> cands;
+        std::vector<std::string> rows;
+        for (int k : ks) {
+          Candidate c;
+          c.k = k;
+          c.l1_rel = 1e300;
+          for (int r = 0; r < fit.restarts; ++r, ++ti) {
+            const EmResult& res = results[ti];
+            double l1 = 2.0;
+            if (res.ok) {
+              try {
+                l1 = l1_rel_error(work[s].full, make_slice_mixture(res.gmm.weight, res.gmm.mean, res.gmm.cov));
+                c.ok = true;
+                c.l1_rel = std::min(c.l1_rel, l1);
+              } catch (const std::exception&) {
+              }
+            }
+            rows.push_back(std::to_string(work[s].ref.index) + "," + std::to_string(k) + "," + std::to_string(r) + "," +
+                           num(res.ok ? res.loglik : 0.0) + "," + num(l1) + "," +
+                           num(candidate_score(k, l1, fit.k_penalty)) + ",");
+          }
+          cands.push_back(c);
+        }
+        std::size_t pick = 0;
+        try {
+          pick = choose_candidate(cands, fit.k_penalty, fit.error_target);
+        } catch (const Error&) {
+          pick = 0;
+        }
+        chosen[s] = cands[pick].k;
+        std::size_t row = 0;
+        for (int k : ks)
+          for (int r = 0; r < fit.restarts; ++r, ++row) search_rows << rows[row] << (k == chosen[s] ? "1" : "0") << "\n";
+      }
+    }
+
+    // The final fits of the chosen K at full resolution.
+    std::vector<EmTask> tasks;
+    for (std::size_t s = 0; s < work.size(); ++s) {
+      if (!(work[s].total > 0)) continue;
+      EmTask t;
+      t.slice = s;
+      t.k = chosen[s];
+      t.settings.iterations = fit.final_iterations;
+      t.settings.tolerance = fit.tolerance;
+      t.settings.restarts = fit.final_restarts;
+      t.settings.seed = task_seed(fit.seed, work[s].ref.index, chosen[s], -1);
+      tasks.push_back(t);
+    }
+    const std::vector<EmResult> finals =
+        tasks.empty() ? std::vector<EmResult>{} : engine.fit(make_set(meta.domain, work, false), tasks);
+    const double batch_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
+
+    BatchPart part;
+    part.mixture.domain = meta.domain;
+    part.mixture.azimuthal = meta.azimuthal;
+    std::size_t fi = 0;
+    for (std::size_t s = 0; s < work.size(); ++s) {
+      const SliceWork& w = work[s];
+      std::vector<double> wt, mean, cov;
+      double loglik = 0, l1 = 0;
+      int iterations = 0;
+      bool fitted = false;
+      if (w.total > 0) {
+        const EmResult& res = finals[fi++];
+        if (res.ok) {
+          try {
+            l1 = l1_rel_error(w.full, make_slice_mixture(res.gmm.weight, res.gmm.mean, res.gmm.cov));
+            wt = res.gmm.weight;
+            mean = res.gmm.mean;
+            cov = res.gmm.cov;
+            loglik = res.loglik;
+            iterations = res.iterations;
+            fitted = true;
+          } catch (const std::exception&) {
+          }
+        }
+      }
+      if (!fitted) {  // zero slice or failed fit: one moment-matched Gaussian
+        moment_gaussian(w.full, wt, mean, cov);
+        l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(wt, mean, cov)) : 0.0;
+      }
+      part.slice_index.push_back(w.ref.index);
+      part.mixture.add_slice(meta.theta_o[w.ref.t_o], meta.phi_o[w.ref.p_o], w.total, loglik, l1, wt, mean, cov);
+      report_rows << w.ref.index << "," << num(meta.theta_o[w.ref.t_o]) << "," << num(meta.phi_o[w.ref.p_o]) << ","
+                  << wt.size() << "," << iterations << "," << num(loglik) << "," << num(l1) << ","
+                  << num(batch_seconds / double(work.size()), "%.6f") << "," << device_names << "\n";
+    }
+    part.report_rows = report_rows.str();
+    part.search_rows = search_rows.str();
+    checkpoint.commit(part);
+    progress.advance(work.size());
+  }
+  progress.finish();
+
+  // Assemble the outputs from the committed parts, in slice order.
+  MixtureFile out;
+  out.domain = meta.domain;
+  out.azimuthal = meta.azimuthal;
+  out.table_source = meta.source;
+  out.fit_settings = fit_settings_json(fit);
+  out.table_theta_o = meta.theta_o;
+  out.table_phi_o = meta.phi_o;
+  std::string report = kReportHeader, search_csv = kSearchHeader;
+  SweepSummary sum;
+  sum.resumed = resumed;
+  std::vector<double> l1s;
+  for (const auto& [first, part] : checkpoint.parts()) {
+    const MixtureFile& m = part.mixture;
+    const std::size_t K = std::size_t(m.kmax);
+    for (std::size_t s = 0; s < m.slices(); ++s) {
+      const int k = m.k[s];
+      std::vector<double> w(k), mean(2 * k), cov(3 * k);
+      for (int j = 0; j < k; ++j) {
+        w[j] = m.weights[s * K + j];
+        for (int d = 0; d < 2; ++d) mean[2 * j + d] = m.means[(s * K + j) * 2 + d];
+        for (int d = 0; d < 3; ++d) cov[3 * j + d] = m.covariances[(s * K + j) * 3 + d];
+      }
+      out.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov);
+      sum.k_histogram[k]++;
+      l1s.push_back(m.l1_rel[s]);
+      if (m.loglik[s] == 0 && m.scale[s] > 0) ++sum.failed;  // the moment-matched fallback
+    }
+    report += part.report_rows;
+    search_csv += part.search_rows;
+  }
+  write_mixture_file(fit.output, out);
+  write_text_atomic(fit.report, report);
+  write_text_atomic(fit.search_report, search_csv);
+  checkpoint.remove();
+
+  sum.slices = out.slices();
+  std::sort(l1s.begin(), l1s.end());
+  if (!l1s.empty()) {
+    sum.l1_median = l1s[l1s.size() / 2];
+    sum.l1_p90 = l1s[std::min(l1s.size() - 1, std::size_t(std::ceil(0.9 * double(l1s.size()))) - 1)];
+    sum.l1_max = l1s.back();
+  }
+  sum.mixture_bytes = out.payload_bytes();
+  const std::uint64_t cells = meta.cells_per_slice();
+  sum.table_bytes = std::uint64_t(sum.slices) * cells * 4;
+  sum.full_bytes = std::uint64_t(sum.slices) * (meta.azimuthal ? meta.phi_i.size() : 1) * cells * 4;
+  sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  sum.devices = device_names;
+  return sum;
+}
+
+}  // namespace bsdfmix
