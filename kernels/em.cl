@@ -60,7 +60,7 @@ typedef float real_t;
 #define NCONST (6 * K_MAX)
 
 #define TWO_PI_F 6.283185307179586f
-#define INV_TWO_PI_F 0.15915494309189535f
+#define PI_F 3.14159265358979f
 #define LOG2E_F 1.4426950408889634f
 #define LN2_R R(0.6931471805599453)
 #define PI_R R(3.141592653589793)
@@ -68,14 +68,17 @@ typedef float real_t;
 
 #if VEC == 16
 typedef float16 floatv;
+#define VINT int16
 #define VLOADV vload16
 #define LANES ((float16)(0.f, 1.f, 2.f, 3.f, 4.f, 5.f, 6.f, 7.f, 8.f, 9.f, 10.f, 11.f, 12.f, 13.f, 14.f, 15.f))
 #elif VEC == 8
 typedef float8 floatv;
+#define VINT int8
 #define VLOADV vload8
 #define LANES ((float8)(0.f, 1.f, 2.f, 3.f, 4.f, 5.f, 6.f, 7.f))
 #elif VEC == 4
 typedef float4 floatv;
+#define VINT int4
 #define VLOADV vload4
 #define LANES ((float4)(0.f, 1.f, 2.f, 3.f))
 #elif VEC == 1
@@ -85,15 +88,38 @@ typedef float floatv;
 #else
 #error "VEC must be 16, 8, 4 or 1"
 #endif
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+#define AS_VINT CAT(as_, VINT)
+#define AS_VFLOAT CAT(as_float, VEC)
 
-// Sum of the lanes of a vector, each lane converted to real_t first.
+// Sum of the lanes of a vector, each lane converted to real_t first (a tree of
+// vector adds, not a loop over lanes).
 inline real_t hsum(floatv v) {
 #if VEC == 1
   return (real_t)v;
+#elif EM_FP64
+#if VEC == 16
+  const double8 a = convert_double8(v.lo) + convert_double8(v.hi);
+  const double4 b = a.lo + a.hi;
+#elif VEC == 8
+  const double4 b = convert_double4(v.lo) + convert_double4(v.hi);
 #else
-  real_t s = R(0.0);
-  for (int i = 0; i < VEC; ++i) s += (real_t)(((float*)&v)[i]);
-  return s;
+  const double4 b = convert_double4(v);
+#endif
+  const double2 c = b.lo + b.hi;
+  return c.x + c.y;
+#else
+#if VEC == 16
+  const float8 a = v.lo + v.hi;
+  const float4 b = a.lo + a.hi;
+#elif VEC == 8
+  const float4 b = v.lo + v.hi;
+#else
+  const float4 b = v;
+#endif
+  const float2 c = b.lo + b.hi;
+  return c.x + c.y;
 #endif
 }
 
@@ -108,8 +134,42 @@ inline void cell_coords(uint c, float inv_nphi, float nphi, float theta0, float 
   *ph = phi0 + col * dphi;
 }
 
-// Nearest-image phi difference, in [-pi, pi].
-inline floatv wrap_diff(floatv d) { return d - TWO_PI_F * rint(d * INV_TWO_PI_F); }
+// Nearest-image phi difference, in [-pi, pi], for d in (-2 pi, 2 pi) (both angles
+// wrapped): two compares and two selects, cheaper than a rounding on CPUs.
+inline floatv wrap_diff(floatv d) {
+  d = select(d, d - TWO_PI_F, d > PI_F);
+  return select(d, d + TWO_PI_F, d < -PI_F);
+}
+
+// 2^x for x <= 0, 0 below 2^-125 (never a denormal): x = n + f with n the nearest
+// integer (by the 1.5 * 2^23 rounding trick: two adds instead of a conversion),
+// f in [-1/2, 1/2]; 2^f by its degree-6 Taylor polynomial (relative error < 2e-7),
+// 2^n added to the exponent bits.
+#define ROUND_MAGIC 12582912.0f
+#define ROUND_MAGIC_BITS 0x4B400000
+inline floatv exp2_neg(floatv x) {
+  x = fmax(x, -126.0f);
+  const floatv t = x + ROUND_MAGIC;
+  const floatv f = x - (t - ROUND_MAGIC);
+#if VEC == 1
+  const int n = as_int(t) - ROUND_MAGIC_BITS;
+#else
+  const VINT n = AS_VINT(t) - ROUND_MAGIC_BITS;
+#endif
+  floatv p = fma(f, 1.5403530e-4f, 1.3333558e-3f);
+  p = fma(p, f, 9.6181291e-3f);
+  p = fma(p, f, 5.5504109e-2f);
+  p = fma(p, f, 2.4022651e-1f);
+  p = fma(p, f, 6.9314718e-1f);
+  p = fma(p, f, 1.0f);
+#if VEC == 1
+  const float r = as_float(as_int(p) + (n << 23));
+  return x > -125.0f ? r : 0.0f;
+#else
+  const floatv r = AS_VFLOAT(AS_VINT(p) + (n << 23));
+  return select((floatv)0.0f, r, x > -125.0f);
+#endif
+}
 
 // Writes the E-step constants of component k of a problem from its state.
 inline void component_constants(__global const real_t* st, __global float* cp, int k) {
@@ -154,9 +214,17 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
   const float nphi = (float)n_phi;
 
-  floatv a0[K_MAX], a1[K_MAX], a2[K_MAX], a3[K_MAX], a4[K_MAX], a5[K_MAX];
-  floatv e[K_MAX];
-  for (int j = 0; j < k; ++j) a0[j] = a1[j] = a2[j] = a3[j] = a4[j] = a5[j] = (floatv)0.f;
+  // Per component: the six accumulators and the E-step scratch value, interleaved
+  // (separate arrays of K_MAX vectors would sit 4 KiB apart and alias in the L1 cache).
+  floatv a[7 * K_MAX];
+#define A0(j) a[7 * (j) + 0]
+#define A1(j) a[7 * (j) + 1]
+#define A2(j) a[7 * (j) + 2]
+#define A3(j) a[7 * (j) + 3]
+#define A4(j) a[7 * (j) + 4]
+#define A5(j) a[7 * (j) + 5]
+#define E(j) a[7 * (j) + 6]
+  for (int j = 0; j < k; ++j) A0(j) = A1(j) = A2(j) = A3(j) = A4(j) = A5(j) = (floatv)0.f;
   floatv ll = (floatv)0.f;
 
   const uint base = g * (WG * CPW * VEC);
@@ -171,13 +239,13 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
       const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
       const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
                             fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
-      e[j] = ej;
-      m = fmax(m, ej);
+      E(j) = ej;
+      m = select(m, ej, ej > m);
     }
     floatv s = (floatv)0.f;
     for (int j = 0; j < k; ++j) {
-      const floatv r = native_exp2(e[j] - m);
-      e[j] = r;
+      const floatv r = exp2_neg(E(j) - m);
+      E(j) = r;
       s += r;
     }
     const floatv f = wv / s;
@@ -185,26 +253,26 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
     for (int j = 0; j < k; ++j) {
       const floatv dt = t - cp[0 * K_MAX + j];
       const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
-      const floatv rw = f * e[j];
+      const floatv rw = f * E(j);
       const floatv rwt = rw * dt, rwp = rw * dp;
-      a0[j] += rw;
-      a1[j] += rwt;
-      a2[j] += rwp;
-      a3[j] = fma(rwt, dt, a3[j]);
-      a4[j] = fma(rwt, dp, a4[j]);
-      a5[j] = fma(rwp, dp, a5[j]);
+      A0(j) += rw;
+      A1(j) += rwt;
+      A2(j) += rwp;
+      A3(j) = fma(rwt, dt, A3(j));
+      A4(j) = fma(rwt, dp, A4(j));
+      A5(j) = fma(rwp, dp, A5(j));
     }
   }
 
   __global real_t* out = partials + (p * G + g) * NSTAT;
 #if WG == 1
   for (int j = 0; j < k; ++j) {
-    out[0 * K_MAX + j] = hsum(a0[j]);
-    out[1 * K_MAX + j] = hsum(a1[j]);
-    out[2 * K_MAX + j] = hsum(a2[j]);
-    out[3 * K_MAX + j] = hsum(a3[j]);
-    out[4 * K_MAX + j] = hsum(a4[j]);
-    out[5 * K_MAX + j] = hsum(a5[j]);
+    out[0 * K_MAX + j] = hsum(A0(j));
+    out[1 * K_MAX + j] = hsum(A1(j));
+    out[2 * K_MAX + j] = hsum(A2(j));
+    out[3 * K_MAX + j] = hsum(A3(j));
+    out[4 * K_MAX + j] = hsum(A4(j));
+    out[5 * K_MAX + j] = hsum(A5(j));
   }
   out[LL_INDEX] = hsum(ll);
 #else
@@ -212,14 +280,7 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
   for (int q = 0; q <= 6 * k; ++q) {
     const int j = q % k;
     const int which = q / k;
-    floatv v;
-    if (which == 0) v = a0[j];
-    else if (which == 1) v = a1[j];
-    else if (which == 2) v = a2[j];
-    else if (which == 3) v = a3[j];
-    else if (which == 4) v = a4[j];
-    else if (which == 5) v = a5[j];
-    else v = ll;
+    const floatv v = which < 6 ? a[7 * j + which] : ll;
     scratch[lid] = hsum(v);
     barrier(CLK_LOCAL_MEM_FENCE);
     for (uint half = WG / 2; half > 0; half >>= 1) {

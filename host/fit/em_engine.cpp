@@ -217,7 +217,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     try {
       const std::string options = "-DK_MAX=" + std::to_string(K) + " -DVEC=" + std::to_string(shape.vec) +
                                   " -DWG=" + std::to_string(shape.wg) + " -DCPW=" + std::to_string(shape.cpw) +
-                                  " -DEM_FP64=" + (fp64 ? "1" : "0");
+                                  " -DEM_FP64=" + (fp64 ? "1" : "0") + " -cl-denorms-are-zero";
       cl::Program program = build_program(dev, "em", options);
       const cl::Context& ctx = dev.context();
       cl::Buffer b_weights(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, weights.size() * 4, weights.data());
