@@ -1,0 +1,101 @@
+// The work-queue scheduler, and EM results independent of how many devices and
+// queues ran them: PoCL presents two CPU devices with POCL_DEVICES="pthread pthread".
+// labels: em
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+
+#include "core/progress.hpp"
+#include "fit/em.hpp"
+#include "fit/scheduler.hpp"
+#include "fit/synthetic.hpp"
+
+using namespace bsdfmix;
+
+namespace {
+// Before the first OpenCL call of this process.
+const int kPoclDevices = [] {
+  setenv("POCL_DEVICES", "pthread pthread", 1);
+  unsetenv("BSDFMIX_DEVICE");
+  Progress::set_enabled(false);
+  return 0;
+}();
+}  // namespace
+
+TEST_CASE("run_on_workers runs every job once and keeps every worker busy", "[scheduler]") {
+  std::vector<std::atomic<int>> runs(40);
+  std::mutex m;
+  std::set<std::size_t> workers;
+  run_on_workers(runs.size(), 3, [&](std::size_t w, std::size_t j) {
+    ++runs[j];
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    std::lock_guard<std::mutex> lock(m);
+    workers.insert(w);
+  });
+  for (auto& r : runs) CHECK(r == 1);
+  CHECK(workers.size() == 3);
+}
+
+TEST_CASE("run_on_workers rethrows the first error and stops handing out jobs", "[scheduler]") {
+  std::atomic<int> started{0};
+  CHECK_THROWS_WITH(run_on_workers(1000, 2,
+                                   [&](std::size_t, std::size_t j) {
+                                     ++started;
+                                     if (j == 3) throw std::runtime_error("job 3 failed");
+                                     std::this_thread::sleep_for(std::chrono::microseconds(200));
+                                   }),
+                    "job 3 failed");
+  CHECK(started < 1000);
+}
+
+TEST_CASE("1, 2 and 3 devices or queues give identical mixtures", "[scheduler]") {
+  const auto both = select_devices("0,1");
+  REQUIRE(both.size() == 2);
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 30, 60);
+  for (int s = 0; s < 6; ++s) set.weights.push_back(mixture_weights(set.grid, synthetic_lobes(Domain::Fiber, 4, s + 11)));
+  EmSettings st;
+  st.iterations = 40;
+  st.restarts = 2;
+  std::vector<EmTask> tasks;
+  for (std::size_t s = 0; s < set.weights.size(); ++s)
+    for (int k : {1, 3, 5, 9}) tasks.push_back({s, k, st});
+
+  struct Setup {
+    const char* name;
+    std::vector<Device> devices;
+    int queues;
+  };
+  const std::vector<Setup> setups = {{"1 device, 1 queue", {both[0]}, 1},
+                                     {"2 devices, 1 queue each", both, 1},
+                                     {"1 device, 3 queues", {both[1]}, 3},
+                                     {"2 devices, 3 queues each", both, 3}};
+  std::vector<std::vector<EmResult>> results;
+  for (const auto& s : setups) {
+    EmEngine engine(s.devices, s.queues);
+    engine.set_batch_budget(1 << 15);  // many small batches
+    Progress progress("fit", tasks.size(), "tasks");
+    results.push_back(engine.fit(set, tasks, &progress));
+    CHECK(engine.last_timing().batches > engine.queue_count());
+  }
+  for (std::size_t c = 1; c < setups.size(); ++c) {
+    INFO(setups[c].name << " vs " << setups[0].name);
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      const EmResult& a = results[0][i];
+      const EmResult& b = results[c][i];
+      REQUIRE(a.ok);
+      REQUIRE(b.ok);
+      CHECK(a.loglik == b.loglik);
+      CHECK(a.iterations == b.iterations);
+      CHECK(a.gmm.weight == b.gmm.weight);
+      CHECK(a.gmm.mean == b.gmm.mean);
+      CHECK(a.gmm.cov == b.gmm.cov);
+    }
+  }
+}
