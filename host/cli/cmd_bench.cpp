@@ -298,12 +298,25 @@ void bench_em(const BenchOptions& o, const Common& common) {
 
   const double ours = rows.front().pc_per_s();
   std::printf("EM throughput, K = %d, %zu-cell slices (90 x 180), %d iterations\n", o.k, cells, o.iterations);
-  std::printf("%-48s %7s %9s %13s %12s %9s\n", "impl", "slices", "cells", "s/iteration", "G pc/s", "vs ours");
+  std::printf("%-48s %7s %9s %13s %17s %10s %9s\n", "impl", "slices", "cells", "s/iteration",
+              "ms/slice-iter", "G pc/s", "vs ours");
   for (const auto& r : rows)
-    std::printf("%-48s %7zu %9zu %13.6f %12.4f %9.3f\n", r.impl.c_str(), r.slices, r.cells,
-                r.seconds_per_iteration, r.pc_per_s() / 1e9, r.pc_per_s() / ours);
+    std::printf("%-48s %7zu %9zu %13.6f %17.4f %10.4f %9.4f\n", r.impl.c_str(), r.slices, r.cells,
+                r.seconds_per_iteration, 1e3 * r.seconds_per_iteration / static_cast<double>(r.slices),
+                r.pc_per_s() / 1e9, r.pc_per_s() / ours);
   std::string how;
-  const double peak = peak_flops(first, how) * static_cast<double>(engine.devices().size());
+  // CPU devices share the host's cores (PoCL presents one CPU as several devices):
+  // count the host once; other devices add up.
+  double peak = peak_flops(first, how);
+  bool all_cpu = true;
+  for (const auto& d : engine.devices()) all_cpu = all_cpu && d.info().is_cpu();
+  if (!all_cpu) {
+    peak = 0;
+    for (const auto& d : engine.devices()) {
+      std::string h;
+      peak += peak_flops(d, h);
+    }
+  }
   const double achieved = ours * kFlopsPerUpdate;
   if (peak > 0)
     std::printf("arithmetic: %.0f flops per update -> %.1f GFLOP/s of a %.1f GFLOP/s single-precision peak "

@@ -123,12 +123,19 @@ Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t 
   std::vector<double> ct(k), cp(k);
   std::vector<double> d2(n, std::numeric_limits<double>::infinity()), p(n);
   std::vector<int> assign(n, 0);
+  // Cell coordinates, and the nearest-image phi difference of two wrapped angles.
+  std::vector<double> xt(n), xp(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    xt[i] = grid.theta[i / np];
+    xp[i] = wrap_phi(grid.phi[i % np]);
+  }
+  auto wrap_diff = [](double d) { return d > kPi ? d - 2 * kPi : (d < -kPi ? d + 2 * kPi : d); };
   auto add_center = [&](int j, std::size_t cell) {
-    ct[j] = grid.theta[cell / np];
-    cp[j] = grid.phi[cell % np];
+    ct[j] = xt[cell];
+    cp[j] = xp[cell];
     for (std::size_t i = 0; i < n; ++i) {
-      const double dt = grid.theta[i / np] - ct[j];
-      const double dp = wrap_phi(grid.phi[i % np] - cp[j]);
+      const double dt = xt[i] - ct[j];
+      const double dp = wrap_diff(xp[i] - cp[j]);
       const double d = dt * dt + dp * dp;
       if (d < d2[i]) {
         d2[i] = d;
@@ -156,8 +163,8 @@ Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t 
   for (std::size_t i = 0; i < n; ++i) {
     if (w[i] <= 0) continue;
     const int j = assign[i];
-    const double dt = grid.theta[i / np] - ct[j];
-    const double dp = wrap_phi(grid.phi[i % np] - cp[j]);
+    const double dt = xt[i] - ct[j];
+    const double dp = wrap_diff(xp[i] - cp[j]);
     double* a = &s[6 * j];
     a[0] += w[i];
     a[1] += w[i] * dt;
