@@ -286,8 +286,8 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
     const floatv v = which < 6 ? a[7 * j + which] : ll;
     scratch[lid] = hsum(v);
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint half = WG / 2; half > 0; half >>= 1) {
-      if (lid < half) scratch[lid] += scratch[lid + half];
+    for (uint span = WG / 2; span > 0; span >>= 1) {
+      if (lid < span) scratch[lid] += scratch[lid + span];
       barrier(CLK_LOCAL_MEM_FENCE);
     }
     if (lid == 0) out[which < 6 ? which * K_MAX + j : LL_INDEX] = scratch[0];
@@ -480,8 +480,8 @@ void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
   __local real_t scratch[WG];
   scratch[lid] = hsum(ll);
   barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint half = WG / 2; half > 0; half >>= 1) {
-    if (lid < half) scratch[lid] += scratch[lid + half];
+  for (uint span = WG / 2; span > 0; span >>= 1) {
+    if (lid < span) scratch[lid] += scratch[lid + span];
     barrier(CLK_LOCAL_MEM_FENCE);
   }
   if (lid == 0) partials[p * G + g] = LN2_R * scratch[0];

@@ -135,6 +135,30 @@ TEST_CASE("kernels match the reference for several K, both precisions", "[em]") 
   }
 }
 
+TEST_CASE("the GPU layout (scalar work-items, local reductions) matches the reference", "[em]") {
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 45, 90);
+  set.weights = {mixture_weights(set.grid, three_lobes())};
+  std::vector<EmTask> tasks;
+  for (int k : {1, 3, 7}) tasks.push_back({0, k, fixed(20)});
+  const auto ref = em_fit_reference(set, tasks);
+  for (EmPrecision prec : {EmPrecision::Auto, EmPrecision::Fp32}) {
+    EmEngine gpu(select_devices(""), 1, prec);
+    gpu.set_gpu_layout(true);
+    const auto got = gpu.fit(set, tasks);
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      INFO("precision " << precision_name(prec) << ", K = " << tasks[i].k);
+      REQUIRE(got[i].ok);
+      CHECK(got[i].iterations == ref[i].iterations);
+      CHECK(std::abs(got[i].loglik - ref[i].loglik) < 2e-5);
+      const Diff d = compare(got[i].gmm, ref[i].gmm);
+      CHECK(d.weight < 2e-5);
+      CHECK(d.mean < 5e-5);
+      CHECK(d.cov_rel < 5e-4);
+    }
+  }
+}
+
 TEST_CASE("a lobe across phi = +-pi fits as well as the same lobe at the center", "[em]") {
   // Shifting by half the phi cells moves the lobe exactly by pi on the grid.
   SliceSet set;

@@ -72,12 +72,16 @@ class EmEngine {
   const std::vector<Device>& devices() const { return devices_; }
   bool uses_fp64(std::size_t device) const;
   const EmTiming& last_timing() const { return timing_; }
+  // Runs the layout meant for GPUs (one cell per work-item, 64 work-items per
+  // work-group, local-memory reductions) on every device, CPUs included.
+  void set_gpu_layout(bool on) { gpu_layout_ = on; }
 
  private:
   std::vector<Device> devices_;
   int queues_per_device_;
   EmPrecision precision_;
   std::uint64_t batch_budget_ = std::uint64_t(1) << 25;
+  bool gpu_layout_ = false;
   EmTiming timing_;
 };
 

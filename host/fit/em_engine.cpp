@@ -34,8 +34,8 @@ struct KernelShape {
 // CPUs: one work-item per work-group walking 16-wide float vectors (the CPU
 // compiler vectorizes the vector code, not across work-items). Others: scalar
 // work-items, 64 per work-group.
-KernelShape shape_for(const DeviceInfo& info) {
-  if (info.is_cpu()) return {16, 1, static_cast<int>(kChunkCells / 16)};
+KernelShape shape_for(const DeviceInfo& info, bool gpu_layout) {
+  if (info.is_cpu() && !gpu_layout) return {16, 1, static_cast<int>(kChunkCells / 16)};
   return {1, 64, static_cast<int>(kChunkCells / 64)};
 }
 
@@ -171,7 +171,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     const Device& dev = devices_[d];
     const cl::CommandQueue& queue = queues[worker];
     const bool fp64 = uses_fp64(d);
-    const KernelShape shape = shape_for(dev.info());
+    const KernelShape shape = shape_for(dev.info(), gpu_layout_);
     const int K = batch.bucket;
     const EmSettings& s = *batch.settings;
     const std::size_t P = batch.problems.size();
