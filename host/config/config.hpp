@@ -50,6 +50,15 @@ struct ConvergeSection {
   int runs = 64;
   std::uint64_t seed = 1;
   std::string csv;
+  // every scene of `scene` (a file, an inline mapping, or a list of them); scene and
+  // scene_file above hold the first
+  std::vector<YAML::Node> scenes;
+  std::vector<std::string> scene_files;  // "" for an inline scene
+  std::string mixture;                   // "" = fit.output
+  std::vector<std::string> estimators;
+  double uniform_fraction = 0.1;
+  std::string tail_csv;  // "" = beside csv: <csv stem>_tail.csv
+  bool cpu = false;      // the CPU reference instead of the device kernels
 };
 
 struct ChartsSection {

@@ -8,33 +8,72 @@
 
 namespace bsdfmix {
 
+namespace {
+
+void add_scene(const ConfigNode& n, const YAML::Node& s, ConvergeSection& c) {
+  if (s.IsScalar()) {
+    const std::string file = s.Scalar();
+    if (!std::filesystem::exists(file)) n.fail("scene", "file '" + file + "' not found");
+    try {
+      c.scenes.push_back(YAML::LoadFile(file));
+    } catch (const YAML::Exception& e) {
+      n.fail("scene", "'" + file + "' is not valid YAML (line " + std::to_string(e.mark.line + 1) + "): " + e.msg);
+    }
+    c.scene_files.push_back(file);
+  } else if (s.IsMap()) {
+    c.scenes.push_back(s);
+    c.scene_files.push_back("");
+  } else {
+    n.fail("scene", "expected a scene file name, an inline scene mapping, or a list of them");
+  }
+}
+
+}  // namespace
+
 ConvergeSection parse_converge(const ConfigNode& n) {
   ConvergeSection c;
   if (n.has("scene")) {
     const YAML::Node s = n.raw("scene");
-    if (s.IsScalar()) {
-      c.scene_file = s.Scalar();
-      if (!std::filesystem::exists(c.scene_file)) n.fail("scene", "file '" + c.scene_file + "' not found");
-      try {
-        c.scene = YAML::LoadFile(c.scene_file);
-      } catch (const YAML::Exception& e) {
-        n.fail("scene", "'" + c.scene_file + "' is not valid YAML (line " + std::to_string(e.mark.line + 1) +
-                            "): " + e.msg);
-      }
-    } else if (s.IsMap()) {
-      c.scene = s;
+    if (s.IsSequence()) {
+      if (s.size() == 0) n.fail("scene", "the list of scenes is empty");
+      for (const auto& item : s) add_scene(n, item, c);
     } else {
-      n.fail("scene", "expected a scene file name or an inline scene mapping");
+      add_scene(n, s, c);
     }
+    c.scene = c.scenes.front();
+    c.scene_file = c.scene_files.front();
   }
   c.theta_o = n.numbers("theta_o");
   c.phi_o = n.numbers("phi_o");
+  if (c.theta_o.empty()) n.fail("theta_o", "name at least one outgoing direction");
+  if (c.phi_o.empty()) c.phi_o = {0.0};
   for (double t : c.theta_o)
     if (t < -kPi / 2 || t > kPi / 2) n.fail("theta_o", "angle " + std::to_string(t) + " rad is outside [-pi/2, pi/2]");
+  for (double p : c.phi_o)
+    if (!std::isfinite(p)) n.fail("phi_o", "angles must be finite");
   c.samples_max = n.integer("samples_max", 1, std::int64_t(1) << 32);
   c.runs = static_cast<int>(n.integer("runs", 2, 1000000));
   c.seed = static_cast<std::uint64_t>(n.integer("seed", 0, INT64_MAX));
   c.csv = n.str("csv");
+  if (n.has("mixture")) c.mixture = n.str("mixture");
+  const YAML::Node est = n.raw("estimators");
+  if (est.IsScalar()) {
+    c.estimators.push_back(est.Scalar());
+  } else if (est.IsSequence() && est.size() > 0) {
+    for (const auto& e : est) {
+      if (!e.IsScalar()) n.fail("estimators", "expected a list of estimator names");
+      c.estimators.push_back(e.Scalar());
+    }
+  } else {
+    n.fail("estimators", "expected a list of estimator names (us_tab, us_gmm, is_tab, is_gmm, mis_tab, cdf_tab)");
+  }
+  for (const auto& e : c.estimators)
+    if (e != "us_tab" && e != "us_gmm" && e != "is_tab" && e != "is_gmm" && e != "mis_tab" && e != "cdf_tab")
+      n.fail("estimators", "unknown estimator '" + e + "' (expected us_tab, us_gmm, is_tab, is_gmm, mis_tab or cdf_tab)");
+  c.uniform_fraction = n.number("uniform_fraction", 0.0, 1.0);
+  if (c.uniform_fraction >= 1.0) n.fail("uniform_fraction", "must be below 1 (1 is pure uniform sampling: us_tab)");
+  if (n.has("tail_csv")) c.tail_csv = n.str("tail_csv");
+  c.cpu = n.boolean("cpu");
   return c;
 }
 

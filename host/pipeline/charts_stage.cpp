@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "pipeline/converge_charts.hpp"
 #include "pipeline/scripts.hpp"
 #include "pipeline/stages.hpp"
 #include "sweep/k_timing.hpp"
@@ -65,6 +66,7 @@ void stage_charts(const Config& config, const std::string& device_selector) {
   const std::string dir = config.charts->dir;
   std::filesystem::create_directories(dir);
   if (config.fit) fit_charts(config, device_selector, dir);
+  if (config.converge) converge_charts(config, dir);
 }
 
 }  // namespace bsdfmix

@@ -1,11 +1,55 @@
-// The convergence stage: the Monte Carlo study of the estimators.
+// The convergence stage: the Monte Carlo study of the estimators (docs/sampling.md).
+#include <filesystem>
+
+#include "converge/scene.hpp"
+#include "converge/study.hpp"
 #include "core/error.hpp"
+#include "core/progress.hpp"
+#include "io/table.hpp"
+#include "pipeline/converge_charts.hpp"
 #include "pipeline/stages.hpp"
 
 namespace bsdfmix {
 
-void stage_converge(const Config& config, const std::string&) {
-  throw UnavailableError(config.file + ": converge: the convergence study is not yet available in this build");
+void stage_converge(const Config& config, const std::string& device_selector) {
+  const ConvergeSection& c = *config.converge;
+  StudySpec spec;
+  spec.table = config.table;
+  spec.mixture = converge_mixture_path(config);
+  if (!std::filesystem::exists(spec.mixture))
+    throw ConfigError(config.file + ": converge: mixture file '" + spec.mixture + "' not found (run the fit stage first)");
+  spec.table_label = std::filesystem::path(config.table).stem().string();
+  Domain domain;
+  {
+    const TableReader table(config.table);
+    domain = table.meta().domain;
+  }
+  if (c.scenes.empty()) {
+    Lighting l = default_lighting(domain, 1.0);
+    l.name = "constant";
+    spec.scenes.push_back(l);
+  }
+  for (std::size_t i = 0; i < c.scenes.size(); ++i) {
+    const bool inline_scene = c.scene_files[i].empty();
+    const std::string where = inline_scene ? "converge.scene" + (c.scenes.size() > 1 ? "[" + std::to_string(i) + "]" : "") : "";
+    spec.scenes.push_back(parse_scene(c.scenes[i], inline_scene ? config.file : c.scene_files[i], where, domain));
+  }
+  for (double t : c.theta_o)
+    for (double p : c.phi_o) spec.directions.emplace_back(t, p);
+  for (const auto& e : c.estimators) spec.estimators.push_back(parse_estimator(e, config.file + ": converge.estimators"));
+  spec.runs = c.runs;
+  spec.samples_max = 1;
+  while (spec.samples_max * 2 <= std::uint64_t(c.samples_max)) spec.samples_max *= 2;
+  if (spec.samples_max != std::uint64_t(c.samples_max))
+    log_line("converge: samples_max " + std::to_string(c.samples_max) + " rounded down to " +
+             std::to_string(spec.samples_max) + " (N doubles)");
+  spec.seed = c.seed;
+  spec.uniform_fraction = c.uniform_fraction;
+  spec.device = device_selector;
+  spec.cpu = c.cpu;
+  spec.csv = c.csv;
+  spec.tail_csv = converge_tail_path(c);
+  run_study(spec);
 }
 
 }  // namespace bsdfmix

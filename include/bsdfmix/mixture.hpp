@@ -61,8 +61,9 @@ struct Gaussian {
     l_pt = s_tp / l_tt;
     l_pp = std::sqrt(std::max(s_pp - l_pt * l_pt, 0.0));
     // Images m with |m| <= images cover every phi in [-pi, pi) to within 9 sigma.
+    // (Means outside [-pi, pi) are allowed: the bound includes |mu_p|.)
     cut = 9.0 * std::sqrt(s_pp);
-    images = static_cast<int>(std::ceil((cut + kPi) / (2 * kPi)));
+    images = static_cast<int>(std::ceil((cut + kPi + std::abs(mu_p)) / (2 * kPi)));
   }
 
   // Density at (theta, phi), phi in [-pi, pi), summed over the phi images.
@@ -117,6 +118,46 @@ struct Sample {
   double pdf_omega = 0;       // density per steradian of what was sampled
   bool valid = false;         // false when theta left the domain: zero contribution
 };
+
+// Counter-based random numbers: Philox4x32-10 (Salmon et al. 2011, the Random123
+// generator), so that sample i of a stream is the same on every device and for any
+// batching. bsdfmix's kernels (kernels/sample.cl) use the same function and the same
+// counter layout: sample i of `stream` under `seed` uses
+//   counter = {i low 32 bits, i high 32 bits, stream, 0}, key = {seed low, seed high}.
+struct PhiloxBlock {
+  std::uint32_t v[4];
+};
+
+inline PhiloxBlock philox4x32_10(const std::uint32_t ctr[4], const std::uint32_t key[2]) {
+  std::uint32_t c0 = ctr[0], c1 = ctr[1], c2 = ctr[2], c3 = ctr[3];
+  std::uint32_t k0 = key[0], k1 = key[1];
+  for (int r = 0; r < 10; ++r) {
+    if (r > 0) {
+      k0 += 0x9E3779B9u;
+      k1 += 0xBB67AE85u;
+    }
+    const std::uint64_t p0 = std::uint64_t(0xD2511F53u) * c0;
+    const std::uint64_t p1 = std::uint64_t(0xCD9E8D57u) * c2;
+    const std::uint32_t hi0 = std::uint32_t(p0 >> 32), lo0 = std::uint32_t(p0);
+    const std::uint32_t hi1 = std::uint32_t(p1 >> 32), lo1 = std::uint32_t(p1);
+    c0 = hi1 ^ c1 ^ k0;
+    c1 = lo1;
+    c2 = hi0 ^ c3 ^ k1;
+    c3 = lo0;
+  }
+  return {{c0, c1, c2, c3}};
+}
+
+// A 32-bit word to a uniform in [0, 1) with 24 bits: exact in float and double alike.
+inline double to_uniform(std::uint32_t x) { return double(x >> 8) * (1.0 / 16777216.0); }
+
+// The four uniforms of sample `index` of `stream` under `seed` (layout above).
+inline void uniforms(std::uint64_t seed, std::uint32_t stream, std::uint64_t index, double u[4]) {
+  const std::uint32_t ctr[4] = {std::uint32_t(index), std::uint32_t(index >> 32), stream, 0u};
+  const std::uint32_t key[2] = {std::uint32_t(seed), std::uint32_t(seed >> 32)};
+  const PhiloxBlock r = philox4x32_10(ctr, key);
+  for (int i = 0; i < 4; ++i) u[i] = to_uniform(r.v[i]);
+}
 
 // Unit normal pair from two uniforms (Box-Muller), u1 in [0, 1).
 inline void normal_pair(double u1, double u2, double& z0, double& z1) {
@@ -236,6 +277,14 @@ class MixtureSet {
     out.pdf_omega = out.valid ? pdf_omega(theta_o, phi_o, out.theta, out.phi) : 0.0;
     if (!(out.pdf_omega > 0)) out.valid = false;
     return out;
+  }
+
+  // Sample `index` of a reproducible stream: sample() fed with uniforms(seed, stream, index).
+  Sample sample_counter(double theta_o, double phi_o, std::uint64_t seed, std::uint32_t stream,
+                        std::uint64_t index) const {
+    double u[4];
+    uniforms(seed, stream, index, u);
+    return sample(theta_o, phi_o, u[0], u[1], u[2], u[3]);
   }
 
  private:

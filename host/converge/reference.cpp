@@ -1,0 +1,173 @@
+// Quadrature references and the tail-risk diagnostic.
+#include "converge/reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace bsdfmix {
+
+void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights) {
+  nodes.assign(std::size_t(n), 0.0);
+  weights.assign(std::size_t(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    double x = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = x;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      if (n == 1) p0 = 1;
+      dp = n * (x * p1 - p0) / (x * x - 1);
+      const double dx = p1 / dp;
+      x -= dx;
+      if (std::abs(dx) < 1e-15) break;
+    }
+    nodes[std::size_t(i)] = x;
+    weights[std::size_t(i)] = 2 / ((1 - x * x) * dp * dp);
+  }
+}
+
+namespace {
+
+double cos_factor(Domain d, double theta) { return d == Domain::Hemisphere ? std::cos(theta) : 1.0; }
+
+// Sub-cell points per axis resolving features of size `feature` in cells of size `cell`.
+int sub_points(double cell, double feature, int lo, int hi) {
+  return std::clamp(int(std::ceil(3.0 * cell / std::max(feature, 1e-9))), lo, hi);
+}
+
+double smallest_sigma(const Problem& p) {
+  double s = kPi;
+  for (int k = 0; k < p.query.blend.count; ++k)
+    for (const auto& g : p.set->slices[std::size_t(p.query.blend.slice[k])].components)
+      s = std::min({s, std::sqrt(g.s_tt), std::sqrt(g.s_pp - g.s_tp * g.s_tp / g.s_tt)});
+  return s;
+}
+
+// sum over cells (i, j) and n x n sub-cell nodes of fn(theta, phi_world) * c J dtheta dphi
+template <class Fn>
+double cell_quadrature(const TableSlice& t, int n, bool skip_zero_f, Fn fn) {
+  std::vector<double> x, w;
+  gauss_legendre(n, x, w);
+  double total = 0;
+  for (std::size_t i = 0; i < t.n_theta; ++i) {
+    const double a = t.theta_edge(i), b = t.theta_edge(i + 1);
+    if (!(b > a)) continue;
+    std::vector<double> th(static_cast<std::size_t>(n)), wt(static_cast<std::size_t>(n));
+    for (int k = 0; k < n; ++k) {
+      th[std::size_t(k)] = 0.5 * (a + b) + 0.5 * (b - a) * x[std::size_t(k)];
+      wt[std::size_t(k)] = 0.5 * (b - a) * w[std::size_t(k)] * cos_factor(t.domain, th[std::size_t(k)]) *
+                           jacobian(t.domain, th[std::size_t(k)]);
+    }
+    for (std::size_t j = 0; j < t.n_phi; ++j) {
+      const double fc = t.f[i * t.n_phi + j];
+      if (skip_zero_f && fc == 0) continue;
+      const double p0 = t.ph0 + t.dph * double(j) + t.rotate;
+      double cell = 0;
+      for (int kp = 0; kp < n; ++kp) {
+        const double ph = wrap_phi(p0 + 0.5 * t.dph * (1 + x[std::size_t(kp)]));
+        const double wp = 0.5 * t.dph * w[std::size_t(kp)];
+        for (int kt = 0; kt < n; ++kt) cell += wt[std::size_t(kt)] * wp * fn(th[std::size_t(kt)], ph, fc);
+      }
+      total += cell;
+    }
+  }
+  return total;
+}
+
+}  // namespace
+
+double reference_integral(const Problem& p) {
+  const TableSlice& t = p.table;
+  if (p.light.is_constant()) {
+    double s = 0;
+    for (std::size_t i = 0; i < t.n_theta; ++i) {
+      double row = 0;
+      for (std::size_t j = 0; j < t.n_phi; ++j) row += double(t.f[i * t.n_phi + j]);
+      s += row * t.cell_weight(i);
+    }
+    return s * p.light.constant;
+  }
+  const int n = sub_points(std::max(t.dth, t.dph), p.light.finest_feature(), 6, 32);
+  return cell_quadrature(t, n, true, [&](double th, double ph, double fc) { return fc * p.light.radiance(th, ph); });
+}
+
+double stand_in_integral(const Problem& p) {
+  const mix::MixtureSet& set = *p.set;
+  const Domain d = p.table.domain;
+  if (p.light.is_constant()) {
+    const double lo = theta_min(d), hi = theta_max(d);
+    double s = 0;
+    for (int k = 0; k < p.query.blend.count; ++k) {
+      const mix::SliceMixture& sl = set.slices[std::size_t(p.query.blend.slice[k])];
+      double mass = 0;
+      for (const auto& g : sl.components) {
+        const double sd = std::sqrt(g.s_tt) * std::sqrt(2.0);
+        mass += g.weight * 0.5 * (std::erf((hi - g.mu_t) / sd) - std::erf((lo - g.mu_t) / sd));
+      }
+      s += p.query.blend.weight[k] * sl.scale * mass;
+    }
+    return s * p.light.constant;
+  }
+  // Over the whole domain (the stand-in also lives where the table's cells do not reach).
+  TableSlice grid = p.table;
+  const int n = sub_points(std::max(grid.dth, grid.dph), std::min(p.light.finest_feature(), smallest_sigma(p)), 6, 24);
+  return cell_quadrature(grid, n, false, [&](double th, double ph, double) {
+    const double cf = cos_factor(d, th);
+    return cf > 0 ? set.eval_f(p.theta_o, p.phi_o, th, ph) * p.light.radiance(th, ph) : 0.0;
+  });
+}
+
+TailDiagnostic tail_diagnostic(const Problem& p) {
+  TailDiagnostic r;
+  const TableSlice& t = p.table;
+  const mix::MixtureSet& set = *p.set;
+  const double pu = t.domain == Domain::Hemisphere ? 1 / (2 * kPi) : 1 / (4 * kPi);
+  const int n = sub_points(std::max(t.dth, t.dph), smallest_sigma(p), 3, 12);
+  std::vector<double> x, w;
+  gauss_legendre(n, x, w);
+  const double a = p.uniform_fraction;
+  double I = 0;
+  for (std::size_t i = 0; i < t.n_theta; ++i)
+    for (std::size_t j = 0; j < t.n_phi; ++j) I += double(t.f[i * t.n_phi + j]) * t.cell_weight(i);
+  r.reference = I;
+  Problem pc = p;
+  pc.light = default_lighting(t.domain, 1.0);
+  r.stand_in = stand_in_integral(pc);
+  if (!(I > 0)) return r;
+  const double inf = std::numeric_limits<double>::infinity();
+  double s_us = 0, s_is = 0, s_mis = 0;
+  for (std::size_t i = 0; i < t.n_theta; ++i) {
+    const double ta = t.theta_edge(i), tb = t.theta_edge(i + 1);
+    for (std::size_t j = 0; j < t.n_phi; ++j) {
+      const double W = double(t.f[i * t.n_phi + j]) * t.cell_weight(i) / I;
+      if (!(W > 0)) continue;
+      const double p0 = t.ph0 + t.dph * double(j) + t.rotate;
+      double P = 0;  // mixture probability of the cell
+      for (int kt = 0; kt < n; ++kt) {
+        const double th = 0.5 * (ta + tb) + 0.5 * (tb - ta) * x[std::size_t(kt)];
+        for (int kp = 0; kp < n; ++kp) {
+          const double ph = wrap_phi(p0 + 0.5 * t.dph * (1 + x[std::size_t(kp)]));
+          P += 0.25 * (tb - ta) * t.dph * w[std::size_t(kt)] * w[std::size_t(kp)] * set.pdf_param(p.theta_o, p.phi_o, th, ph);
+        }
+      }
+      const double U = t.cell_solid_angle(i) * pu;
+      const double M = a * U + (1 - a) * P;
+      s_us += W * W / U;
+      s_is += P > 0 ? W * W / P : inf;
+      s_mis += W * W / M;
+      r.max_weight_is = std::max(r.max_weight_is, P > 0 ? W / P : inf);
+      r.max_weight_mis = std::max(r.max_weight_mis, W / M);
+    }
+  }
+  r.relvar_us = s_us - 1;
+  r.relvar_is = s_is - 1;
+  r.relvar_mis = s_mis - 1;
+  r.relvar_cdf = 0;
+  return r;
+}
+
+}  // namespace bsdfmix

@@ -1,0 +1,32 @@
+// Quadrature references of the convergence study and the per-slice tail-risk diagnostic.
+#pragma once
+
+#include <vector>
+
+#include "sampling/sampling.hpp"
+
+namespace bsdfmix {
+
+// Gauss-Legendre nodes and weights on [-1, 1].
+void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weights);
+
+// The integral of L_i f c d(omega) with the table as f (piecewise constant over its
+// cells): exact cell Jacobian integrals for constant L, sub-cell Gauss-Legendre otherwise.
+double reference_integral(const Problem& p);
+
+// The same with the mixture stand-in as f: what us_gmm and is_gmm converge to. Exact
+// (normal CDFs of the theta marginals) for constant L, quadrature otherwise.
+double stand_in_integral(const Problem& p);
+
+// Tail risk of importance sampling the table with the mixture, with L_i = 1 and the
+// cell probabilities of each technique: the relative variance per sample
+// (sum_c (W_c / I)^2 / P_c - 1, the chi-square divergence of the sampling density from
+// the integrand) and the largest single-sample weight (max_c (W_c / I) / P_c).
+struct TailDiagnostic {
+  double reference = 0, stand_in = 0;
+  double relvar_us = 0, relvar_is = 0, relvar_mis = 0, relvar_cdf = 0;
+  double max_weight_is = 0, max_weight_mis = 0;
+};
+TailDiagnostic tail_diagnostic(const Problem& p);
+
+}  // namespace bsdfmix

@@ -1,0 +1,166 @@
+// The convergence study driver.
+#include "converge/study.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "converge/reference.hpp"
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "io/mixture_file.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+std::string num(double x) {
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  if (std::isnan(x)) return "nan";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return buf;
+}
+
+std::string fixed(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
+  return buf;
+}
+
+}  // namespace
+
+std::vector<ConvergenceRow> convergence_rows(const RunSums& sums, double reference, double ns_per_sample) {
+  std::vector<ConvergenceRow> rows;
+  for (int l = 0; l < sums.levels; ++l) {
+    const double N = std::ldexp(1.0, l);
+    double mean = 0, se = 0;
+    for (int r = 0; r < sums.runs; ++r) {
+      const double est = sums.at(r, l) / N;
+      mean += est;
+      se += (est - reference) * (est - reference);
+    }
+    ConvergenceRow row;
+    row.samples = std::uint64_t(N);
+    row.runs = sums.runs;
+    row.mean = mean / sums.runs;
+    row.reference = reference;
+    row.rmse = std::sqrt(se / sums.runs);
+    row.rel_rmse = reference != 0 ? row.rmse / std::abs(reference) : std::numeric_limits<double>::infinity();
+    row.ns_per_sample = ns_per_sample;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+std::string format_row(const ConvergenceRow& r) {
+  return r.table + "," + num(r.theta_o) + "," + num(r.phi_o) + "," + r.scene + "," + r.estimator + "," +
+         std::to_string(r.samples) + "," + std::to_string(r.runs) + "," + num(r.mean) + "," + num(r.reference) + "," +
+         num(r.rmse) + "," + num(r.rel_rmse) + "," + num(r.ns_per_sample);
+}
+
+std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
+  if (spec.samples_max == 0 || (spec.samples_max & (spec.samples_max - 1)))
+    throw ConfigError("converge: samples_max must be a power of two");
+  prepare_output(spec.csv);
+  prepare_output(spec.tail_csv);
+  const TableReader table(spec.table);
+  const MixtureFile mf = read_mixture_file(spec.mixture);
+  if (mf.domain != table.meta().domain)
+    throw InputError(spec.mixture + ": domain " + domain_name(mf.domain) + " differs from the table's (" +
+                     spec.table + ": " + domain_name(table.meta().domain) + ")");
+  const mix::MixtureSet set = to_mixture_set(mf);
+  std::vector<Device> devices;
+  if (!spec.cpu) devices = select_devices(spec.device);
+  const std::string where = spec.cpu ? std::string("CPU reference") : devices.front().info().label();
+  log_line("converge: " + spec.table + " with " + spec.mixture + " on " + where + ": " +
+           std::to_string(spec.directions.size()) + " directions x " + std::to_string(spec.scenes.size()) +
+           " scenes x " + std::to_string(spec.estimators.size()) + " estimators, " + std::to_string(spec.runs) +
+           " runs of up to " + std::to_string(spec.samples_max) + " samples (seed " + std::to_string(spec.seed) + ")");
+
+  std::vector<ConvergenceRow> rows;
+  std::string tail = std::string(kTailHeader) + "\n";
+  Progress progress("converge " + spec.table_label,
+                    spec.directions.size() * spec.scenes.size() * spec.estimators.size(), "launches");
+  for (const auto& [theta_o, phi_o] : spec.directions) {
+    // The tail diagnostic, scene-independent (L_i = 1).
+    Problem p0 = make_problem(table, set, theta_o, phi_o, default_lighting(table.meta().domain, 1.0),
+                              spec.uniform_fraction);
+    const TailDiagnostic td = tail_diagnostic(p0);
+    const auto& b = p0.query.blend;
+    int main_slice = b.slice[0];
+    for (int k = 1; k < b.count; ++k)
+      if (b.weight[k] > b.weight[0]) main_slice = b.slice[k];
+    const int k_used = mf.k[std::size_t(main_slice)];
+    const double l1 = mf.l1_rel[std::size_t(main_slice)];
+    const std::uint64_t table_bytes = table.meta().cells_per_slice() * sizeof(float);
+    const std::uint64_t mix_bytes = std::uint64_t(k_used) * 6 * sizeof(float) + 3 * sizeof(double);
+    tail += spec.table_label + "," + num(theta_o) + "," + num(phi_o) + "," + std::to_string(k_used) + "," + num(l1) +
+            "," + num(td.reference) + "," + num(td.stand_in) + "," + num(td.stand_in / td.reference - 1) + "," +
+            num(td.relvar_us) + "," + num(td.relvar_is) + "," + num(td.relvar_mis) + "," + num(td.max_weight_is) +
+            "," + num(td.max_weight_mis) + "," + std::to_string(table_bytes) + "," + std::to_string(mix_bytes) + "\n";
+    std::string msg = "converge: theta_o " + fixed(theta_o, 4) + " phi_o " + fixed(phi_o, 4) + ": K " +
+                      std::to_string(k_used) + ", predicted variance per sample (L=1) relative to uniform: is_tab " +
+                      num(td.relvar_is / td.relvar_us) + ", mis_tab " + num(td.relvar_mis / td.relvar_us) +
+                      "; largest f/pdf over the integral: is_tab " + num(td.max_weight_is) + ", mis_tab " +
+                      num(td.max_weight_mis) + "; stand-in integral error " + num(td.stand_in / td.reference - 1);
+    log_line(msg);
+    if (!(td.relvar_is <= td.relvar_us))
+      log_line("converge: warning: at theta_o " + fixed(theta_o, 4) +
+               " is_tab has more variance than uniform sampling (the Gaussians' tails fall faster than f): "
+               "use mis_tab, the robust default");
+
+    for (const Lighting& light : spec.scenes) {
+      const Problem p = make_problem(table, set, theta_o, phi_o, light, spec.uniform_fraction);
+      const double ref = reference_integral(p);
+      if (!(ref > 0) || !std::isfinite(ref))
+        throw InputError("converge: the reference integral at theta_o " + num(theta_o) + " in scene '" + light.name +
+                         "' is " + num(ref) + " (the lighting or the table slice is zero)");
+      std::map<std::string, double> var_at_max;
+      for (const Estimator e : spec.estimators) {
+        RunSums s;
+        if (spec.cpu) {
+          const auto t0 = std::chrono::steady_clock::now();
+          s = integrate_cpu(p, e, spec.runs, spec.samples_max, spec.seed);
+          s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        } else {
+          s = integrate_device(devices.front(), p, e, spec.runs, spec.samples_max, spec.seed);
+        }
+        const double ns = s.seconds * 1e9 / (double(spec.runs) * double(spec.samples_max));
+        auto rs = convergence_rows(s, ref, ns);
+        for (auto& r : rs) {
+          r.table = spec.table_label;
+          r.scene = light.name;
+          r.estimator = estimator_name(e);
+          r.theta_o = theta_o;
+          r.phi_o = phi_o;
+        }
+        const ConvergenceRow& last = rs.back();
+        var_at_max[estimator_name(e)] = last.rmse * last.rmse;
+        log_line("converge: theta_o " + fixed(theta_o, 4) + " " + light.name + " " + estimator_name(e) + ": N " +
+                 std::to_string(last.samples) + " rel_rmse " + num(last.rel_rmse) + " mean/reference - 1 " +
+                 num(last.mean / ref - 1) + ", " + fixed(ns, 2) + " ns/sample");
+        rows.insert(rows.end(), rs.begin(), rs.end());
+        progress.advance();
+      }
+      if (var_at_max.count("us_tab"))
+        for (const auto& [name, v] : var_at_max)
+          if (name != "us_tab" && v > 0)
+            log_line("converge: theta_o " + fixed(theta_o, 4) + " " + light.name + ": variance of us_tab / " + name +
+                     " at N " + std::to_string(spec.samples_max) + ": " + num(var_at_max["us_tab"] / v));
+    }
+  }
+  progress.finish();
+  std::string text = std::string(kConvergenceHeader) + "\n";
+  for (const auto& r : rows) text += format_row(r) + "\n";
+  write_text_atomic(spec.csv, text);
+  write_text_atomic(spec.tail_csv, tail);
+  log_line("converge: wrote " + spec.csv + " (" + std::to_string(rows.size()) + " rows) and " + spec.tail_csv);
+  return rows;
+}
+
+}  // namespace bsdfmix

@@ -1,0 +1,51 @@
+// The Monte Carlo convergence study (docs/sampling.md): for each outgoing direction,
+// scene and estimator, R runs of up to N_max samples in one launch; rows for
+// N = 1, 2, 4, .., N_max of the convergence CSV (DESIGN.md), and the tail-risk CSV.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sampling/sampling.hpp"
+
+namespace bsdfmix {
+
+struct StudySpec {
+  std::string table, mixture;   // files
+  std::string table_label;      // the CSV's `table` column
+  std::vector<std::pair<double, double>> directions;  // (theta_o, phi_o), radians
+  std::vector<Lighting> scenes;
+  std::vector<Estimator> estimators;
+  int runs = 64;
+  std::uint64_t samples_max = 65536;  // a power of two
+  std::uint64_t seed = 1;
+  double uniform_fraction = 0.1;
+  std::string device;  // selector
+  bool cpu = false;    // the CPU reference instead of the device kernels
+  std::string csv, tail_csv;
+};
+
+struct ConvergenceRow {
+  std::string table, scene, estimator;
+  double theta_o = 0, phi_o = 0;
+  std::uint64_t samples = 0;
+  int runs = 0;
+  double mean = 0, reference = 0, rmse = 0, rel_rmse = 0, ns_per_sample = 0;
+};
+
+constexpr const char* kConvergenceHeader =
+    "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample";
+constexpr const char* kTailHeader =
+    "table,theta_o,phi_o,k,l1_rel,reference,stand_in,stand_in_error,relvar_us,relvar_is,relvar_mis,"
+    "max_weight_is,max_weight_mis,table_bytes,mixture_bytes";
+
+// Rows of one (direction, scene, estimator) from its run sums.
+std::vector<ConvergenceRow> convergence_rows(const RunSums& sums, double reference, double ns_per_sample);
+std::string format_row(const ConvergenceRow& r);
+
+// Runs the study and writes both CSVs (atomically); returns the rows.
+std::vector<ConvergenceRow> run_study(const StudySpec& spec);
+
+}  // namespace bsdfmix

@@ -1,0 +1,19 @@
+// The convergence study's files and charts, for the converge and charts stages.
+#pragma once
+
+#include <string>
+
+#include "config/config.hpp"
+
+namespace bsdfmix {
+
+// The tail-risk CSV of a converge section: tail_csv, else <csv stem>_tail.csv beside csv.
+std::string converge_tail_path(const ConvergeSection& c);
+
+// The mixture file the study samples: converge.mixture, else fit.output; ConfigError if neither.
+std::string converge_mixture_path(const Config& config);
+
+// Charts of the convergence CSV (scripts/plot_convergence.py) into `dir`.
+void converge_charts(const Config& config, const std::string& dir);
+
+}  // namespace bsdfmix

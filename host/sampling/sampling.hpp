@@ -1,0 +1,117 @@
+// Importance sampling from a mixture file and the Monte Carlo estimators of the
+// convergence study: the problem of one omega_o (the blended table slice, its CDF, the
+// blended mixture flattened for the kernels, the lighting), the device drivers of
+// kernels/sample.cl and their CPU references (host/sampling/sample_reference.cpp).
+#pragma once
+
+#include <bsdfmix/mixture.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/domain.hpp"
+#include "device/device.hpp"
+#include "io/table.hpp"
+#include "sampling/lighting.hpp"
+
+namespace bsdfmix {
+
+// Counter streams (third counter word): sample CLI and each estimator.
+constexpr std::uint32_t kSampleStream = 0x73616d70u;  // "samp"
+std::uint32_t estimator_stream(int estimator);
+
+// ---- the mixture serving one omega_o, flattened (kernels/sample.cl layout) -----------
+
+struct QueryMixture {
+  Domain domain = Domain::Fiber;
+  mix::MixtureSet::Blend blend;
+  std::vector<float> q;      // 16 floats: count, rotate, weights, first, counts, total
+  std::vector<float> comps;  // 16 floats per component
+  std::size_t components() const { return comps.size() / 16; }
+};
+
+QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o);
+
+// ---- sampling --------------------------------------------------------------------------
+
+// Samples first..first+n-1 of `stream` under `seed` on a device (float) ...
+std::vector<mix::Sample> sample_device(const Device& device, const mix::MixtureSet& set, double theta_o,
+                                       double phi_o, std::uint64_t seed, std::uint32_t stream, std::uint64_t first,
+                                       std::size_t n);
+// ... and on the CPU with the renderer-facing header (double): the reference.
+std::vector<mix::Sample> sample_cpu(const mix::MixtureSet& set, double theta_o, double phi_o, std::uint64_t seed,
+                                    std::uint32_t stream, std::uint64_t first, std::size_t n);
+
+// pdf_omega and the stand-in f at directions (theta, phi), on a device: pairs (pdf, f).
+std::vector<std::pair<double, double>> eval_device(const Device& device, const mix::MixtureSet& set, double theta_o,
+                                                   double phi_o, const std::vector<std::pair<double, double>>& dirs);
+
+// ---- estimators ------------------------------------------------------------------------
+
+enum class Estimator { UsTab = 0, UsGmm = 1, IsTab = 2, IsGmm = 3, MisTab = 4, CdfTab = 5 };
+constexpr int kEstimators = 6;
+const char* estimator_name(Estimator e);
+// Throws ConfigError naming `where` for an unknown name.
+Estimator parse_estimator(const std::string& name, const std::string& where);
+bool uses_table(Estimator e);
+
+// The table as f for one omega_o: the blend of the table slices serving omega_o with
+// the mixture's bilinear weights, piecewise constant over its cells (phi in the slice
+// frame: with azimuthal symmetry the query's phi_o rotates it).
+struct TableSlice {
+  Domain domain = Domain::Fiber;
+  std::vector<float> f;  // [n_theta][n_phi]
+  std::size_t n_theta = 0, n_phi = 0;
+  double th0 = 0, dth = 0, ph0 = 0, dph = 0;  // lower edge of the first cell, cell size
+  double rotate = 0;
+  double theta_edge(std::size_t i) const;  // clamped to the domain
+  double f_at(double theta, double phi_world) const;
+  // Integral over cell (i, j) of cos(theta) [hemisphere only] J(theta) dtheta dphi, and of J alone.
+  double cell_weight(std::size_t i) const;
+  double cell_solid_angle(std::size_t i) const;
+};
+
+TableSlice blended_slice(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o);
+
+// Piecewise-constant 2D CDF over the cells, proportional to f * cell_weight.
+struct CellCdf {
+  std::vector<float> marginal;     // [n_theta + 1]
+  std::vector<float> conditional;  // [n_theta][n_phi + 1]
+};
+CellCdf build_cdf(const TableSlice& t);
+
+struct Problem {
+  const mix::MixtureSet* set = nullptr;
+  double theta_o = 0, phi_o = 0;
+  QueryMixture query;
+  TableSlice table;
+  CellCdf cdf;
+  Lighting light;
+  double uniform_fraction = 0.1;  // mis_tab: defensive share of uniform samples
+  std::vector<float> geometry() const;
+};
+
+Problem make_problem(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o,
+                     const Lighting& light, double uniform_fraction);
+
+// The uniforms of sample n of run r: counter {n lo, n hi, stream, r}.
+void run_uniforms(std::uint64_t seed, std::uint32_t stream, std::uint32_t run, std::uint64_t n, double u[4]);
+
+// One estimate with uniforms u (double; the reference of kernels/sample.cl `estimate`).
+double estimate_cpu(const Problem& p, Estimator e, const double u[4]);
+
+// Per run, the sums of the first N estimates for N = 1, 2, 4, .., n_max (a power of two).
+struct RunSums {
+  int runs = 0, levels = 0;   // levels = log2(n_max) + 1
+  std::vector<double> sum;    // [run][level]
+  double seconds = 0;         // time spent estimating (the timed launch)
+  double at(int r, int l) const { return sum[std::size_t(r) * std::size_t(levels) + std::size_t(l)]; }
+};
+
+RunSums integrate_cpu(const Problem& p, Estimator e, int runs, std::uint64_t n_max, std::uint64_t seed);
+RunSums integrate_device(const Device& device, const Problem& p, Estimator e, int runs, std::uint64_t n_max,
+                         std::uint64_t seed, std::uint32_t chunk = 256);
+
+}  // namespace bsdfmix

@@ -1,0 +1,404 @@
+// Importance sampling from the fitted mixtures and the Monte Carlo estimators of the
+// convergence study (docs/sampling.md), in float. CPU reference:
+// include/bsdfmix/mixture.hpp (sampling, pdf, stand-in) and
+// host/sampling/sample_reference.cpp (estimators); tests: tests/sample_test.cpp and
+// tests/converge_test.cpp.
+//
+// The mixture serving one omega_o (up to 4 fitted slices blended with bilinear weights,
+// thesis eq. 3.7) arrives flattened: `q` holds the blend, `comps` the components of its
+// slices one after the other, 16 floats each (see COMP_* below).
+//
+// Random numbers: Philox4x32-10, counter {i lo, i hi, stream, 0}, key {seed lo, seed hi};
+// the same function as bsdfmix::mix::philox4x32, so sample i is the same everywhere.
+//
+// Defines: HEMISPHERE (0: fiber domain, theta in [-pi/2, pi/2], J = cos theta;
+// 1: hemisphere, theta in [0, pi/2], J = sin theta); ESTIMATOR (integrate_chunks only:
+// 0 us_tab, 1 us_gmm, 2 is_tab, 3 is_gmm, 4 mis_tab, 5 cdf_tab).
+
+#ifndef HEMISPHERE
+#define HEMISPHERE 0
+#endif
+#ifndef ESTIMATOR
+#define ESTIMATOR 0
+#endif
+
+#define S_PI 3.14159265358979323846f
+
+#if HEMISPHERE
+#define THETA_LO 0.0f
+#else
+#define THETA_LO (-0.5f * S_PI)
+#endif
+#define THETA_HI (0.5f * S_PI)
+
+// Component layout (16 floats).
+#define COMP_MU_T 0
+#define COMP_MU_P 1
+#define COMP_I_TT 2
+#define COMP_I_TP 3
+#define COMP_I_PP 4
+#define COMP_L_TT 5
+#define COMP_L_PT 6
+#define COMP_L_PP 7
+#define COMP_W_PDF 8  // blend weight * component weight * normalization
+#define COMP_W_F 9    // the same times the slice's scale (the stand-in for f)
+#define COMP_CUT 10   // |dphi| beyond which an image adds nothing
+#define COMP_IMAGES 11
+#define COMP_CDF 12   // cumulative component weight within its slice
+
+// Query layout: [0] slice count, [1] rotate (phi_o added with azimuthal symmetry),
+// [2..5] blend weights, [6..9] first component of each slice, [10..13] component counts,
+// [14] total component count.
+#define Q_COUNT 0
+#define Q_ROTATE 1
+#define Q_W 2
+#define Q_FIRST 6
+#define Q_N 10
+#define Q_TOTAL 14
+
+// ---- Philox4x32-10 --------------------------------------------------------------------
+
+uint4 philox4x32(uint4 c, uint2 k) {
+  for (int r = 0; r < 10; ++r) {
+    if (r > 0) {
+      k.x += 0x9E3779B9u;
+      k.y += 0xBB67AE85u;
+    }
+    const uint hi0 = mul_hi(0xD2511F53u, c.x), lo0 = 0xD2511F53u * c.x;
+    const uint hi1 = mul_hi(0xCD9E8D57u, c.z), lo1 = 0xCD9E8D57u * c.z;
+    c = (uint4)(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
+  }
+  return c;
+}
+
+float4 uniforms4(const ulong index, const uint stream, const uint2 key) {
+  const uint4 r = philox4x32((uint4)((uint)index, (uint)(index >> 32), stream, 0u), key);
+  return convert_float4(r >> 8) * (1.0f / 16777216.0f);
+}
+
+// ---- angles --------------------------------------------------------------------------
+
+float wrap_phi(const float phi) {
+  float r = phi - 2.0f * S_PI * floor((phi + S_PI) / (2.0f * S_PI));
+  return r >= S_PI ? -S_PI : r;
+}
+
+float jacobian(const float theta) {
+#if HEMISPHERE
+  return sin(theta);
+#else
+  return cos(theta);
+#endif
+}
+
+// ---- the mixture ---------------------------------------------------------------------
+
+// Sum over components of w * density, for the pdf (wpdf) and the stand-in (wf) at once;
+// phi is in the slice frame (rotation removed).
+float2 mixture_sums(__global const float* q, __global const float16* comps, const float theta, const float phi) {
+  const int total = (int)q[Q_TOTAL];
+  float2 acc = (float2)(0.0f, 0.0f);
+  for (int c = 0; c < total; ++c) {
+    const float16 g = comps[c];
+    const float dt = theta - g.s0;
+    const int images = (int)g.sb;
+    float sum = 0.0f;
+    for (int m = -images; m <= images; ++m) {
+      const float dp = phi + 2.0f * S_PI * (float)m - g.s1;
+      if (fabs(dp) > g.sa) continue;
+      const float qf = g.s2 * dt * dt + 2.0f * g.s3 * dt * dp + g.s4 * dp * dp;
+      sum += exp(-0.5f * qf);
+    }
+    acc += sum * (float2)(g.s8, g.s9);
+  }
+  return acc;
+}
+
+bool theta_inside(const float theta) { return theta >= THETA_LO && theta <= THETA_HI; }
+
+// pdf per steradian of the mixture sampler at (theta, phi) (phi in the world frame).
+float mixture_pdf_omega(__global const float* q, __global const float16* comps, const float theta, const float phi) {
+  if (!theta_inside(theta)) return 0.0f;
+  const float j = jacobian(theta);
+  if (!(j > 0.0f)) return 0.0f;
+  return mixture_sums(q, comps, theta, wrap_phi(phi - q[Q_ROTATE])).x / j;
+}
+
+// Draws a point from the blended mixture with uniforms u (u.x slice, u.y component,
+// u.zw the normal pair). Returns (theta, phi); phi wrapped, in the world frame.
+float2 mixture_draw(__global const float* q, __global const float16* comps, const float4 u) {
+  const int count = (int)q[Q_COUNT];
+  int k = 0;
+  float acc = q[Q_W];
+  while (k + 1 < count && u.x >= acc) acc += q[Q_W + (++k)];
+  const int first = (int)q[Q_FIRST + k], n = (int)q[Q_N + k];
+  // upper_bound: the first component whose cumulative weight exceeds u.y
+  int lo = 0, hi = n;
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (comps[first + mid].sc > u.y) hi = mid;
+    else lo = mid + 1;
+  }
+  const float16 g = comps[first + min(lo, n - 1)];
+  const float r = sqrt(-2.0f * log(1.0f - u.z));
+  const float z0 = r * cos(2.0f * S_PI * u.w), z1 = r * sin(2.0f * S_PI * u.w);
+  const float theta = g.s0 + g.s5 * z0;
+  const float phi = wrap_phi(g.s1 + g.s6 * z0 + g.s7 * z1 + q[Q_ROTATE]);
+  return (float2)(theta, phi);
+}
+
+// `n` samples first..first+n-1 of `stream`: (theta, phi, pdf_omega, valid).
+__kernel void sample_mixture(__global const float* q, __global const float16* comps, const uint key0,
+                             const uint key1, const uint stream, const ulong first, const uint n,
+                             __global float4* out) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const float4 u = uniforms4(first + i, stream, (uint2)(key0, key1));
+  const float2 p = mixture_draw(q, comps, u);
+  const float pdf = mixture_pdf_omega(q, comps, p.x, p.y);
+  const float valid = (theta_inside(p.x) && pdf > 0.0f) ? 1.0f : 0.0f;
+  out[i] = (float4)(p.x, p.y, valid > 0.0f ? pdf : 0.0f, valid);
+}
+
+// pdf_omega and the stand-in f at n directions (theta, phi) (world phi): out (pdf, f).
+__kernel void eval_mixture(__global const float* q, __global const float16* comps, __global const float2* dirs,
+                           const uint n, __global float2* out) {
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const float theta = dirs[i].x, phi = dirs[i].y;
+  float2 r = (float2)(0.0f, 0.0f);
+  if (theta_inside(theta)) {
+    const float j = jacobian(theta);
+    if (j > 0.0f) {
+      r = mixture_sums(q, comps, theta, wrap_phi(phi - q[Q_ROTATE])) / j;
+#if HEMISPHERE
+      r.y /= cos(theta);
+#endif
+    }
+  }
+  out[i] = r;
+}
+
+// ---- the estimators -------------------------------------------------------------------
+
+// Table slice geometry: [0] theta of the first cell's lower edge, [1] dtheta, [2] n_theta,
+// [3] phi of the first cell's lower edge, [4] dphi, [5] n_phi, [6] uniform fraction (mis).
+#define T_TH0 0
+#define T_DTH 1
+#define T_NTH 2
+#define T_PH0 3
+#define T_DPH 4
+#define T_NPH 5
+#define T_ALPHA 6
+
+// Scene layout (see host/converge/scene.hpp): [0..8] frame (axis, e1, e2),
+// [9] constant, [10] lobe count, [11..50] lobes (dir xyz, kappa, radiance) x 8,
+// [51..56] gradient (up xyz, zenith, horizon, ground), [57] gradient on,
+// [58] env width, [59] env height, [60] env scale (0 = none).
+#define SC_CONST 9
+#define SC_NLOBES 10
+#define SC_LOBES 11
+#define SC_GRAD 51
+#define SC_GRAD_ON 57
+#define SC_ENV_W 58
+#define SC_ENV_H 59
+#define SC_ENV_SCALE 60
+
+float3 to_world(__global const float* sc, const float theta, const float phi) {
+  const float3 a = (float3)(sc[0], sc[1], sc[2]), e1 = (float3)(sc[3], sc[4], sc[5]), e2 = (float3)(sc[6], sc[7], sc[8]);
+#if HEMISPHERE
+  return cos(theta) * a + sin(theta) * (cos(phi) * e1 + sin(phi) * e2);
+#else
+  return sin(theta) * a + cos(theta) * (cos(phi) * e1 + sin(phi) * e2);
+#endif
+}
+
+float envmap_lookup(__global const float* sc, __global const float* env, const float3 w) {
+  const int W = (int)sc[SC_ENV_W], H = (int)sc[SC_ENV_H];
+  const float u = (atan2(w.y, w.x) + S_PI) / (2.0f * S_PI) * (float)W - 0.5f;
+  const float v = acos(clamp(w.z, -1.0f, 1.0f)) / S_PI * (float)H - 0.5f;
+  const float fu = floor(u), fv = floor(v);
+  const float au = u - fu, av = v - fv;
+  int x0 = (int)fu, y0 = (int)fv;
+  int x1 = x0 + 1, y1 = y0 + 1;
+  x0 = (x0 % W + W) % W;
+  x1 = (x1 % W + W) % W;
+  y0 = clamp(y0, 0, H - 1);
+  y1 = clamp(y1, 0, H - 1);
+  const float top = (1.0f - au) * env[y0 * W + x0] + au * env[y0 * W + x1];
+  const float bot = (1.0f - au) * env[y1 * W + x0] + au * env[y1 * W + x1];
+  return (1.0f - av) * top + av * bot;
+}
+
+// Incident radiance from direction (theta, phi) of the table's frame.
+float radiance(__global const float* sc, __global const float* env, const float theta, const float phi) {
+  const float3 w = to_world(sc, theta, phi);
+  float L = sc[SC_CONST];
+  const int nl = (int)sc[SC_NLOBES];
+  for (int i = 0; i < nl; ++i) {
+    __global const float* lb = sc + SC_LOBES + 5 * i;
+    const float3 d = w - (float3)(lb[0], lb[1], lb[2]);
+    L += lb[4] * exp(-0.5f * lb[3] * dot(d, d));  // exp(kappa (cos - 1)), 1 - cos = |w - d|^2 / 2
+  }
+  if (sc[SC_GRAD_ON] > 0.0f) {
+    const float t = dot(w, (float3)(sc[SC_GRAD], sc[SC_GRAD + 1], sc[SC_GRAD + 2]));
+    L += t >= 0.0f ? sc[SC_GRAD + 4] + (sc[SC_GRAD + 3] - sc[SC_GRAD + 4]) * t
+                   : sc[SC_GRAD + 4] + (sc[SC_GRAD + 4] - sc[SC_GRAD + 5]) * t;
+  }
+  if (sc[SC_ENV_SCALE] != 0.0f) L += sc[SC_ENV_SCALE] * envmap_lookup(sc, env, w);
+  return L;
+}
+
+// The table as f: the value of the cell holding (theta, phi_local); 0 outside the cells.
+float table_f(__global const float* geo, __global const float* f, const float theta, const float phi_local) {
+  const int i = (int)floor((theta - geo[T_TH0]) / geo[T_DTH]);
+  const int nth = (int)geo[T_NTH], nph = (int)geo[T_NPH];
+  if (i < 0 || i >= nth) return 0.0f;
+  int j = (int)floor((phi_local - geo[T_PH0]) / geo[T_DPH]);
+  j = (j % nph + nph) % nph;
+  return f[i * nph + j];
+}
+
+float cos_factor(const float theta) {
+#if HEMISPHERE
+  return cos(theta);
+#else
+  return 1.0f;
+#endif
+}
+
+// Uniform direction over the domain from (u, v): returns (theta, phi); pdf 1/(4 pi) or 1/(2 pi).
+float2 uniform_draw(const float u, const float v) {
+#if HEMISPHERE
+  const float theta = acos(1.0f - u);
+#else
+  const float theta = asin(clamp(2.0f * u - 1.0f, -1.0f, 1.0f));
+#endif
+  return (float2)(theta, 2.0f * S_PI * v - S_PI);
+}
+
+#if HEMISPHERE
+#define UNIFORM_PDF (1.0f / (2.0f * S_PI))
+#else
+#define UNIFORM_PDF (1.0f / (4.0f * S_PI))
+#endif
+
+// First index i in [0, n) with cdf[i + 1] > u (cdf[0] = 0, cdf[n] = 1): the cell holding u.
+int cdf_find(__global const float* cdf, const int n, const float u) {
+  int lo = 0, hi = n;  // search in cdf[1..n]
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (cdf[mid + 1] > u) hi = mid;
+    else lo = mid + 1;
+  }
+  return min(lo, n - 1);
+}
+
+// One estimate of L_o with uniforms u.
+float estimate(__global const float* q, __global const float16* comps, __global const float* geo,
+               __global const float* f, __global const float* marg, __global const float* cond,
+               __global const float* sc, __global const float* env, const float4 u) {
+  const float rotate = q[Q_ROTATE];
+#if ESTIMATOR == 0 || ESTIMATOR == 1
+  const float2 d = uniform_draw(u.z, u.w);
+#if ESTIMATOR == 0
+  const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
+#else
+  const float j = jacobian(d.x);
+  float fv = j > 0.0f ? mixture_sums(q, comps, d.x, wrap_phi(d.y - rotate)).y / j : 0.0f;
+#if HEMISPHERE
+  fv = j > 0.0f ? fv / cos(d.x) : 0.0f;
+#endif
+#endif
+  if (fv == 0.0f) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / UNIFORM_PDF;
+#elif ESTIMATOR == 2 || ESTIMATOR == 3
+  const float2 d = mixture_draw(q, comps, u);
+  if (!theta_inside(d.x)) return 0.0f;
+  const float j = jacobian(d.x);
+  if (!(j > 0.0f)) return 0.0f;
+  const float2 s = mixture_sums(q, comps, d.x, wrap_phi(d.y - rotate));
+  if (!(s.x > 0.0f)) return 0.0f;
+#if ESTIMATOR == 2
+  // f c / pdf_omega = f c J / pdf_param
+  const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
+  if (fv == 0.0f) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) * j / s.x;
+#else
+  // the stand-in: f c J = sum w scale p_param, so f c / pdf_omega = sums.y / sums.x
+  return radiance(sc, env, d.x, d.y) * s.y / s.x;
+#endif
+#elif ESTIMATOR == 4
+  const float alpha = geo[T_ALPHA];
+  float2 d;
+  if (u.x < alpha) {
+    d = uniform_draw(u.z, u.w);
+  } else {
+    d = mixture_draw(q, comps, (float4)((u.x - alpha) / (1.0f - alpha), u.y, u.z, u.w));
+    if (!theta_inside(d.x)) return 0.0f;
+  }
+  const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
+  if (fv == 0.0f) return 0.0f;
+  const float j = jacobian(d.x);
+  const float pm = j > 0.0f ? mixture_sums(q, comps, d.x, wrap_phi(d.y - rotate)).x / j : 0.0f;
+  const float pdf = alpha * UNIFORM_PDF + (1.0f - alpha) * pm;
+  if (!(pdf > 0.0f)) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+#else
+  // piecewise-constant 2D CDF over the cells, exact within a cell: theta drawn with
+  // density proportional to c(theta) J(theta), phi uniform
+  const int nth = (int)geo[T_NTH], nph = (int)geo[T_NPH];
+  const int i = cdf_find(marg, nth, u.x);
+  __global const float* row = cond + i * (nph + 1);
+  const int jc = cdf_find(row, nph, u.y);
+  const float p_cell = (marg[i + 1] - marg[i]) * (row[jc + 1] - row[jc]);
+  if (!(p_cell > 0.0f)) return 0.0f;
+  const float a = fmax(geo[T_TH0] + geo[T_DTH] * (float)i, THETA_LO);
+  const float b = fmin(geo[T_TH0] + geo[T_DTH] * (float)(i + 1), THETA_HI);
+#if HEMISPHERE
+  const float sa = sin(a) * sin(a), sb = sin(b) * sin(b);
+  const float theta = asin(sqrt(clamp(sa + u.z * (sb - sa), 0.0f, 1.0f)));
+  const float area = 0.5f * (sb - sa) * geo[T_DPH];  // integral of cos J over the cell
+#else
+  const float sa = sin(a), sb = sin(b);
+  const float theta = asin(clamp(sa + u.z * (sb - sa), -1.0f, 1.0f));
+  const float area = (sb - sa) * geo[T_DPH];
+#endif
+  const float phi = wrap_phi(geo[T_PH0] + geo[T_DPH] * ((float)jc + u.w) + rotate);
+  return radiance(sc, env, theta, phi) * f[i * nph + jc] * area / p_cell;
+#endif
+}
+
+// Work item (run r, chunk c) sums the estimates of samples c*chunk .. (c+1)*chunk-1 of run
+// r (Kahan). Sample n of run r uses counter {n lo, n hi, stream, r}: independent of the
+// chunking. Chunk 0 also writes the prefix sums at N = 1, 2, 4, .., chunk/2.
+__kernel void integrate_chunks(__global const float* q, __global const float16* comps, __global const float* geo,
+                               __global const float* f, __global const float* marg, __global const float* cond,
+                               __global const float* sc, __global const float* env, const uint key0,
+                               const uint key1, const uint stream, const uint runs, const uint chunks,
+                               const uint chunk, const uint levels, __global float* sums,
+                               __global float* prefix) {
+  const uint gid = get_global_id(0);
+  if (gid >= runs * chunks) return;
+  const uint r = gid / chunks, c = gid % chunks;
+  const uint2 key = (uint2)(key0, key1);
+  float s = 0.0f, comp = 0.0f;
+  uint next = 1;
+  int level = 0;
+  for (uint k = 0; k < chunk; ++k) {
+    const ulong n = (ulong)c * chunk + k;
+    const uint4 bits = philox4x32((uint4)((uint)n, (uint)(n >> 32), stream, r), key);
+    const float4 u = convert_float4(bits >> 8) * (1.0f / 16777216.0f);
+    const float e = estimate(q, comps, geo, f, marg, cond, sc, env, u);
+    const float y = e - comp;
+    const float t = s + y;
+    comp = (t - s) - y;
+    s = t;
+    if (c == 0 && k + 1 == next && level < (int)levels) {
+      prefix[r * levels + level] = s;
+      ++level;
+      next <<= 1;
+    }
+  }
+  sums[gid] = s;
+}

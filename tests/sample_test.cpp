@@ -1,0 +1,356 @@
+// kernels/sample.cl (sample_mixture, eval_mixture) against its CPU reference, the
+// renderer-facing header include/bsdfmix/mixture.hpp (host/sampling/sample_reference.cpp):
+// Philox against Random123, Pearson chi-square of samples against the pdf (a lobe across
+// phi = +-pi, a lobe cut by the theta border, interpolated omega_o, both domains), the pdf
+// integrating to 1 - P(invalid), kernel and header agreeing sample for sample, and the
+// `bsdfmix sample` command.
+#include <Random123/philox.h>
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/progress.hpp"
+#include "device/device.hpp"
+#include "io/mixture_file.hpp"
+#include "sampling/sampling.hpp"
+
+using namespace bsdfmix;
+
+namespace {
+
+// Fixed seed (printed); SAMPLE_TEST_SEED overrides it to re-check with other streams.
+const std::uint64_t kSeed = std::getenv("SAMPLE_TEST_SEED") ? std::strtoull(std::getenv("SAMPLE_TEST_SEED"), nullptr, 10)
+                                                             : 20240611ull;
+
+mix::Gaussian gauss(double w, double mt, double mp, double st, double sp, double rho) {
+  mix::Gaussian g;
+  g.weight = w;
+  g.mu_t = mt;
+  g.mu_p = mp;
+  g.s_tt = st * st;
+  g.s_tp = rho * st * sp;
+  g.s_pp = sp * sp;
+  return g;
+}
+
+// Fiber set on a 3-slice theta_o grid (azimuthal): slice 0 has a lobe across phi = +-pi
+// and one cut by theta = pi/2; slice 1 a correlated lobe; slice 2 a broad one cut by -pi/2.
+mix::MixtureSet fiber_set() {
+  mix::MixtureSet set;
+  set.domain = mix::Domain::Fiber;
+  set.azimuthal = true;
+  set.grid_theta_o = {-0.6, 0.0, 0.6};
+  set.grid_phi_o = {0.0};
+  mix::SliceMixture a, b, c;
+  a.theta_o = -0.6;
+  a.scale = 0.8;
+  a.components = {gauss(0.5, 0.2, 3.0, 0.15, 0.3, 0.2), gauss(0.3, 1.45, -0.5, 0.12, 0.4, -0.3),
+                  gauss(0.2, -0.3, 0.8, 0.3, 0.8, 0.0)};
+  b.theta_o = 0.0;
+  b.scale = 1.1;
+  b.components = {gauss(0.7, 0.1, -2.9, 0.08, 0.2, 0.6), gauss(0.3, 0.0, 1.0, 0.4, 1.2, -0.4)};
+  c.theta_o = 0.6;
+  c.scale = 0.5;
+  c.components = {gauss(1.0, -1.3, 0.0, 0.35, 2.5, 0.1)};
+  set.slices = {a, b, c};
+  set.prepare();
+  return set;
+}
+
+// Hemisphere set, no azimuthal symmetry: 2 x 2 omega_o grid, lobes cut by theta = 0
+// and pi/2.
+mix::MixtureSet hemisphere_set() {
+  mix::MixtureSet set;
+  set.domain = mix::Domain::Hemisphere;
+  set.azimuthal = false;
+  set.grid_theta_o = {0.4, 1.0};
+  set.grid_phi_o = {-kPi / 2, kPi / 2};
+  const double tos[2] = {0.4, 1.0}, pos[2] = {-kPi / 2, kPi / 2};
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) {
+      mix::SliceMixture s;
+      s.theta_o = tos[i];
+      s.phi_o = pos[j];
+      s.scale = 0.5 + 0.1 * (2 * i + j);
+      s.components = {gauss(0.6, 0.1 + 0.3 * i, pos[j] + kPi, 0.2, 0.5, 0.3),
+                      gauss(0.4, 1.4, pos[j] - 0.5 * i, 0.15, 0.6, -0.2)};
+      set.slices.push_back(s);
+    }
+  set.prepare();
+  return set;
+}
+
+const Device& device() {
+  static std::vector<Device> d = select_devices("");
+  return d.front();
+}
+
+// Regularized upper incomplete gamma Q(a, x) (Numerical Recipes, series / continued fraction).
+double gamma_q(double a, double x) {
+  if (x <= 0) return 1;
+  const double gln = std::lgamma(a);
+  if (x < a + 1) {
+    double ap = a, sum = 1 / a, del = sum;
+    for (int n = 0; n < 100000; ++n) {
+      ap += 1;
+      del *= x / ap;
+      sum += del;
+      if (std::abs(del) < std::abs(sum) * 1e-15) break;
+    }
+    return 1 - sum * std::exp(-x + a * std::log(x) - gln);
+  }
+  double b = x + 1 - a, c = 1 / 1e-300, d = 1 / b, h = d;
+  for (int i = 1; i < 100000; ++i) {
+    const double an = -i * (i - a);
+    b += 2;
+    d = an * d + b;
+    if (std::abs(d) < 1e-300) d = 1e-300;
+    c = b + an / c;
+    if (std::abs(c) < 1e-300) c = 1e-300;
+    d = 1 / d;
+    const double del = d * c;
+    h *= del;
+    if (std::abs(del - 1) < 1e-15) break;
+  }
+  return std::exp(-x + a * std::log(x) - gln) * h;
+}
+
+// Integral of the set's pdf_param over [t0, t1] x [p0, p1] (Gauss-Legendre 6 x 6).
+double bin_mass(const mix::MixtureSet& set, double to, double po, double t0, double t1, double p0, double p1) {
+  static const double x[6] = {-0.9324695142, -0.6612093865, -0.2386191861, 0.2386191861, 0.6612093865, 0.9324695142};
+  static const double w[6] = {0.1713244924, 0.3607615730, 0.4679139346, 0.4679139346, 0.3607615730, 0.1713244924};
+  double s = 0;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      const double t = 0.5 * (t0 + t1) + 0.5 * (t1 - t0) * x[i], p = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * x[j];
+      s += w[i] * w[j] * set.pdf_param(to, po, t, p);
+    }
+  return s * 0.25 * (t1 - t0) * (p1 - p0);
+}
+
+struct Chi2 {
+  double stat = 0, p = 0, mass = 0, invalid = 0;
+  int dof = 0;
+};
+
+// Pearson chi-square of samples against the pdf on a theta x phi histogram plus one
+// "invalid" bin; bins expecting fewer than 5 samples are pooled (as Mitsuba's chi2 test).
+Chi2 chi2(const mix::MixtureSet& set, double to, double po, const std::vector<mix::Sample>& s) {
+  const int nt = 40, np = 80;
+  const double lo = set.domain == mix::Domain::Fiber ? -kPi / 2 : 0.0, hi = kPi / 2;
+  std::vector<double> obs(std::size_t(nt * np + 1), 0.0), expct(obs.size(), 0.0);
+  for (const auto& x : s) {
+    if (!x.valid) {
+      obs.back() += 1;
+      continue;
+    }
+    const int i = std::min(nt - 1, int((x.theta - lo) / (hi - lo) * nt));
+    const int j = std::min(np - 1, int((x.phi + kPi) / (2 * kPi) * np));
+    obs[std::size_t(i * np + j)] += 1;
+  }
+  Chi2 r;
+  const double N = double(s.size());
+  for (int i = 0; i < nt; ++i)
+    for (int j = 0; j < np; ++j) {
+      const double m = bin_mass(set, to, po, lo + (hi - lo) * i / nt, lo + (hi - lo) * (i + 1) / nt,
+                                -kPi + 2 * kPi * j / np, -kPi + 2 * kPi * (j + 1) / np);
+      r.mass += m;
+      expct[std::size_t(i * np + j)] = m * N;
+    }
+  expct.back() = std::max(0.0, 1 - r.mass) * N;
+  r.invalid = obs.back() / N;
+  double pooled_o = 0, pooled_e = 0;
+  int bins = 0;
+  for (std::size_t k = 0; k < obs.size(); ++k) {
+    if (expct[k] < 5) {
+      pooled_o += obs[k];
+      pooled_e += expct[k];
+      continue;
+    }
+    r.stat += (obs[k] - expct[k]) * (obs[k] - expct[k]) / expct[k];
+    ++bins;
+  }
+  if (pooled_e > 5) {
+    r.stat += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
+    ++bins;
+  }
+  r.dof = bins - 1;
+  r.p = gamma_q(0.5 * r.dof, 0.5 * r.stat);
+  return r;
+}
+
+void check_chi2(const mix::MixtureSet& set, double to, double po, const char* what) {
+  const std::size_t n = 400000;
+  for (int dev = 0; dev < 2; ++dev) {
+    const auto s = dev ? sample_device(device(), set, to, po, kSeed, kSampleStream, 0, n)
+                       : sample_cpu(set, to, po, kSeed, kSampleStream, 0, n);
+    const Chi2 c = chi2(set, to, po, s);
+    INFO(what << (dev ? " (device)" : " (CPU header)") << ": seed " << kSeed << ", chi2 " << c.stat << " with "
+              << c.dof << " dof, p-value " << c.p << "; pdf mass " << c.mass << ", invalid fraction " << c.invalid);
+    std::printf("sample_test: %s %s: seed %llu, chi2 %.1f, dof %d, p-value %.4f, mass %.6f, 1 - invalid %.6f\n", what,
+                dev ? "device" : "cpu", (unsigned long long)kSeed, c.stat, c.dof, c.p, c.mass, 1 - c.invalid);
+    CHECK(c.p > 0.01);
+    // The pdf integrates to 1 - P(invalid): quadrature against the empirical fraction.
+    const double se = std::sqrt(std::max(c.invalid * (1 - c.invalid), 1e-12) / double(n));
+    CHECK(std::abs(c.mass - (1 - c.invalid)) < 4 * se + 2e-4);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Philox4x32-10 of the header matches Random123", "[sample]") {
+  r123::Philox4x32 rng;
+  const std::uint32_t ctrs[4][4] = {{0, 0, 0, 0}, {1, 2, 3, 4}, {0xffffffffu, 0xffffffffu, 0xffffffffu, 0xffffffffu},
+                                    {123456789u, 0, kSampleStream, 77}};
+  const std::uint32_t keys[3][2] = {{0, 0}, {0xdeadbeefu, 0xcafef00du}, {1, 0}};
+  for (const auto& c : ctrs)
+    for (const auto& k : keys) {
+      const auto ref = rng({{c[0], c[1], c[2], c[3]}}, {{k[0], k[1]}});
+      const auto mine = mix::philox4x32_10(c, k);
+      for (int i = 0; i < 4; ++i) CHECK(mine.v[i] == ref.v[i]);
+    }
+}
+
+TEST_CASE("chi-square: fiber slice with a lobe across phi = +-pi and one cut by theta = pi/2", "[sample]") {
+  Progress::set_enabled(false);
+  check_chi2(fiber_set(), -0.6, 0.0, "fiber grid slice");
+}
+
+TEST_CASE("chi-square: fiber omega_o between grid slices, rotated by phi_o", "[sample]") {
+  check_chi2(fiber_set(), -0.25, 1.3, "fiber interpolated");
+  check_chi2(fiber_set(), 0.45, -2.0, "fiber interpolated, broad cut lobe");
+}
+
+TEST_CASE("chi-square: hemisphere, four-slice blend without symmetry", "[sample]") {
+  check_chi2(hemisphere_set(), 0.7, 0.3, "hemisphere 4-way blend");
+}
+
+TEST_CASE("the pdf's mass is the normal mass inside the theta range (analytic)", "[sample]") {
+  const auto set = fiber_set();
+  // grid slice 2: one component, theta marginal N(-1.3, 0.35^2) cut at -pi/2
+  const double analytic = 0.5 * (std::erf((kPi / 2 + 1.3) / (0.35 * std::sqrt(2.0))) -
+                                 std::erf((-kPi / 2 + 1.3) / (0.35 * std::sqrt(2.0))));
+  double q = 0;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 60; ++j)
+      q += bin_mass(set, 0.6, 0.0, -kPi / 2 + kPi * i / 60, -kPi / 2 + kPi * (i + 1) / 60, -kPi + 2 * kPi * j / 60,
+                    -kPi + 2 * kPi * (j + 1) / 60);
+  CHECK(std::abs(q - analytic) < 1e-6);
+}
+
+TEST_CASE("kernel and header agree sample for sample", "[sample]") {
+  for (int which = 0; which < 2; ++which) {
+    const auto set = which ? hemisphere_set() : fiber_set();
+    const double to = which ? 0.55 : -0.3, po = which ? 2.0 : 0.7;
+    const std::size_t n = 200000;
+    const std::uint64_t first = 5000000000ull;  // above 2^32: the high counter word
+    const auto a = sample_cpu(set, to, po, kSeed, kSampleStream, first, n);
+    const auto b = sample_device(device(), set, to, po, kSeed, kSampleStream, first, n);
+    REQUIRE(a.size() == b.size());
+    std::size_t mismatched = 0, valid = 0;
+    double worst_angle = 0, worst_pdf = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double da = std::max(std::abs(a[i].theta - b[i].theta), std::abs(wrap_phi(a[i].phi - b[i].phi)));
+      // the kernel's pdf against the header's at the kernel's point (near theta = 0 the
+      // hemisphere's 1 / sin(theta) magnifies float rounding of the point itself)
+      const double dp = a[i].valid ? std::abs(b[i].pdf_omega / set.pdf_omega(to, po, b[i].theta, b[i].phi) - 1) : 0.0;
+      if (a[i].valid != b[i].valid || da > 1e-3) {
+        ++mismatched;  // a component or validity boundary hit within float rounding
+        continue;
+      }
+      valid += a[i].valid;
+      worst_angle = std::max(worst_angle, da);
+      if (a[i].pdf_omega > 1e-3 && dp > worst_pdf) {
+        worst_pdf = dp;
+        if (std::getenv("SAMPLE_DEBUG"))
+          std::printf("  i %zu theta %.9g/%.9g phi %.9g/%.9g pdf %.9g/%.9g\n", i, a[i].theta, b[i].theta, a[i].phi,
+                      b[i].phi, a[i].pdf_omega, b[i].pdf_omega);
+      }
+    }
+    std::printf("sample_test: device vs header (%s): %zu of %zu differ, worst angle %.2e rad, worst pdf %.2e rel\n",
+                which ? "hemisphere" : "fiber", mismatched, n, worst_angle, worst_pdf);
+    CHECK(mismatched <= n / 10000);
+    CHECK(valid > n / 2);
+    CHECK(worst_angle < 2e-4);
+    CHECK(worst_pdf < 2e-3);
+    // the same stream at another offset: batch independence
+    const auto c = sample_device(device(), set, to, po, kSeed, kSampleStream, first + 1000, 10);
+    for (std::size_t i = 0; i < 10; ++i) CHECK(c[i].theta == b[1000 + i].theta);
+  }
+}
+
+TEST_CASE("eval kernel: pdf_omega and the stand-in f match the header", "[sample]") {
+  for (int which = 0; which < 2; ++which) {
+    const auto set = which ? hemisphere_set() : fiber_set();
+    const double to = which ? 0.8 : 0.2, po = which ? -1.0 : 0.4;
+    std::vector<std::pair<double, double>> dirs;
+    for (int i = 0; i < 30; ++i)
+      for (int j = 0; j < 30; ++j)
+        dirs.emplace_back((which ? 0.0 : -kPi / 2) + (which ? 1.0 : 2.0) * kPi / 2 * (i + 0.5) / 30,
+                          -kPi + 2 * kPi * (j + 0.37) / 30);
+    const auto r = eval_device(device(), set, to, po, dirs);
+    double worst = 0;
+    for (std::size_t k = 0; k < dirs.size(); ++k) {
+      const double p = set.pdf_omega(to, po, dirs[k].first, dirs[k].second);
+      const double f = set.eval_f(to, po, dirs[k].first, dirs[k].second);
+      if (p > 1e-4) worst = std::max(worst, std::abs(r[k].first / p - 1));
+      if (f > 1e-4) worst = std::max(worst, std::abs(r[k].second / f - 1));
+      // the stand-in is scale * pdf (per slice, blended)
+    }
+    CHECK(worst < 1e-3);
+  }
+  // a grid slice: f = scale * pdf_omega exactly (fiber)
+  const auto set = fiber_set();
+  for (double t : {-1.0, 0.0, 0.9})
+    CHECK(set.eval_f(0.0, 0.0, t, 0.5) == Approx(1.1 * set.pdf_omega(0.0, 0.0, t, 0.5)).epsilon(1e-12));
+}
+
+TEST_CASE("bsdfmix sample writes theta,phi,pdf_omega,valid", "[sample][cli]") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "bsdfmix_sample_test";
+  fs::create_directories(dir);
+  const auto set = fiber_set();
+  MixtureFile m;
+  m.domain = Domain::Fiber;
+  m.azimuthal = true;
+  m.table_theta_o = set.grid_theta_o;
+  m.table_phi_o = {0.0};
+  for (const auto& s : set.slices) {
+    std::vector<double> w, mean, cov;
+    for (const auto& g : s.components) {
+      w.push_back(g.weight);
+      mean.insert(mean.end(), {g.mu_t, g.mu_p});
+      cov.insert(cov.end(), {g.s_tt, g.s_tp, g.s_pp});
+    }
+    m.add_slice(s.theta_o, 0.0, s.scale, 0.0, 0.01, w, mean, cov);
+  }
+  const std::string file = (dir / "m.h5").string(), out = (dir / "s.csv").string(), out_cpu = (dir / "c.csv").string();
+  write_mixture_file(file, m);
+  const std::string base = std::string(BSDFMIX_BINARY) + " sample " + file + " --theta-o -0.25 --phi-o 1.3 -n 500 --seed 7 -q -o ";
+  REQUIRE(std::system((base + out).c_str()) == 0);
+  REQUIRE(std::system((base + out_cpu + " --cpu").c_str()) == 0);
+  std::ifstream a(out), b(out_cpu);
+  std::string la, lb;
+  std::getline(a, la);
+  CHECK(la == "theta,phi,pdf_omega,valid");
+  std::getline(b, lb);
+  int rows = 0;
+  while (std::getline(a, la) && std::getline(b, lb)) {
+    ++rows;
+    double ta, pa, qa, tb, pb, qb;
+    int va, vb;
+    REQUIRE(std::sscanf(la.c_str(), "%lf,%lf,%lf,%d", &ta, &pa, &qa, &va) == 4);
+    REQUIRE(std::sscanf(lb.c_str(), "%lf,%lf,%lf,%d", &tb, &pb, &qb, &vb) == 4);
+    CHECK(std::abs(ta - tb) < 1e-3);
+    CHECK(va == vb);
+    CHECK((va == 1 ? qa > 0 : qa == 0));
+  }
+  CHECK(rows == 500);
+  // errors are one line and non-zero
+  CHECK(std::system((std::string(BSDFMIX_BINARY) + " sample " + file + " --theta-o 3 -n 5 -q -o " + out + " 2>/dev/null").c_str()) != 0);
+}
