@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <thread>
 #include <tuple>
 
 #include "core/error.hpp"
@@ -184,12 +185,18 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     std::vector<int> prob_slice(P), prob_k(P);
     std::vector<double> state(P * nstate, 0.0);
     for (std::size_t i = 0; i < P; ++i) {
-      const Problem& pr = problems[batch.problems[i]];
-      const EmTask& t = tasks[pr.task];
+      const EmTask& t = tasks[problems[batch.problems[i]].task];
       auto it = local_slice.find(t.slice);
       if (it == local_slice.end()) it = local_slice.emplace(t.slice, static_cast<int>(local_slice.size())).first;
       prob_slice[i] = it->second;
       prob_k[i] = t.k;
+    }
+    // Initializations in parallel on the host (each depends on its problem only).
+    const std::size_t init_threads =
+        std::min<std::size_t>(P, std::max(1u, std::thread::hardware_concurrency()));
+    run_on_workers(P, init_threads, [&](std::size_t, std::size_t i) {
+      const Problem& pr = problems[batch.problems[i]];
+      const EmTask& t = tasks[pr.task];
       const Gmm g = initialize(grid, prepared[t.slice]->w, t.slice, t.k, pr.restart, t.settings);
       double* st = &state[i * nstate];
       for (int j = 0; j < t.k; ++j) {
@@ -200,7 +207,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
         st[4 * K + j] = g.cov[3 * j + 1];
         st[5 * K + j] = g.cov[3 * j + 2];
       }
-    }
+    });
     std::vector<float> weights(local_slice.size() * stride, 0.0f);
     for (const auto& [slice, local] : local_slice) {
       const auto& w = prepared[slice]->w;
