@@ -1,0 +1,300 @@
+// The estimators of kernels/sample.cl (integrate_chunks) and their CPU reference
+// (host/sampling/sample_reference.cpp), the quadrature references and the convergence
+// study (host/converge): every table estimator unbiased, is_gmm converging to the
+// stand-in's integral (its bias is the stand-in's integral error), device and CPU
+// agreeing, scenes (lobes, gradient, PFM environment map, frames, errors), and the exact
+// CSV columns of `bsdfmix converge`.
+// labels: sample
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "converge/reference.hpp"
+#include "converge/scene.hpp"
+#include "converge/study.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "io/mixture_file.hpp"
+#include "io/table.hpp"
+#include "sampling/sampling.hpp"
+
+using namespace bsdfmix;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::uint64_t kSeed = 97;
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / "bsdfmix_converge_test";
+  fs::create_directories(d);
+  return d;
+}
+
+double lobe(double dt, double dp, double st, double sp) {
+  double s = 0;
+  for (int m = -1; m <= 1; ++m) {
+    const double p = dp + 2 * kPi * m;
+    s += std::exp(-0.5 * (dt * dt / (st * st) + p * p / (sp * sp)));
+  }
+  return s;
+}
+
+// A small table (3 theta_o slices, 24 x 48 cells) whose f is a lobe that moves with
+// theta_o plus a floor, and a mixture file for it: the lobe's Gaussian and a broad
+// Gaussian (which keeps the mixture positive wherever f is), scale = the integral.
+struct Fixture {
+  std::string table, mixture;
+  Domain domain;
+};
+
+Fixture make_fixture(Domain domain) {
+  const std::string tag = domain == Domain::Fiber ? "fiber" : "hemi";
+  Fixture fx{(temp_dir() / (tag + "_table.h5")).string(), (temp_dir() / (tag + "_mixture.h5")).string(), domain};
+  TableMeta meta = make_grid(domain, 3, 1, 24, 48, true);
+  meta.source = "{\"model\": \"test\"}";
+  const std::size_t nt = meta.theta_i.size(), np = meta.phi_i.size();
+  std::vector<float> values;
+  MixtureFile m;
+  m.domain = domain;
+  m.azimuthal = true;
+  m.table_theta_o = meta.theta_o;
+  m.table_phi_o = meta.phi_o;
+  for (std::size_t s = 0; s < meta.theta_o.size(); ++s) {
+    const double to = meta.theta_o[s];
+    const double mt = domain == Domain::Fiber ? -0.5 * to : 0.3 + 0.3 * s;
+    const double mp = 2.6 - 0.4 * double(s);  // near phi = pi for s = 0
+    std::vector<double> f(nt * np);
+    std::vector<double> w = integrand_weights(domain, meta.theta_i, meta.phi_i,
+                                              std::vector<float>(nt * np, 1.0f).data());  // cell weights with f = 1
+    double integral = 0;
+    for (std::size_t i = 0; i < nt; ++i)
+      for (std::size_t j = 0; j < np; ++j) {
+        const double th = meta.theta_i[i];
+        const double c = domain == Domain::Hemisphere ? std::cos(th) : 1.0;
+        f[i * np + j] = (0.02 + 3.0 * lobe(th - mt, wrap_phi(meta.phi_i[j] - mp), 0.2, 0.35) / (c * jacobian(domain, th)));
+        integral += f[i * np + j] * w[i * np + j];
+        values.push_back(float(f[i * np + j]));
+      }
+    m.add_slice(to, 0.0, integral, 0.0, 0.05, {0.85, 0.15}, {mt, mp, 0.1, 0.0},
+                {0.2 * 0.2, 0.0, 0.35 * 0.35, 0.7 * 0.7, 0.0, 2.0 * 2.0});
+  }
+  write_table(fx.table, meta, values);
+  write_mixture_file(fx.mixture, m);
+  return fx;
+}
+
+const Fixture& fiber() {
+  static Fixture f = make_fixture(Domain::Fiber);
+  return f;
+}
+const Fixture& hemisphere() {
+  static Fixture f = make_fixture(Domain::Hemisphere);
+  return f;
+}
+
+const Device& device() {
+  static std::vector<Device> d = select_devices("");
+  return d.front();
+}
+
+Lighting sky(Domain d) {
+  Lighting l = default_lighting(d, 0.2);
+  l.name = "sky";
+  LightLobe sun;
+  sun.direction = {0.3, 0.5, std::sqrt(1 - 0.34)};
+  sun.kappa = std::log(2.0) / (1 - std::cos(8 * kPi / 180));
+  sun.radiance = 20;
+  l.lobes.push_back(sun);
+  l.gradient = true;
+  l.zenith = 1.0;
+  l.horizon = 0.4;
+  l.ground = 0.1;
+  return l;
+}
+
+struct Stats {
+  double mean = 0, sd = 0;  // of the per-run estimates at N_max
+};
+
+Stats stats(const RunSums& s) {
+  Stats st;
+  const double N = std::ldexp(1.0, s.levels - 1);
+  for (int r = 0; r < s.runs; ++r) st.mean += s.at(r, s.levels - 1) / N;
+  st.mean /= s.runs;
+  for (int r = 0; r < s.runs; ++r) {
+    const double e = s.at(r, s.levels - 1) / N - st.mean;
+    st.sd += e * e;
+  }
+  st.sd = std::sqrt(st.sd / (s.runs - 1));
+  return st;
+}
+
+void check_unbiased(const Fixture& fx, const Lighting& light, double to, double po) {
+  Progress::set_enabled(false);
+  const TableReader table(fx.table);
+  const mix::MixtureSet set = to_mixture_set(read_mixture_file(fx.mixture));
+  const Problem p = make_problem(table, set, to, po, light, 0.1);
+  const double ref = reference_integral(p), stand_in = stand_in_integral(p);
+  const int runs = 64;
+  const std::uint64_t n = 1024;
+  for (int e = 0; e < kEstimators; ++e) {
+    const RunSums s = integrate_device(device(), p, Estimator(e), runs, n, kSeed);
+    const Stats st = stats(s);
+    const double target = uses_table(Estimator(e)) ? ref : stand_in;
+    const double se = st.sd / std::sqrt(double(runs));
+    const double z = se > 0 ? (st.mean - target) / se : 0.0;
+    std::printf("converge_test: %s %s theta_o %.3f: %-7s mean %.7g target %.7g (reference %.7g) z %+.2f rel_se %.2e\n",
+                domain_name(fx.domain).c_str(), light.name.c_str(), to, estimator_name(Estimator(e)), st.mean, target,
+                ref, z, se / target);
+    INFO(estimator_name(Estimator(e)) << " seed " << kSeed << ": mean " << st.mean << " target " << target << " z " << z);
+    CHECK(std::abs(st.mean - target) <= 4 * se + 2e-6 * target);
+    if (Estimator(e) == Estimator::IsGmm) {
+      // is_gmm's bias against the table's integral is the stand-in's integral error,
+      // and with constant lighting this fixture makes that error far larger than the noise.
+      if (light.is_constant()) CHECK(std::abs(stand_in - ref) > 10 * se);
+      CHECK(std::abs((st.mean - ref) - (stand_in - ref)) <= 4 * se + 2e-6 * ref);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("stand-in integral: exact (normal CDFs) equals quadrature", "[converge]") {
+  const TableReader table(fiber().table);
+  const mix::MixtureSet set = to_mixture_set(read_mixture_file(fiber().mixture));
+  Problem p = make_problem(table, set, 0.25, 0.4, default_lighting(Domain::Fiber, 1.0), 0.1);
+  const double exact = stand_in_integral(p);
+  Lighting almost = sky(Domain::Fiber);  // not constant: forces the quadrature path
+  almost.constant = 1.0;
+  almost.lobes[0].radiance = 0;
+  almost.gradient = false;
+  almost.lobes[0].kappa = 1e-6;
+  p.light = almost;
+  CHECK(stand_in_integral(p) == Approx(exact).epsilon(2e-4));
+  // and the table reference with constant L is the sum of f times the exact cell integrals
+  Problem q = make_problem(table, set, 0.25, 0.4, default_lighting(Domain::Fiber, 2.0), 0.1);
+  double s = 0;
+  for (std::size_t i = 0; i < q.table.n_theta; ++i)
+    for (std::size_t j = 0; j < q.table.n_phi; ++j) s += 2.0 * q.table.f[i * q.table.n_phi + j] * q.table.cell_weight(i);
+  CHECK(reference_integral(q) == Approx(s).epsilon(1e-12));
+}
+
+TEST_CASE("every table estimator is unbiased; is_gmm converges to the stand-in (fiber, constant)", "[converge]") {
+  check_unbiased(fiber(), default_lighting(Domain::Fiber, 1.0), 0.25, 0.4);
+}
+
+TEST_CASE("every table estimator is unbiased; is_gmm converges to the stand-in (fiber, sky)", "[converge]") {
+  check_unbiased(fiber(), sky(Domain::Fiber), -0.7, 2.5);
+}
+
+TEST_CASE("every table estimator is unbiased; is_gmm converges to the stand-in (hemisphere, sky)", "[converge]") {
+  check_unbiased(hemisphere(), sky(Domain::Hemisphere), 0.5, -1.0);
+}
+
+TEST_CASE("device estimators agree with the CPU reference run for run", "[converge]") {
+  for (const Fixture* fx : {&fiber(), &hemisphere()}) {
+    const TableReader table(fx->table);
+    const mix::MixtureSet set = to_mixture_set(read_mixture_file(fx->mixture));
+    const Problem p = make_problem(table, set, 0.4, 0.9, sky(fx->domain), 0.1);
+    for (int e = 0; e < kEstimators; ++e) {
+      const RunSums a = integrate_cpu(p, Estimator(e), 4, 512, kSeed);
+      const RunSums b = integrate_device(device(), p, Estimator(e), 4, 512, kSeed, 64);
+      REQUIRE(a.levels == b.levels);
+      double worst = 0;
+      for (int r = 0; r < 4; ++r)
+        for (int l = 0; l < a.levels; ++l) {
+          const double d = std::abs(a.at(r, l) - b.at(r, l)) / std::max(std::abs(a.at(r, l)), 1e-3);
+          worst = std::max(worst, d);
+        }
+      std::printf("converge_test: device vs CPU %s %s: worst relative difference of run sums %.2e\n",
+                  domain_name(fx->domain).c_str(), estimator_name(Estimator(e)), worst);
+      CHECK(worst < 2e-3);
+    }
+  }
+}
+
+TEST_CASE("results do not depend on the chunking", "[converge]") {
+  const TableReader table(fiber().table);
+  const mix::MixtureSet set = to_mixture_set(read_mixture_file(fiber().mixture));
+  const Problem p = make_problem(table, set, 0.1, 0.0, sky(Domain::Fiber), 0.1);
+  const RunSums a = integrate_device(device(), p, Estimator::MisTab, 8, 2048, kSeed, 256);
+  const RunSums b = integrate_device(device(), p, Estimator::MisTab, 8, 2048, kSeed, 16);
+  for (int r = 0; r < 8; ++r)
+    for (int l = 0; l < a.levels; ++l) CHECK(a.at(r, l) == Approx(b.at(r, l)).epsilon(1e-4));
+}
+
+TEST_CASE("scenes: PFM environment map, frame, errors naming file and key", "[converge]") {
+  const fs::path dir = temp_dir();
+  PfmImage img;
+  img.width = 16;
+  img.height = 8;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x) img.luminance.push_back(0.5f + 0.4f * std::sin(0.4f * x) * std::cos(0.3f * y));
+  const std::string pfm = (dir / "env.pfm").string();
+  write_pfm(pfm, img);
+  const PfmImage back = read_pfm(pfm);
+  REQUIRE(back.width == 16);
+  REQUIRE(back.height == 8);
+  CHECK(back.luminance == img.luminance);
+
+  const std::string scene_file = (dir / "env.yaml").string();
+  std::ofstream(scene_file) << "name: envtest\nframe:\n  tangent: [0, 1, 0]\n  normal: [0, 0, 1]\nenvmap:\n  file: env.pfm\n  scale: 2\n";
+  const Lighting l = parse_scene(YAML::LoadFile(scene_file), scene_file, "", Domain::Fiber);
+  CHECK(l.name == "envtest");
+  CHECK(l.env_width == 16);
+  // theta = pi/2 is along the fiber tangent (+y): the map's value there
+  const Vec3 w = l.to_world(kPi / 2, 0.0);
+  CHECK(w[1] == Approx(1.0));
+  check_unbiased(fiber(), l, 0.3, 0.0);
+
+  auto error_of = [&](const std::string& yaml) {
+    try {
+      parse_scene(YAML::Load(yaml), "bad.yaml", "", Domain::Fiber);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK_THAT(error_of("lobes:\n  - direction: [0, 0, 1]\n    radius: 3\n    radiance: 1\n"),
+             Catch::Contains("bad.yaml: lobes[0].radius") && Catch::Contains("unknown key"));
+  CHECK_THAT(error_of("lobes:\n  - direction: [0, 0]\n    kappa: 3\n    radiance: 1\n"),
+             Catch::Contains("lobes[0].direction") && Catch::Contains("3-vector"));
+  CHECK_THAT(error_of("envmap:\n  file: nowhere.pfm\n"), Catch::Contains("envmap.file") && Catch::Contains("not found"));
+  CHECK_THAT(error_of("frame:\n  tangent: [1, 0, 0]\n  normal: [2, 0, 0]\n"), Catch::Contains("parallel"));
+  CHECK_THAT(error_of("sky: 1\n"), Catch::Contains("bad.yaml: sky") && Catch::Contains("unknown key"));
+  std::ofstream(dir / "broken.pfm") << "P6\n1 1\n255\n";
+  CHECK_THROWS_WITH(read_pfm((dir / "broken.pfm").string()), Catch::Contains("not a PFM"));
+}
+
+TEST_CASE("bsdfmix converge writes the convergence CSV with the exact columns", "[converge][cli]") {
+  const fs::path dir = temp_dir();
+  const std::string cfg = (dir / "cfg.yaml").string(), csv = (dir / "conv.csv").string();
+  std::ofstream(cfg) << "table: " << fiber().table << "\nconverge:\n  mixture: " << fiber().mixture
+                     << "\n  theta_o: [0.0, 0.5]\n  samples_max: 100\n  runs: 4\n  csv: " << csv
+                     << "\n  scene:\n    - {name: sky, constant: 0.5, gradient: {zenith: 1, horizon: 0.5, ground: 0.1}}\n"
+                        "    - {name: flat, constant: 1}\n";
+  REQUIRE(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg).c_str()) == 0);
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  CHECK(line == "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    CHECK(std::count(line.begin(), line.end(), ',') == 11);
+  }
+  CHECK(rows == 2 * 2 * 6 * 7);  // directions x scenes x estimators x N in 1..64
+  std::ifstream tail((dir / "conv_tail.csv").string());
+  std::getline(tail, line);
+  CHECK(line == kTailHeader);
+  // a bad estimator name is one error line naming the key
+  std::ofstream(cfg) << "table: " << fiber().table << "\nconverge:\n  mixture: " << fiber().mixture
+                     << "\n  estimators: [us_tab, magic]\n  csv: " << csv << "\n";
+  CHECK(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg + " 2>/dev/null").c_str()) != 0);
+}
