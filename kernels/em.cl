@@ -313,6 +313,29 @@ inline real_t sum_chunks(__global const real_t* partials, uint p, uint G, int in
   return s;
 }
 
+// Raises the eigenvalues of the covariance [a b; b c] to at least f (the
+// covariance floor), keeping the eigenvectors: components wider than the floor
+// are untouched, a component cannot collapse onto one cell.
+inline void floor_covariance(real_t* a, real_t* b, real_t* c, const real_t f) {
+  const real_t half_tr = R(0.5) * (*a + *c);
+  const real_t disc = sqrt(R(0.25) * (*a - *c) * (*a - *c) + *b * *b);
+  const real_t l1 = half_tr + disc, l2 = half_tr - disc;
+  if (l2 >= f) return;
+  if (*b == R(0.0)) {
+    *a = fmax(*a, f);
+    *c = fmax(*c, f);
+    return;
+  }
+  real_t vx = l1 - *c, vy = *b;
+  const real_t n = sqrt(vx * vx + vy * vy);
+  vx /= n;
+  vy /= n;
+  const real_t m1 = fmax(l1, f), m2 = f;
+  *a = m1 * vx * vx + m2 * vy * vy;
+  *b = (m1 - m2) * vx * vy;
+  *c = m1 * vy * vy + m2 * vx * vx;
+}
+
 inline real_t wrap_phi_r(real_t x) {
   real_t r = x - TWO_PI_R * floor((x + PI_R) / TWO_PI_R);
   return r >= PI_R ? r - TWO_PI_R : r;
@@ -320,7 +343,7 @@ inline real_t wrap_phi_r(real_t x) {
 
 // M-step, one work-item per problem: reduces the chunk statistics, tests
 // convergence on the log-likelihood of the current state, updates the state
-// (weights, means with phi wrapped, covariances plus the floor), re-seeds empty
+// (weights, means with phi wrapped, covariances floored), re-seeds empty
 // components by splitting the heaviest one, and writes the E-step constants.
 __kernel void em_mstep(const uint n_problems, const uint G, const int iter, const int max_iter,
                        const real_t tol, const real_t cov_floor, const real_t min_weight,
@@ -371,9 +394,10 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
     st[0 * K_MAX + j] = s0 / total;
     st[1 * K_MAX + j] += dt;
     st[2 * K_MAX + j] = wrap_phi_r(st[2 * K_MAX + j] + dp);
-    st[3 * K_MAX + j] = ctt + cov_floor;
+    floor_covariance(&ctt, &ctp, &cpp, cov_floor);
+    st[3 * K_MAX + j] = ctt;
     st[4 * K_MAX + j] = ctp;
-    st[5 * K_MAX + j] = cpp + cov_floor;
+    st[5 * K_MAX + j] = cpp;
   }
   // Re-seed each empty component (in index order) by splitting the heaviest
   // non-empty one along its principal axis: means +- half a standard deviation,

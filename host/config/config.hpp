@@ -33,12 +33,12 @@ struct FitSection {
   std::string output, report, search_report;
   int k_min = 1, k_max = 32;
   std::uint64_t seed = 1;
-  int restarts = 3, final_restarts = 6, iterations = 100, final_iterations = 300;
+  int restarts = 2, final_restarts = 4, iterations = 60, final_iterations = 300;
   double tolerance = 1e-6;
   int batch = 0;
   double k_penalty = 0.004;
   std::optional<double> error_target;
-  int search_pool = 2;
+  int search_pool = 1;
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 

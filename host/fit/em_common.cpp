@@ -75,6 +75,26 @@ double cov_floor(const SliceGrid& grid, const EmSettings& s) {
   return 0.0625 * step * step;
 }
 
+void floor_covariance(double& a, double& b, double& c, double f) {
+  const double half_tr = 0.5 * (a + c);
+  const double disc = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  const double l1 = half_tr + disc, l2 = half_tr - disc;
+  if (l2 >= f) return;
+  if (b == 0.0) {
+    a = std::max(a, f);
+    c = std::max(c, f);
+    return;
+  }
+  double vx = l1 - c, vy = b;
+  const double n = std::sqrt(vx * vx + vy * vy);
+  vx /= n;
+  vy /= n;
+  const double m1 = std::max(l1, f), m2 = f;
+  a = m1 * vx * vx + m2 * vy * vy;
+  b = (m1 - m2) * vx * vy;
+  c = m1 * vy * vy + m2 * vx * vx;
+}
+
 int k_bucket(int k) {
   int b = 4;
   while (b < k) b *= 2;
@@ -191,9 +211,10 @@ Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t 
     double stp = a[4] / m - dt * dp;
     const double lim = std::sqrt(stt * spp);
     stp = std::min(std::max(stp, -lim), lim);
-    g.cov[3 * j] = stt + floor;
+    floor_covariance(stt, stp, spp, floor);
+    g.cov[3 * j] = stt;
     g.cov[3 * j + 1] = stp;
-    g.cov[3 * j + 2] = spp + floor;
+    g.cov[3 * j + 2] = spp;
   }
   for (int j = 0; j < k; ++j) g.weight[j] = wsum > 0 ? g.weight[j] / wsum : 1.0 / k;
   return g;

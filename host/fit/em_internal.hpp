@@ -29,6 +29,10 @@ void validate_tasks(const SliceSet& set, const std::vector<EmTask>& tasks);
 // The covariance floor in effect (rad^2).
 double cov_floor(const SliceGrid& grid, const EmSettings& s);
 
+// Raises the eigenvalues of the covariance (s_tt, s_tp, s_pp) to at least `floor`,
+// keeping its eigenvectors (kernels/em.cl floor_covariance does the same).
+void floor_covariance(double& stt, double& stp, double& spp, double floor);
+
 // Deterministic initialization from (seed, slice, k, restart): weighted k-means++
 // seeding (phi distances to the nearest image), then one hard-assignment pass
 // giving weights, means and covariances (+ floor) of the k clusters.

@@ -137,13 +137,14 @@ EmResult run_reference(const SliceGrid& grid, const std::vector<double>& w, cons
       double ctt = std::max(a[3] / a[0] - dt * dt, 0.0);
       double cpp = std::max(a[5] / a[0] - dp * dp, 0.0);
       const double lim = std::sqrt(ctt * cpp);
-      const double ctp = std::min(std::max(a[4] / a[0] - dt * dp, -lim), lim);
+      double ctp = std::min(std::max(a[4] / a[0] - dt * dp, -lim), lim);
+      floor_covariance(ctt, ctp, cpp, floor);
       g.weight[j] = a[0] / total;
       g.mean[2 * j] += dt;
       g.mean[2 * j + 1] = wrap_phi(g.mean[2 * j + 1] + dp);
-      g.cov[3 * j] = ctt + floor;
+      g.cov[3 * j] = ctt;
       g.cov[3 * j + 1] = ctp;
-      g.cov[3 * j + 2] = cpp + floor;
+      g.cov[3 * j + 2] = cpp;
     }
     for (int j = 0; j < k && !failed; ++j)
       if (empty[j] && !reseed(g, empty, j)) failed = true;

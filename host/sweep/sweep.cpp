@@ -2,6 +2,7 @@
 #include "sweep/sweep.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -94,6 +95,40 @@ void moment_gaussian(const WeightedSlice& s, std::vector<double>& w, std::vector
   w = {1.0};
   mean = {mt, wrap_phi(mp)};
   cov = {stt, stp, spp};
+}
+
+// One fit of a slice, with its relative L1 error at full resolution.
+struct Fitted {
+  bool ok = false;
+  Gmm gmm;
+  double loglik = 0, l1 = 0;
+  int iterations = 0;
+};
+
+Fitted evaluate(const EmResult& r, const WeightedSlice& full) {
+  Fitted f;
+  if (!r.ok) return f;
+  try {
+    f.l1 = l1_rel_error(full, make_slice_mixture(r.gmm.weight, r.gmm.mean, r.gmm.cov));
+  } catch (const std::exception&) {
+    return f;  // a covariance that is not positive definite: not a usable fit
+  }
+  f.ok = std::isfinite(f.l1) && std::isfinite(r.loglik);
+  f.gmm = r.gmm;
+  f.loglik = r.loglik;
+  f.iterations = r.iterations;
+  return f;
+}
+
+EmTask make_task(std::size_t slice, int k, int iterations, double tolerance, std::uint64_t seed) {
+  EmTask t;
+  t.slice = slice;
+  t.k = k;
+  t.settings.iterations = iterations;
+  t.settings.tolerance = tolerance;
+  t.settings.restarts = 1;
+  t.settings.seed = seed;
+  return t;
 }
 
 struct SliceWork {
@@ -214,7 +249,9 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
       work.push_back(std::move(w));
     }
     std::vector<int> chosen(work.size(), fit.k_min);
+    std::vector<Fitted> best(work.size());  // per slice: the lowest-L1 fit of the chosen K so far
     std::ostringstream search_rows, report_rows;
+    const SliceSet full_set = make_set(meta.domain, work, false);
 
     // The search: every candidate K and restart of every slice in one submission.
     if (search) {
@@ -222,43 +259,35 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
       for (std::size_t s = 0; s < work.size(); ++s) {
         if (!(work[s].total > 0)) continue;
         for (int k : ks)
-          for (int r = 0; r < fit.restarts; ++r) {
-            EmTask t;
-            t.slice = s;
-            t.k = k;
-            t.settings.iterations = fit.iterations;
-            t.settings.tolerance = fit.tolerance;
-            t.settings.restarts = 1;
-            t.settings.seed = task_seed(fit.seed, work[s].ref.index, k, r);
-            tasks.push_back(t);
-          }
+          for (int r = 0; r < fit.restarts; ++r)
+            tasks.push_back(make_task(s, k, fit.iterations, fit.tolerance, task_seed(fit.seed, work[s].ref.index, k, r)));
       }
-      const std::vector<EmResult> results = engine.fit(make_set(meta.domain, work, true), tasks);
+      const std::vector<EmResult> results =
+          engine.fit(fit.search_pool > 1 ? make_set(meta.domain, work, true) : full_set, tasks);
       std::size_t ti = 0;
       for (std::size_t s = 0; s < work.size(); ++s) {
         if (!(work[s].total > 0)) continue;
         std::vector<Candidate> cands;
+        std::vector<Fitted> per_k;  // the best restart of each candidate
         std::vector<std::string> rows;
         for (int k : ks) {
           Candidate c;
           c.k = k;
           c.l1_rel = 1e300;
+          Fitted kbest;
           for (int r = 0; r < fit.restarts; ++r, ++ti) {
-            const EmResult& res = results[ti];
-            double l1 = 2.0;
-            if (res.ok) {
-              try {
-                l1 = l1_rel_error(work[s].full, make_slice_mixture(res.gmm.weight, res.gmm.mean, res.gmm.cov));
-                c.ok = true;
-                c.l1_rel = std::min(c.l1_rel, l1);
-              } catch (const std::exception&) {
-              }
+            const Fitted f = evaluate(results[ti], work[s].full);
+            if (f.ok && f.l1 < c.l1_rel) {
+              c.ok = true;
+              c.l1_rel = f.l1;
+              kbest = f;
             }
             rows.push_back(std::to_string(work[s].ref.index) + "," + std::to_string(k) + "," + std::to_string(r) + "," +
-                           num(res.ok ? res.loglik : 0.0) + "," + num(l1) + "," +
-                           num(candidate_score(k, l1, fit.k_penalty)) + ",");
+                           num(f.ok ? f.loglik : 0.0) + "," + num(f.ok ? f.l1 : 2.0) + "," +
+                           num(candidate_score(k, f.ok ? f.l1 : 2.0, fit.k_penalty)) + ",");
           }
           cands.push_back(c);
+          per_k.push_back(kbest);
         }
         std::size_t pick = 0;
         try {
@@ -267,62 +296,47 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
           pick = 0;
         }
         chosen[s] = cands[pick].k;
+        best[s] = per_k[pick];
         std::size_t row = 0;
         for (int k : ks)
           for (int r = 0; r < fit.restarts; ++r, ++row) search_rows << rows[row] << (k == chosen[s] ? "1" : "0") << "\n";
       }
     }
 
-    // The final fits of the chosen K at full resolution.
+    // The final fits of the chosen K at full resolution: more restarts and iterations;
+    // the lowest relative L1 error among them and the search's fits of that K is kept.
     std::vector<EmTask> tasks;
     for (std::size_t s = 0; s < work.size(); ++s) {
       if (!(work[s].total > 0)) continue;
-      EmTask t;
-      t.slice = s;
-      t.k = chosen[s];
-      t.settings.iterations = fit.final_iterations;
-      t.settings.tolerance = fit.tolerance;
-      t.settings.restarts = fit.final_restarts;
-      t.settings.seed = task_seed(fit.seed, work[s].ref.index, chosen[s], -1);
-      tasks.push_back(t);
+      for (int r = 0; r < fit.final_restarts; ++r)
+        tasks.push_back(make_task(s, chosen[s], fit.final_iterations, fit.tolerance,
+                                  task_seed(fit.seed, work[s].ref.index, chosen[s], -1 - r)));
     }
-    const std::vector<EmResult> finals =
-        tasks.empty() ? std::vector<EmResult>{} : engine.fit(make_set(meta.domain, work, false), tasks);
+    const std::vector<EmResult> finals = tasks.empty() ? std::vector<EmResult>{} : engine.fit(full_set, tasks);
+    for (std::size_t i = 0; i < finals.size(); ++i) {
+      const std::size_t s = tasks[i].slice;
+      const Fitted f = evaluate(finals[i], work[s].full);
+      if (f.ok && (!best[s].ok || f.l1 < best[s].l1)) best[s] = f;
+    }
     const double batch_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
 
     BatchPart part;
     part.mixture.domain = meta.domain;
     part.mixture.azimuthal = meta.azimuthal;
-    std::size_t fi = 0;
     for (std::size_t s = 0; s < work.size(); ++s) {
       const SliceWork& w = work[s];
-      std::vector<double> wt, mean, cov;
-      double loglik = 0, l1 = 0;
-      int iterations = 0;
-      bool fitted = false;
-      if (w.total > 0) {
-        const EmResult& res = finals[fi++];
-        if (res.ok) {
-          try {
-            l1 = l1_rel_error(w.full, make_slice_mixture(res.gmm.weight, res.gmm.mean, res.gmm.cov));
-            wt = res.gmm.weight;
-            mean = res.gmm.mean;
-            cov = res.gmm.cov;
-            loglik = res.loglik;
-            iterations = res.iterations;
-            fitted = true;
-          } catch (const std::exception&) {
-          }
-        }
-      }
-      if (!fitted) {  // zero slice or failed fit: one moment-matched Gaussian
-        moment_gaussian(w.full, wt, mean, cov);
-        l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(wt, mean, cov)) : 0.0;
+      Fitted f = best[s];
+      if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
+        moment_gaussian(w.full, f.gmm.weight, f.gmm.mean, f.gmm.cov);
+        f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
+        f.loglik = 0;
+        f.iterations = 0;
       }
       part.slice_index.push_back(w.ref.index);
-      part.mixture.add_slice(meta.theta_o[w.ref.t_o], meta.phi_o[w.ref.p_o], w.total, loglik, l1, wt, mean, cov);
+      part.mixture.add_slice(meta.theta_o[w.ref.t_o], meta.phi_o[w.ref.p_o], w.total, f.loglik, f.l1, f.gmm.weight,
+                             f.gmm.mean, f.gmm.cov);
       report_rows << w.ref.index << "," << num(meta.theta_o[w.ref.t_o]) << "," << num(meta.phi_o[w.ref.p_o]) << ","
-                  << wt.size() << "," << iterations << "," << num(loglik) << "," << num(l1) << ","
+                  << f.gmm.weight.size() << "," << f.iterations << "," << num(f.loglik) << "," << num(f.l1) << ","
                   << num(batch_seconds / double(work.size()), "%.6f") << "," << device_names << "\n";
     }
     part.report_rows = report_rows.str();
