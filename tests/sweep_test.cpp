@@ -158,7 +158,8 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
   }
   // The CSVs follow their contracts.
   const std::string report = slurp(f.report), search = slurp(f.search_report);
-  CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device\n", 0) == 0);
+  CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n", 0) == 0);
+  CHECK(std::count(report.begin(), report.end(), ',') == 5 * 9);  // 10 fields a row, no comma inside one
   CHECK(search.rfind("slice,k,restart,loglik,l1_rel,score,chosen\n", 0) == 0);
   CHECK(std::count(report.begin(), report.end(), '\n') == 5);
   // 4 slices x 9 candidates (1..8, 10) x 2 restarts, one chosen K per slice (2 rows each).
@@ -202,6 +203,29 @@ TEST_CASE("zero slices are stored with scale 0 and never NaN", "[fit]") {
   CHECK(m.k[0] == 1);
   CHECK(std::isfinite(m.loglik[0]));
   CHECK(m.scale[1] > 0);
+  const std::string report = slurp(f.report);
+  CHECK_THAT(report, Catch::Contains(",zero: every cell is zero; stored with scale 0\n"));
+  CHECK_THAT(report, Catch::Contains(",ok\n"));
+}
+
+TEST_CASE("a slice with fewer non-zero cells than K gets one component per cell", "[fit]") {
+  Progress::set_enabled(false);
+  TableMeta meta = make_grid(Domain::Fiber, 1, 1, 20, 40, true);
+  std::vector<float> v(meta.cells_per_slice(), 0.0f);
+  v[5 * 40 + 3] = 2.0f;
+  v[9 * 40 + 20] = 1.0f;
+  v[14 * 40 + 33] = 0.5f;
+  const std::string table = (temp_dir() / "three_cells.h5").string();
+  write_table(table, meta, v);
+  FitSection f = fit_settings("three_cells");
+  f.k_min = f.k_max = 8;
+  run_sweep(table, f, "");
+  const MixtureFile m = read_mixture_file(f.output);
+  CHECK(m.k[0] == 3);
+  for (float x : m.weights) CHECK(std::isfinite(x));
+  for (float x : m.covariances) CHECK(std::isfinite(x));
+  CHECK(std::isfinite(m.l1_rel[0]));
+  CHECK_THAT(slurp(f.report), Catch::Contains(",reduced: K lowered from 8 to 3; the number of non-zero cells\n"));
 }
 
 TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {

@@ -24,7 +24,10 @@ namespace bsdfmix {
 
 namespace {
 
-constexpr const char* kReportHeader = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device\n";
+// DESIGN.md's columns, then `status`: ok, zero (an all-zero slice, stored with scale 0),
+// reduced (K lowered to the number of non-zero cells) or failed (a moment-matched Gaussian
+// stands in), each with its reason.
+constexpr const char* kReportHeader = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n";
 constexpr const char* kSearchHeader = "slice,k,restart,loglik,l1_rel,score,chosen\n";
 
 std::uint64_t splitmix(std::uint64_t x) {
@@ -100,6 +103,7 @@ void moment_gaussian(const WeightedSlice& s, std::vector<double>& w, std::vector
 // One fit of a slice, with its relative L1 error at full resolution.
 struct Fitted {
   bool ok = false;
+  std::string failure;  // why, when !ok
   Gmm gmm;
   double loglik = 0, l1 = 0;
   int iterations = 0;
@@ -107,13 +111,19 @@ struct Fitted {
 
 Fitted evaluate(const EmResult& r, const WeightedSlice& full) {
   Fitted f;
-  if (!r.ok) return f;
+  if (!r.ok) {
+    f.failure = r.failure;
+    return f;
+  }
   try {
     f.l1 = l1_rel_error(full, make_slice_mixture(r.gmm.weight, r.gmm.mean, r.gmm.cov));
   } catch (const std::exception&) {
-    return f;  // a covariance that is not positive definite: not a usable fit
+    f.failure = "a covariance is not positive definite";
+    return f;
   }
   f.ok = std::isfinite(f.l1) && std::isfinite(r.loglik);
+  for (const auto* v : {&r.gmm.weight, &r.gmm.mean, &r.gmm.cov})
+    for (double x : *v) f.ok = f.ok && std::isfinite(x);
   f.gmm = r.gmm;
   f.loglik = r.loglik;
   f.iterations = r.iterations;
@@ -313,10 +323,35 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
                                   task_seed(fit.seed, work[s].ref.index, chosen[s], -1 - r)));
     }
     const std::vector<EmResult> finals = tasks.empty() ? std::vector<EmResult>{} : engine.fit(full_set, tasks);
+    std::vector<std::string> failure(work.size());
     for (std::size_t i = 0; i < finals.size(); ++i) {
       const std::size_t s = tasks[i].slice;
       const Fitted f = evaluate(finals[i], work[s].full);
       if (f.ok && (!best[s].ok || f.l1 < best[s].l1)) best[s] = f;
+      if (!f.ok && failure[s].empty()) failure[s] = f.failure;
+    }
+    // A slice with fewer non-zero cells than K cannot hold K components: refit it
+    // with one component per non-zero cell.
+    std::vector<EmTask> reduced;
+    std::vector<int> reduced_from(work.size(), 0);
+    for (std::size_t s = 0; s < work.size(); ++s) {
+      if (best[s].ok || !(work[s].total > 0)) continue;
+      const int positive = static_cast<int>(
+          std::count_if(work[s].full.w.begin(), work[s].full.w.end(), [](double x) { return x > 0; }));
+      if (positive >= chosen[s]) continue;
+      reduced_from[s] = chosen[s];
+      chosen[s] = positive;
+      for (int r = 0; r < fit.final_restarts; ++r)
+        reduced.push_back(make_task(s, positive, fit.final_iterations, fit.tolerance,
+                                    task_seed(fit.seed, work[s].ref.index, positive, -1 - r)));
+    }
+    if (!reduced.empty()) {
+      const std::vector<EmResult> refits = engine.fit(full_set, reduced);
+      for (std::size_t i = 0; i < refits.size(); ++i) {
+        const std::size_t s = reduced[i].slice;
+        const Fitted f = evaluate(refits[i], work[s].full);
+        if (f.ok && (!best[s].ok || f.l1 < best[s].l1)) best[s] = f;
+      }
     }
     const double batch_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
 
@@ -326,6 +361,17 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
     for (std::size_t s = 0; s < work.size(); ++s) {
       const SliceWork& w = work[s];
       Fitted f = best[s];
+      std::string status = "ok";
+      if (!(w.total > 0)) {
+        status = "zero: every cell is zero; stored with scale 0";
+      } else if (!f.ok) {
+        status = "failed: " + (failure[s].empty() ? std::string("no usable fit") : failure[s]) +
+                 "; one moment-matched Gaussian stands in";
+      } else if (reduced_from[s] > 0) {
+        status = "reduced: K lowered from " + std::to_string(reduced_from[s]) + " to " + std::to_string(chosen[s]) +
+                 ", the number of non-zero cells";
+      }
+      std::replace(status.begin(), status.end(), ',', ';');
       if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
         moment_gaussian(w.full, f.gmm.weight, f.gmm.mean, f.gmm.cov);
         f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
@@ -337,7 +383,8 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
                              f.gmm.mean, f.gmm.cov);
       report_rows << w.ref.index << "," << num(meta.theta_o[w.ref.t_o]) << "," << num(meta.phi_o[w.ref.p_o]) << ","
                   << f.gmm.weight.size() << "," << f.iterations << "," << num(f.loglik) << "," << num(f.l1) << ","
-                  << num(batch_seconds / double(work.size()), "%.6f") << "," << device_names << "\n";
+                  << num(batch_seconds / double(work.size()), "%.6f") << "," << device_names << "," << status << "\n";
+      if (status != "ok") log_line("slice " + std::to_string(w.ref.index) + ": " + status);
     }
     part.report_rows = report_rows.str();
     part.search_rows = search_rows.str();
@@ -372,9 +419,11 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
       out.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov);
       sum.k_histogram[k]++;
       l1s.push_back(m.l1_rel[s]);
-      if (m.loglik[s] == 0 && m.scale[s] > 0) ++sum.failed;  // the moment-matched fallback
     }
     report += part.report_rows;
+    for (std::size_t at = part.report_rows.find(",failed: "); at != std::string::npos;
+         at = part.report_rows.find(",failed: ", at + 1))
+      ++sum.failed;
     search_csv += part.search_rows;
   }
   write_mixture_file(fit.output, out);
