@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "io/h5.hpp"
+#include "io/mixture_file.hpp"
 #include "io/table.hpp"
 
 namespace bsdfmix {
@@ -129,13 +130,21 @@ std::string describe_generic(const std::string& path) {
       else if (H5Tget_class(type.get()) == H5T_FLOAT || H5Tget_class(type.get()) == H5T_INTEGER)
         s << "    @" << a << " = " << h5::read_double_attr(g.get(), a, path) << "\n";
     }
-    if (gname == "mixture" && h5::exists(g.get(), "k")) {
-      const auto k = h5::read_ints(g.get(), "k", path);
+    if (gname == "mixture") {
+      const MixtureFile m = read_mixture_file(path);  // validates every slice
       std::map<int, int> hist;
-      for (int x : k) hist[x]++;
-      s << "  components per slice:";
+      for (int x : m.k) hist[x]++;
+      s << "  slices     " << m.slices() << " fitted, all valid; components per slice:";
       for (auto [kk, n] : hist) s << " K=" << kk << " x" << n;
-      s << "\n";
+      std::vector<double> l1 = m.l1_rel;
+      std::sort(l1.begin(), l1.end());
+      char buf[160];
+      if (!l1.empty()) {
+        std::snprintf(buf, sizeof buf, "\n  l1_rel     median %.2f%%, p90 %.2f%%, max %.2f%%", 100 * l1[l1.size() / 2],
+                      100 * l1[std::min(l1.size() - 1, (l1.size() * 9 + 9) / 10 - 1)], 100 * l1.back());
+        s << buf;
+      }
+      s << "\n  parameters " << bytes_text(double(m.payload_bytes())) << "\n";
     }
   }
   s << "  file size  " << bytes_text(double(std::filesystem::file_size(path))) << "\n";
