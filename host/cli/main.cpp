@@ -2,6 +2,7 @@
 // inside is a typed exception, printed here as one line.
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "cli/commands.hpp"
 #include "core/error.hpp"
@@ -15,6 +16,24 @@ void add_common_options(CLI::App& sub, Common& common) {
                  "OpenCL device(s): index, name substring, cpu, gpu or all, comma-separated "
                  "(default: $BSDFMIX_DEVICE, else the config's, else 0)");
   sub.add_flag("-q,--quiet", common.quiet, "no progress or log lines on stderr");
+}
+
+// The error line with control characters escaped: a message quotes names and values
+// read from the input (a key, an attribute, a field name), and a newline in them must
+// not split the one error line.
+std::string one_line(const char* what) {
+  std::string out;
+  for (const char* p = what; *p; ++p) {
+    const unsigned char c = static_cast<unsigned char>(*p);
+    if (c == '\n') out += "\\n";
+    else if (c == '\r') out += "\\r";
+    else if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else out += char(c);
+  }
+  return out;
 }
 
 }  // namespace bsdfmix::cli
@@ -42,10 +61,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::Success& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "bsdfmix: error: %s (see --help)\n", e.what());
+    std::fprintf(stderr, "bsdfmix: error: %s (see --help)\n", cli::one_line(e.what()).c_str());
     return 2;
   } catch (const Error& e) {
-    std::fprintf(stderr, "bsdfmix: error: %s\n", e.what());
+    std::fprintf(stderr, "bsdfmix: error: %s\n", cli::one_line(e.what()).c_str());
     return 1;
   } catch (const cl::Error& e) {
     std::fprintf(stderr, "bsdfmix: error: OpenCL call %s failed with %s\n", e.what(), cl_error_name(e.err()));
@@ -54,7 +73,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bsdfmix: error: out of memory\n");
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bsdfmix: internal error: %s\n", e.what());
+    std::fprintf(stderr, "bsdfmix: internal error: %s\n", cli::one_line(e.what()).c_str());
     return 3;
   }
 }

@@ -64,10 +64,10 @@ Config parse_config(const std::string& text, const std::string& name) {
     ConfigNode section = top.child(s);
     section.reject_unknown(keys_of(defaults[s]));
   }
-  YAML::Node all = YAML::Clone(user);
-  all["device"] = user["device"] && !user["device"].IsNull() ? user["device"] : defaults["device"];
-  ConfigNode root(name, "", all);
-  c.device = root.str("device");
+  // Top-level keys are read from the user's own nodes (a clone would lose their line
+  // numbers, and errors would name line 1); a missing device takes the default.
+  ConfigNode root(name, "", user);
+  c.device = root.has("device") ? root.str("device") : defaults["device"].Scalar();
   if (!root.has("table")) root.fail("table", "missing: name the table file (HDF5)");
   c.table = root.str("table");
 

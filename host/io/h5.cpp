@@ -92,8 +92,20 @@ std::vector<T> read_all(hid_t loc, const std::string& name, const std::string& w
   const H5T_class_t cls = H5Tget_class(type.get());
   if (cls != want)
     throw InputError(where + ": dataset " + name + " has the wrong type (expected " + want_name + ")");
+  // A dataset's extent costs nothing in the file (unwritten storage reads as the fill
+  // value), so a few corrupt bytes can claim 2^40 elements: refuse what no table axis or
+  // mixture dataset needs before allocating it.
+  constexpr hsize_t kMaxElements = hsize_t(1) << 26;
   hsize_t n = 1;
-  for (hsize_t s : shape(d.get())) n *= s;
+  for (hsize_t s : shape(d.get())) {
+    if (s != 0 && n > kMaxElements / s)
+      throw InputError(where + ": dataset " + name + " is impossibly large (more than " +
+                       std::to_string(kMaxElements) + " elements; corrupt file?)");
+    n *= s;
+  }
+  if (n > kMaxElements)
+    throw InputError(where + ": dataset " + name + " is impossibly large (" + std::to_string(n) +
+                     " elements, more than " + std::to_string(kMaxElements) + "; corrupt file?)");
   std::vector<T> out(n);
   if (n > 0 && H5Dread(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
     throw InputError(where + ": cannot read dataset " + name + " (corrupt or truncated file)");

@@ -2,6 +2,7 @@
 #include "io/mixture_file.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -101,8 +102,11 @@ MixtureFile read_mixture_file(const std::string& path) {
   m.loglik = h5::read_doubles(id, "loglik", where);
   m.l1_rel = h5::read_doubles(id, "l1_rel", where);
   const std::size_t S = m.theta_o.size();
-  for (const auto* v : {&m.phi_o, &m.scale, &m.loglik, &m.l1_rel})
-    if (v->size() != S) throw InputError(where + ": per-slice datasets disagree in length (theta_o has " + std::to_string(S) + ")");
+  for (const auto& [name, v] : {std::pair{"phi_o", &m.phi_o}, std::pair{"scale", &m.scale},
+                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel}})
+    if (v->size() != S)
+      throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
+                       std::to_string(S) + " (the length of theta_o)");
   if (m.k.size() != S) throw InputError(where + "/k: length " + std::to_string(m.k.size()) + ", expected " + std::to_string(S));
   {
     h5::Handle d = h5::open_dataset(id, "weights", where);
@@ -110,12 +114,22 @@ MixtureFile read_mixture_file(const std::string& path) {
     if (dims.size() != 2 || dims[0] != S) throw InputError(where + "/weights: expected shape [S, Kmax] with S = " + std::to_string(S));
     m.kmax = static_cast<int>(dims[1]);
   }
+  // The full shapes, not only the element counts: [S, 2, Kmax] has as many elements as
+  // [S, Kmax, 2] and would be read in the wrong order.
+  for (const auto& [name, last] : {std::pair{"means", 2}, std::pair{"covariances", 3}}) {
+    h5::Handle d = h5::open_dataset(id, name, where);
+    const std::vector<hsize_t> dims = h5::shape(d.get()), want = {S, hsize_t(m.kmax), hsize_t(last)};
+    if (dims != want) {
+      std::string got;
+      for (std::size_t i = 0; i < dims.size(); ++i) got += (i ? ", " : "") + std::to_string(dims[i]);
+      throw InputError(where + "/" + name + ": shape [" + got + "], expected [S, Kmax, " + std::to_string(last) +
+                       "] = [" + std::to_string(S) + ", " + std::to_string(m.kmax) + ", " + std::to_string(last) + "]");
+    }
+  }
   m.weights = h5::read_floats(id, "weights", where);
   m.means = h5::read_floats(id, "means", where);
   m.covariances = h5::read_floats(id, "covariances", where);
   const std::size_t K = static_cast<std::size_t>(m.kmax);
-  if (m.means.size() != S * K * 2) throw InputError(where + "/means: expected shape [S, Kmax, 2]");
-  if (m.covariances.size() != S * K * 3) throw InputError(where + "/covariances: expected shape [S, Kmax, 3]");
   if (h5::exists(id, "table_theta_o")) {
     m.table_theta_o = h5::read_doubles(id, "table_theta_o", where);
     m.table_phi_o = h5::read_doubles(id, "table_phi_o", where);

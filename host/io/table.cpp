@@ -192,9 +192,9 @@ std::vector<float> TableReader::read_slice(std::size_t t_o, std::size_t p_o) con
   for (std::size_t k = 0; k < v.size(); ++k) {
     const float x = v[k];
     if (!std::isfinite(x) || x < 0.0f) {
-      const char* what = std::isnan(x) ? "NaN" : std::isinf(x) ? "Inf" : "negative value";
+      const char* what = std::isnan(x) ? "NaN" : std::isinf(x) ? (x > 0 ? "Inf" : "-Inf") : "negative value";
       throw InputError(where + " cell (theta_i " + std::to_string(k / np) + ", phi_i " +
-                       std::to_string(k % np) + "): " + what + (std::isnan(x) ? "" : " " + fmt(x)));
+                       std::to_string(k % np) + "): " + what + (x < 0.0f && std::isfinite(x) ? " " + fmt(x) : ""));
     }
   }
   return v;
