@@ -138,7 +138,6 @@ TailDiagnostic tail_diagnostic(const Problem& p) {
   pc.light = default_lighting(t.domain, 1.0);
   r.stand_in = stand_in_integral(pc);
   if (!(I > 0)) return r;
-  const double inf = std::numeric_limits<double>::infinity();
   double s_us = 0, s_is = 0, s_mis = 0;
   for (std::size_t i = 0; i < t.n_theta; ++i) {
     const double ta = t.theta_edge(i), tb = t.theta_edge(i + 1);
@@ -157,9 +156,13 @@ TailDiagnostic tail_diagnostic(const Problem& p) {
       const double U = t.cell_solid_angle(i) * pu;
       const double M = a * U + (1 - a) * P;
       s_us += W * W / U;
-      s_is += P > 0 ? W * W / P : inf;
+      if (P > 0) {
+        s_is += W * W / P;
+        r.max_weight_is = std::max(r.max_weight_is, W / P);
+      } else {
+        r.missed_is += W;  // is_tab never samples this cell: bias, not variance
+      }
       s_mis += W * W / M;
-      r.max_weight_is = std::max(r.max_weight_is, P > 0 ? W / P : inf);
       r.max_weight_mis = std::max(r.max_weight_mis, W / M);
     }
   }

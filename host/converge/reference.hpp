@@ -22,10 +22,15 @@ double stand_in_integral(const Problem& p);
 // cell probabilities of each technique: the relative variance per sample
 // (sum_c (W_c / I)^2 / P_c - 1, the chi-square divergence of the sampling density from
 // the integrand) and the largest single-sample weight (max_c (W_c / I) / P_c).
+// Cells where the mixture's density is exactly zero (past its 9-sigma cut, or underflow)
+// are never sampled by is_tab: they add no variance but bias it by -missed_is, the share
+// of the integral they hold. They are left out of relvar_is and max_weight_is, which stay
+// finite.
 struct TailDiagnostic {
   double reference = 0, stand_in = 0;
   double relvar_us = 0, relvar_is = 0, relvar_mis = 0, relvar_cdf = 0;
   double max_weight_is = 0, max_weight_mis = 0;
+  double missed_is = 0;
 };
 TailDiagnostic tail_diagnostic(const Problem& p);
 

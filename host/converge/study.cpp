@@ -1,6 +1,7 @@
 // The convergence study driver.
 #include "converge/study.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -86,7 +87,18 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
   std::string tail = std::string(kTailHeader) + "\n";
   Progress progress("converge " + spec.table_label,
                     spec.directions.size() * spec.scenes.size() * spec.estimators.size(), "launches");
+  std::size_t skipped = 0;
   for (const auto& [theta_o, phi_o] : spec.directions) {
+    // A zero slice has nothing to integrate (and no CDF to sample): skip the direction,
+    // keep the others.
+    const TableSlice probe = blended_slice(table, set, theta_o, phi_o);
+    if (!std::any_of(probe.f.begin(), probe.f.end(), [](float v) { return v > 0; })) {
+      log_line("converge: warning: " + spec.table + " at theta_o " + fixed(theta_o, 4) + " phi_o " + fixed(phi_o, 4) +
+               ": the table slice is zero everywhere (nothing to integrate): direction skipped");
+      ++skipped;
+      progress.advance(spec.scenes.size() * spec.estimators.size());
+      continue;
+    }
     // The tail diagnostic, scene-independent (L_i = 1).
     Problem p0 = make_problem(table, set, theta_o, phi_o, default_lighting(table.meta().domain, 1.0),
                               spec.uniform_fraction);
@@ -102,12 +114,18 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     tail += spec.table_label + "," + num(theta_o) + "," + num(phi_o) + "," + std::to_string(k_used) + "," + num(l1) +
             "," + num(td.reference) + "," + num(td.stand_in) + "," + num(td.stand_in / td.reference - 1) + "," +
             num(td.relvar_us) + "," + num(td.relvar_is) + "," + num(td.relvar_mis) + "," + num(td.max_weight_is) +
-            "," + num(td.max_weight_mis) + "," + std::to_string(table_bytes) + "," + std::to_string(mix_bytes) + "\n";
+            "," + num(td.max_weight_mis) + "," + std::to_string(table_bytes) + "," + std::to_string(mix_bytes) + "," +
+            num(td.missed_is) + "\n";
     std::string msg = "converge: theta_o " + fixed(theta_o, 4) + " phi_o " + fixed(phi_o, 4) + ": K " +
-                      std::to_string(k_used) + ", predicted variance per sample (L=1) relative to uniform: is_tab " +
-                      num(td.relvar_is / td.relvar_us) + ", mis_tab " + num(td.relvar_mis / td.relvar_us) +
+                      std::to_string(k_used) + ", predicted variance per sample (L=1) " +
+                      (td.relvar_us > 1e-9 ? "relative to uniform: is_tab " + num(td.relvar_is / td.relvar_us) +
+                                                 ", mis_tab " + num(td.relvar_mis / td.relvar_us)
+                                           : "(uniform sampling is exact here): is_tab " + num(td.relvar_is) +
+                                                 ", mis_tab " + num(td.relvar_mis)) +
                       "; largest f/pdf over the integral: is_tab " + num(td.max_weight_is) + ", mis_tab " +
                       num(td.max_weight_mis) + "; stand-in integral error " + num(td.stand_in / td.reference - 1);
+    if (td.missed_is > 0)
+      msg += "; is_tab never samples " + num(td.missed_is) + " of the integral (biased by that much: use mis_tab)";
     log_line(msg);
     if (!(td.relvar_is <= td.relvar_us))
       log_line("converge: warning: at theta_o " + fixed(theta_o, 4) +
@@ -155,6 +173,8 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     }
   }
   progress.finish();
+  if (skipped == spec.directions.size())
+    throw InputError(spec.table + ": the table slice is zero everywhere at every studied direction (nothing to integrate)");
   std::string text = std::string(kConvergenceHeader) + "\n";
   for (const auto& r : rows) text += format_row(r) + "\n";
   write_text_atomic(spec.csv, text);

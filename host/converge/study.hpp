@@ -39,7 +39,7 @@ constexpr const char* kConvergenceHeader =
     "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample";
 constexpr const char* kTailHeader =
     "table,theta_o,phi_o,k,l1_rel,reference,stand_in,stand_in_error,relvar_us,relvar_is,relvar_mis,"
-    "max_weight_is,max_weight_mis,table_bytes,mixture_bytes";
+    "max_weight_is,max_weight_mis,table_bytes,mixture_bytes,missed_is";
 
 // Rows of one (direction, scene, estimator) from its run sums.
 std::vector<ConvergenceRow> convergence_rows(const RunSums& sums, double reference, double ns_per_sample);

@@ -30,7 +30,7 @@ Estimator parse_estimator(const std::string& name, const std::string& where) {
 
 bool uses_table(Estimator e) { return e != Estimator::UsGmm && e != Estimator::IsGmm; }
 
-QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o) {
+QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit) {
   QueryMixture qm;
   qm.domain = set.domain == mix::Domain::Fiber ? Domain::Fiber : Domain::Hemisphere;
   qm.blend = set.blend(theta_o, phi_o);
@@ -48,7 +48,7 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
       const mix::Gaussian& g = s.components[j];
       const float c[16] = {float(g.mu_t), float(g.mu_p), float(g.i_tt), float(g.i_tp), float(g.i_pp),
                            float(g.l_tt), float(g.l_pt), float(g.l_pp),
-                           float(b.weight[k] * g.weight * g.norm), float(b.weight[k] * s.scale * g.weight * g.norm),
+                           float(b.weight[k] * g.weight * g.norm), float(b.weight[k] * s.scale * g.weight * g.norm / f_unit),
                            float(g.cut), float(g.images), float(s.cdf[j]), 0.f, 0.f, 0.f};
       qm.comps.insert(qm.comps.end(), c, c + 16);
     }

@@ -1,6 +1,7 @@
 // Device drivers of kernels/sample.cl: sampling, evaluation and the estimator launches.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "core/error.hpp"
 #include "device/program.hpp"
@@ -105,12 +106,25 @@ RunSums integrate_device(const Device& device, const Problem& p, Estimator e, in
   while ((std::uint64_t(1) << (rs.levels - 1)) < n_max) ++rs.levels;
   rs.sum.assign(std::size_t(runs) * std::size_t(rs.levels), 0.0);
 
+  // The kernel works in float. f (the table and the stand-in) enters every estimate
+  // linearly, so it is divided by the power of two nearest the slice's largest value and
+  // the sums are multiplied back in double: a table near FLT_MAX no longer overflows to
+  // inf (and NaN in the compensated sums), one in the denormal range is no longer flushed
+  // to zero, and for every other table the scaling is exact (the sums are bitwise the same).
+  float f_max = 0.f;
+  for (const float v : p.table.f) f_max = std::max(f_max, v);
+  const double unit = f_max > 0.f && std::isfinite(f_max) ? std::ldexp(1.0, std::ilogb(f_max)) : 1.0;
+  std::vector<float> f_dev(p.table.f.size());
+  for (std::size_t i = 0; i < f_dev.size(); ++i) f_dev[i] = float(double(p.table.f[i]) / unit);
+  const std::vector<float> comps_dev =
+      unit == 1.0 || p.set == nullptr ? p.query.comps : make_query(*p.set, p.theta_o, p.phi_o, unit).comps;
+
   const std::string options = domain_define(p.table.domain) + " -DESTIMATOR=" + std::to_string(int(e));
   cl::Program program = build_program(device, "sample", options);
   cl::CommandQueue queue = device.make_queue();
   const cl::Context& ctx = device.context();
-  cl::Buffer q = upload(device, p.query.q), comps = upload(device, p.query.comps), geo = upload(device, p.geometry()),
-             f = upload(device, p.table.f), marg = upload(device, p.cdf.marginal),
+  cl::Buffer q = upload(device, p.query.q), comps = upload(device, comps_dev), geo = upload(device, p.geometry()),
+             f = upload(device, f_dev), marg = upload(device, p.cdf.marginal),
              cond = upload(device, p.cdf.conditional), sc = upload(device, p.light.pack()),
              env = upload(device, p.light.env);
   const std::size_t items = std::size_t(chunks) * std::size_t(runs);
@@ -161,7 +175,7 @@ RunSums integrate_device(const Device& device, const Problem& p, Estimator e, in
         while (c < N / chunk) acc += hs[std::size_t(r) * chunks + c++];
         v = acc;
       }
-      rs.sum[std::size_t(r) * std::size_t(rs.levels) + std::size_t(l)] = v;
+      rs.sum[std::size_t(r) * std::size_t(rs.levels) + std::size_t(l)] = v * unit;
     }
   }
   return rs;

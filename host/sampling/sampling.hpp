@@ -32,7 +32,9 @@ struct QueryMixture {
   std::size_t components() const { return comps.size() / 16; }
 };
 
-QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o);
+// f_unit divides the stand-in's values (component [9], scale x density) before they are
+// rounded to float: the estimator launches pass the power of two they scale f by.
+QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit = 1.0);
 
 // ---- sampling --------------------------------------------------------------------------
 
