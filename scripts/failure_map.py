@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 CASES = ["spike", "phi_wrap", "theta_border", "all_zero", "constant", "dynamic_range", "noise",
-         "k_gt_cells", "line", "heavy_tail", "grazing"]
+         "k_gt_cells", "line", "heavy_tail", "heavy_tail_k1", "grazing"]
 ESTIMATORS = ["us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab"]
 TABLE_ESTIMATORS = ["us_tab", "is_tab", "mis_tab", "cdf_tab"]
 N_THETA_I, N_PHI_I = 45, 90
@@ -102,7 +102,7 @@ def synthetic_slice(case):
         diag &= np.abs(wrapped(P + 1.5)) < 1.2
         f[diag] += 3.0
         src = "one theta row (ring) + one-cell-wide diagonal line"
-    elif case == "heavy_tail":
+    elif case in ("heavy_tail", "heavy_tail_k1"):
         d = angle_to(T, P, 0.25, 0.8)
         f = 1.0 / (1.0 + (d / 0.05) ** 2) ** 1.1
         src = "1/(1+(d/0.05)^2)^1.1"
@@ -233,7 +233,7 @@ def run_case(case, args, log):
     cfg_path = os.path.join(args.configs, case + ".yaml")
     cfg = simple_yaml(cfg_path)
     table = cfg["table"]
-    res = {"case": case, "config": cfg_path}
+    res = {"case": case, "config": cfg_path, "table": table}
     os.makedirs(os.path.dirname(table), exist_ok=True)
     t0 = time.time()
     err = build_table(case, table, args.bsdfmix, log)
@@ -352,6 +352,14 @@ def run_case(case, args, log):
 
 # ---- chart ------------------------------------------------------------------------------
 
+def status_color(st):
+    if st == "ok":
+        return "tab:blue"
+    if st.startswith("reduced"):
+        return "tab:orange"
+    return "tab:red"
+
+
 def chart(results, out_dir):
     import matplotlib
     matplotlib.use("Agg")
@@ -359,24 +367,24 @@ def chart(results, out_dir):
 
     names = [r["case"] for r in results]
     x = np.arange(len(names))
-    fig, axes = plt.subplots(4, 1, figsize=(12, 14), sharex=True,
-                             gridspec_kw={"height_ratios": [1, 0.8, 1.6, 0.8]})
+    fig, axes = plt.subplots(5, 1, figsize=(13, 17), gridspec_kw={"height_ratios": [1, 0.7, 1.6, 0.6, 1.0]})
     fig.suptitle("bsdfmix failure map: fits and estimators on tables built to break them\n"
-                 "(45 x 90 cells per slice; MSE at N = %d, 64 runs, constant lighting)" % N_FIXED)
+                 "(45 x 90 cells per slice, fiber domain; estimators at N = %d, 64 runs, constant lighting)" % N_FIXED)
+    colors = [status_color(r.get("fit_status", "ok")) for r in results]
 
     ax = axes[0]
-    l1 = [r.get("l1_rel", np.nan) for r in results]
-    colors = ["tab:red" if r.get("fit_status", "ok") != "ok" else "tab:blue" for r in results]
-    ax.bar(x, [max(v, 1e-6) if np.isfinite(v) else 0 for v in l1], color=colors)
-    for xi, v, r in zip(x, l1, results):
-        lbl = "%.3g" % v if np.isfinite(v) else "n/a"
-        ax.text(xi, max(v, 1e-6) if np.isfinite(v) else 1e-6, lbl, ha="center", va="bottom", fontsize=8)
+    l1 = np.array([r.get("l1_rel", np.nan) for r in results], dtype=float)
+    ax.bar(x, np.where(np.isfinite(l1), np.maximum(l1, 1e-6), 0), color=colors)
+    for xi, v in zip(x, l1):
+        ax.text(xi, min(max(v, 1.2e-4), 10) if np.isfinite(v) else 1.2e-4, "%.3g" % v if np.isfinite(v) else "n/a",
+                ha="center", va="bottom", fontsize=8)
     ax.set_yscale("log")
-    ax.set_ylim(1e-4, 20)
+    ax.set_ylim(1e-4, 30)
     ax.set_ylabel("fit error\n(relative L1)")
     ax.axhline(0.05, color="gray", lw=0.8, ls="--")
     ax.text(len(names) - 0.5, 0.055, "5%", color="gray", fontsize=8, ha="right")
-    ax.set_title("red: slice reported failed (moment-matched fallback)", fontsize=9, loc="left")
+    ax.set_title("bar color = fit status: blue ok, orange K reduced, red zero slice or failed (see the table below)",
+                 fontsize=9, loc="left")
 
     ax = axes[1]
     ks = [r.get("k_max_chosen", 0) for r in results]
@@ -384,26 +392,38 @@ def chart(results, out_dir):
     for xi, k, r in zip(x, ks, results):
         ax.text(xi, k, r.get("k", "-"), ha="center", va="bottom", fontsize=8)
     ax.set_ylabel("chosen K")
-    ax.set_ylim(0, max(ks + [1]) * 1.3 + 1)
+    ax.set_ylim(0, max(ks + [1]) * 1.35 + 1)
+    for a in axes[:2]:
+        a.set_xticks(x)
+        a.set_xticklabels(names, fontsize=8)
 
     ax = axes[2]
     markers = {"us_tab": "o", "us_gmm": "s", "is_tab": "^", "is_gmm": "v", "mis_tab": "D", "cdf_tab": "*"}
-    off = np.linspace(-0.3, 0.3, len(ESTIMATORS))
+    off = np.linspace(-0.32, 0.32, len(ESTIMATORS))
+    top = 1e10
     for j, e in enumerate(ESTIMATORS):
         ys = np.array([r.get("mse_ratio_" + e, np.nan) for r in results], dtype=float)
-        shown = np.clip(ys, 1e-13, 1e6)
-        ax.scatter(x + off[j], np.where(np.isfinite(shown), shown, np.nan), marker=markers[e], s=40, label=e,
-                   zorder=3)
+        ax.scatter(x + off[j], np.clip(ys, 1e-13, top), marker=markers[e], s=40, label=e + " (measured)", zorder=3)
         for xi, y, r in zip(x + off[j], ys, results):
             if e in r.get("biased_table_estimators", "").split():
-                ax.scatter([xi], [min(max(y, 1e-13), 1e6)], s=160, facecolors="none", edgecolors="red", zorder=4)
+                ax.scatter([xi], [min(max(y, 1e-13), top)], s=160, facecolors="none", edgecolors="red", zorder=4)
+            if np.isfinite(y) and y > top:
+                ax.annotate("%.0e" % y, (xi, top), fontsize=6, ha="center", va="bottom", rotation=90)
+    pred = np.array([r.get("relvar_is_over_us", np.nan) for r in results], dtype=float)
+    ax.scatter(x + off[2], np.clip(pred, 1e-13, top), marker="x", s=60, color="k", zorder=5,
+               label="is_tab predicted (tail CSV)")
+    for xi, y in zip(x + off[2], pred):
+        if np.isfinite(y) and y > 10:
+            ax.annotate("predicted %.0e" % y, (xi, min(y, top / 30)), fontsize=7, ha="left", va="top", color="k")
     ax.axhline(1, color="gray", lw=0.8)
     ax.set_yscale("log")
-    ax.set_ylim(3e-14, 3e6)
+    ax.set_ylim(3e-14, 3e12)
     ax.set_ylabel("MSE / MSE(us_tab)\n(below 1: better than uniform)")
-    ax.legend(ncol=6, fontsize=8, loc="upper left")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.005, 1.0))
     ax.set_title("gmm estimators: MSE includes the stand-in's bias; red ring: table estimator biased; "
-                 "no marker: not run", fontsize=9, loc="left")
+                 "constant slice: us_tab is exact, so every ratio is huge", fontsize=9, loc="left")
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, fontsize=8)
 
     ax = axes[3]
     parts = [("mixture", "nan_mixture"), ("fit report", "nan_report"), ("search", "nan_search"),
@@ -413,17 +433,30 @@ def chart(results, out_dir):
         v = np.array([r.get(key, 0) for r in results], dtype=float)
         ax.bar(x, v, bottom=bottom, label=lbl)
         bottom += v
-    for xi, r in zip(x, results):
-        txt = "fit: %s\nconverge: %s\n%s" % (r.get("fit_status", "?"), r.get("converge_status", "?"),
-                                             "PASS" if r["verdict"] == "pass" else "FAIL")
-        ax.text(xi, 0.05, "\n".join(t[:38] for t in txt.split("\n")), ha="center", va="bottom", fontsize=6,
-                rotation=90, color="black" if r["verdict"] == "pass" else "red")
+    for xi, tot in zip(x, bottom):
+        ax.text(xi, tot, "%d" % tot, ha="center", va="bottom", fontsize=9)
     ax.set_ylabel("NaN/Inf values\nin the outputs")
-    ax.set_ylim(0, max(bottom.max(), 1) * 4)
+    ax.set_ylim(0, max(bottom.max(), 1) * 2.5)
     ax.legend(ncol=5, fontsize=8, loc="upper right")
     ax.set_xticks(x)
-    ax.set_xticklabels(names, rotation=30, ha="right")
-    fig.tight_layout()
+    ax.set_xticklabels(names, rotation=20, ha="right")
+
+    ax = axes[4]
+    ax.axis("off")
+    rows = []
+    for r in results:
+        conv = r.get("converge_status", "?").replace("bsdfmix: error: ", "").replace(r.get("table", "") + ": ", "")
+        rows.append([r["case"], r.get("fit_status", "?")[:70], conv[:70],
+                     "pass" if r["verdict"] == "pass" else "FAIL"])
+    t = ax.table(cellText=rows, colLabels=["case", "fit status (report)", "converge", "stability"],
+                 loc="center", cellLoc="left", colWidths=[0.13, 0.45, 0.34, 0.08])
+    t.auto_set_font_size(False)
+    t.set_fontsize(7.5)
+    t.scale(1, 1.25)
+    for i, r in enumerate(results):
+        if r["verdict"] != "pass":
+            t[i + 1, 3].set_text_props(color="red")
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
     for ext in ("png", "svg"):
         fig.savefig(os.path.join(out_dir, "failure_map." + ext), dpi=110)
     plt.close(fig)
