@@ -2,6 +2,7 @@
 // inside is a typed exception, printed here as one line.
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <string>
 
 #include "cli/commands.hpp"
@@ -68,6 +69,12 @@ int main(int argc, char** argv) {
     return 1;
   } catch (const cl::Error& e) {
     std::fprintf(stderr, "bsdfmix: error: OpenCL call %s failed with %s\n", e.what(), cl_error_name(e.err()));
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the file system refuses (a name too long, a component that is a file):
+    // an input error naming the path, not an internal one.
+    std::fprintf(stderr, "bsdfmix: error: %s: %s\n", cli::one_line(e.path1().c_str()).c_str(),
+                 cli::one_line(e.code().message().c_str()).c_str());
     return 1;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "bsdfmix: error: out of memory\n");

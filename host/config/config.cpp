@@ -79,7 +79,7 @@ Config parse_config(const std::string& text, const std::string& name) {
   if (user["charts"]) c.charts = parse_charts(section("charts"));
   if (c.generate && c.import)
     throw ConfigError(name + ": generate and import both make the table; keep one");
-  if (!c.generate && !c.import && !std::filesystem::exists(c.table))
+  if (!c.generate && !c.import && !exists_quiet(c.table))
     root.fail("table", "file '" + c.table + "' not found (and no generate or import section makes it)");
   return c;
 }

@@ -13,7 +13,7 @@ namespace {
 void add_scene(const ConfigNode& n, const YAML::Node& s, ConvergeSection& c) {
   if (s.IsScalar()) {
     const std::string file = s.Scalar();
-    if (!std::filesystem::exists(file)) n.fail("scene", "file '" + file + "' not found");
+    if (!exists_quiet(file)) n.fail("scene", "file '" + file + "' not found");
     try {
       c.scenes.push_back(YAML::LoadFile(file));
     } catch (const YAML::Exception& e) {

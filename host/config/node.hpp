@@ -6,7 +6,9 @@
 
 #include <cstdint>
 #include <optional>
+#include <filesystem>
 #include <set>
+#include <system_error>
 #include <string>
 #include <vector>
 
@@ -40,5 +42,12 @@ class ConfigNode {
   std::string file_, path_;
   YAML::Node node_;
 };
+
+// std::filesystem::exists without the exception: a name the file system refuses (too
+// long, a component that is a file) is reported as a missing file, in context.
+inline bool exists_quiet(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::exists(path, ec);
+}
 
 }  // namespace bsdfmix

@@ -150,9 +150,23 @@ void write_ints(hid_t loc, const std::string& name, const std::vector<hsize_t>& 
 
 bool has_attr(hid_t obj, const std::string& name) { return H5Aexists(obj, name.c_str()) > 0; }
 
+namespace {
+// H5Aread writes every element of an attribute: one that holds an array instead of a
+// single value would overflow the one-value buffers below.
+void require_single(hid_t attr, const std::string& name, const std::string& where) {
+  Handle space(H5Aget_space(attr));
+  const hssize_t n = space.valid() ? H5Sget_simple_extent_npoints(space.get()) : -1;
+  if (n != 1)
+    throw InputError(where + ": attribute '" + name + "' must hold a single value (holds " +
+                     (n < 0 ? std::string("an unreadable extent") : std::to_string(n) + " values") + ")");
+}
+}  // namespace
+
 std::string read_string_attr(hid_t obj, const std::string& name, const std::string& where) {
   if (!has_attr(obj, name)) throw InputError(where + ": missing attribute '" + name + "'");
   Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT));
+  if (!a.valid()) throw InputError(where + ": cannot open attribute '" + name + "'");
+  require_single(a.get(), name, where);
   Handle type(H5Aget_type(a.get()));
   if (H5Tget_class(type.get()) != H5T_STRING)
     throw InputError(where + ": attribute '" + name + "' is not a string");
@@ -193,6 +207,8 @@ void write_string_attr(hid_t obj, const std::string& name, const std::string& va
 double read_double_attr(hid_t obj, const std::string& name, const std::string& where) {
   if (!has_attr(obj, name)) throw InputError(where + ": missing attribute '" + name + "'");
   Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT));
+  if (!a.valid()) throw InputError(where + ": cannot open attribute '" + name + "'");
+  require_single(a.get(), name, where);
   double v = 0;
   if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0)
     throw InputError(where + ": attribute '" + name + "' is not a number");

@@ -141,6 +141,14 @@ def make_tables():
         at["domain"] = "fib\ner"
     write_table("table_newline_domain.h5", attrs_mutate=newline_domain)
 
+    def domain_array(at):  # 40 variable-length strings where one belongs
+        at["domain"] = ["fiber"] * 40
+    write_table("table_domain_array.h5", attrs_mutate=domain_array)
+
+    def symmetry_fixed_array(at):  # 40 fixed-length strings where one belongs
+        at["symmetry"] = np.array([b"azimuthal"] * 40, dtype="S9")
+    write_table("table_symmetry_array.h5", attrs_mutate=symmetry_fixed_array)
+
     def unknown_symmetry(at):
         at["symmetry"] = "mirror"
     write_table("table_unknown_symmetry.h5", attrs_mutate=unknown_symmetry)
