@@ -24,8 +24,11 @@ WeightedSlice pool_slice(const WeightedSlice& s, std::size_t factor);
 mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const std::vector<double>& mean,
                                      const std::vector<double>& cov);
 
-// sum_i |w_i - W p(x_i) A| / W, W = sum w, p the mixture's density at the cell center,
-// A the cell area: the relative L1 error of the mixture as a stand-in for the slice.
+// sum_i |w_i - W m_i| / W, W = sum w, m_i the mixture's mass in cell i: the relative L1
+// error of the mixture as a stand-in for the slice (0 to 2). m_i is the density at the
+// cell center times the cell area for components wider than 1.5 cells, and the mean
+// over 3 x 3 points of the cell times its area for narrower ones (a component at the
+// covariance floor holds most of its mass in one cell, its center density does not).
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m);
 
 }  // namespace bsdfmix

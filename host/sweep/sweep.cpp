@@ -83,7 +83,7 @@ void moment_gaussian(const WeightedSlice& s, std::vector<double>& w, std::vector
       stp += x * dt * dp;
       spp += x * dp * dp;
     }
-  const double floor = std::pow(0.5 * axis_step(s.theta), 2);
+  const double floor = std::pow(0.25 * std::min(axis_step(s.theta), axis_step(s.phi)), 2);  // EM's default floor
   if (W > 0) {
     stt /= W;
     stp /= W;
