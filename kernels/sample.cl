@@ -31,30 +31,45 @@
 #endif
 #define THETA_HI (0.5f * S_PI)
 
-// Component layout (16 floats).
+// Component layout (16 floats): what the draw reads.
 #define COMP_MU_T 0
 #define COMP_MU_P 1
-#define COMP_I_TT 2
-#define COMP_I_TP 3
-#define COMP_I_PP 4
 #define COMP_L_TT 5
 #define COMP_L_PT 6
 #define COMP_L_PP 7
-#define COMP_W_PDF 8  // blend weight * component weight * normalization
-#define COMP_W_F 9    // the same times the slice's scale (the stand-in for f)
-#define COMP_CUT 10   // |dphi| beyond which an image adds nothing
-#define COMP_IMAGES 11
 #define COMP_CDF 12   // cumulative component weight within its slice
+
+// The pdf's constants (host/sampling/problem.cpp, make_query): blocks of 8 components,
+// 8 rows of PDF_LANES floats each (one component per lane): mu_t, mu_p (wrapped), m, a_t, a_p, lw, r_f,
+// and in row 7 lane 0 the block's image count. At (dt, dp) from the mean a component's
+// term (blend weight x weight x normal density) is 2^(lw + a_t dt^2 + a_p u^2), u = dp - m dt
+// the offset from the conditional mean of phi given theta; r_f is its slice's scale (the
+// stand-in's f over the pdf). Padding lanes have lw = -1000.
+#define PDF_ROWS 8
+#ifndef PDF_LANES
+#define PDF_LANES 16  // components per block: the host's QueryMixture::kLanes (8 or 16)
+#endif
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+#define VF CAT(float, PDF_LANES)
+#define VI CAT(int, PDF_LANES)
+#define AS_VF CAT(as_float, PDF_LANES)
+#define AS_VI CAT(as_int, PDF_LANES)
+#define CONVERT_VI CAT(convert_int, PDF_LANES)
 
 // Query layout: [0] slice count, [1] rotate (phi_o added with azimuthal symmetry),
 // [2..5] blend weights, [6..9] first component of each slice, [10..13] component counts,
-// [14] total component count.
+// [14] total component count, [15] pdf blocks, [18] the first step of the component
+// search (the largest power of two <= the largest count), [19..22] cumulative blend weights.
 #define Q_COUNT 0
 #define Q_ROTATE 1
 #define Q_W 2
 #define Q_FIRST 6
 #define Q_N 10
 #define Q_TOTAL 14
+#define Q_BLOCKS 15
+#define Q_STEP 18
+#define Q_CUM 19
 
 // ---- Philox4x32-10 --------------------------------------------------------------------
 
@@ -83,85 +98,164 @@ float wrap_phi(const float phi) {
   return r >= S_PI ? -S_PI : r;
 }
 
+// Polynomials for |a| <= pi/4 (Taylor; error below float rounding).
+float sin_poly(const float a) {
+  const float a2 = a * a;
+  return a * mad(a2, mad(a2, mad(a2, mad(a2, 2.7557319e-6f, -1.9841270e-4f), 8.3333333e-3f), -1.6666667e-1f), 1.0f);
+}
+float cos_poly(const float a) {
+  const float a2 = a * a;
+  return mad(a2, mad(a2, mad(a2, mad(a2, 2.4801587e-5f, -1.3888889e-3f), 4.1666667e-2f), -0.5f), 1.0f);
+}
+
+// pi/2 split in two floats: (PIO2_HI - a) is exact for a in [pi/4, pi/2], so cos and sin
+// near pi/2 keep their relative accuracy.
+#define PIO2_HI 1.57079637050628662109375f
+#define PIO2_LO (-4.37113900018624283e-8f)
+
 float jacobian(const float theta) {
+  const float a = fabs(theta);
+  const float d = (PIO2_HI - a) + PIO2_LO;
 #if HEMISPHERE
-  return sin(theta);
+  return a <= 0.25f * S_PI ? sin_poly(theta) : cos_poly(d);  // sin(theta), theta in [0, pi/2]
 #else
-  return cos(theta);
+  return a <= 0.25f * S_PI ? cos_poly(a) : sin_poly(d);  // cos(theta), |theta| <= pi/2
 #endif
+}
+
+// sin and cos of 2 pi u (u in [0, 1)): quadrant by rounding, polynomials on [-pi/4, pi/4].
+float2 sincos_turn(const float u) {
+  const float x = u - rint(u);          // [-1/2, 1/2] turns
+  const float j = rint(4.0f * x);       // quadrant -2..2
+  const float a = (x - 0.25f * j) * (2.0f * S_PI);
+  const float s = sin_poly(a), c = cos_poly(a);
+  const int q = ((int)j) & 3;
+  return q == 0 ? (float2)(s, c) : q == 1 ? (float2)(c, -s) : q == 2 ? (float2)(-s, -c) : (float2)(-c, s);
+}
+
+// ln(v) for v in [2^-24, 1] (Box-Muller): v = 2^e m, m in [sqrt(1/2), sqrt(2)),
+// ln m = 2 atanh((m - 1) / (m + 1)) (series to s^9: error 2e-9).
+float log_unit(const float v) {
+  const int i = as_int(v);
+  int e = ((i >> 23) & 0xff) - 127;
+  float m = as_float((i & 0x007fffff) | 0x3f800000);
+  const int big = m > 1.41421356f;
+  m = big ? 0.5f * m : m;
+  e += big;
+  const float s = (m - 1.0f) / (m + 1.0f), z = s * s;
+  const float p = mad(z, mad(z, mad(z, mad(z, 1.0f / 9.0f, 1.0f / 7.0f), 0.2f), 1.0f / 3.0f), 1.0f);
+  return mad((float)e, 0.693147181f, 2.0f * s * p);
+}
+
+// 2^x for x <= 127, 0 below -126: exponent bits plus a degree-6 polynomial for 2^f on
+// [0, 1) (relative error 1e-7, float rounding).
+VF exp2_v(VF x) {
+  const VI dead = x < -126.0f;
+  x = clamp(x, -126.0f, 127.0f);
+  const VF fi = floor(x);
+  const VF f = x - fi;
+  VF p = mad(f, 2.161394423e-4f, 1.246734070e-3f);
+  p = mad(p, f, 9.675536062e-3f);
+  p = mad(p, f, 5.548521868e-2f);
+  p = mad(p, f, 2.402293254e-1f);
+  p = mad(p, f, 6.931470423e-1f);
+  p = mad(p, f, 1.0f);
+  const VF r = AS_VF(AS_VI(p) + (CONVERT_VI(fi) << 23));
+  return select(r, (VF)(0.0f), dead);
+}
+
+float hsum(const VF w) {
+#if PDF_LANES == 16
+  const float8 v = w.lo + w.hi;
+#else
+  const float8 v = w;
+#endif
+  const float4 a = v.lo + v.hi;
+  const float2 b = a.lo + a.hi;
+  return b.x + b.y;
 }
 
 // ---- the mixture ---------------------------------------------------------------------
 
-// Sum over components of w * density, for the pdf (wpdf) and the stand-in (wf) at once;
-// phi is in the slice frame (rotation removed).
-float2 mixture_sums(__global const float* q, __global const float16* comps, const float theta, const float phi) {
-  const int total = (int)q[Q_TOTAL];
-  float2 acc = (float2)(0.0f, 0.0f);
-  for (int c = 0; c < total; ++c) {
-    const float16 g = comps[c];
-    const float dt = theta - g.s0;
-    const int images = (int)g.sb;
-    float sum = 0.0f;
-    for (int m = -images; m <= images; ++m) {
-      const float dp = phi + 2.0f * S_PI * (float)m - g.s1;
-      if (fabs(dp) > g.sa) continue;
-      const float qf = g.s2 * dt * dt + 2.0f * g.s3 * dt * dp + g.s4 * dp * dp;
-      sum += exp(-0.5f * qf);
+// Sum over components of w * density, for the pdf (x) and the stand-in (y) at once; phi
+// in [-pi, pi), in the slice frame (rotation removed). PDF_LANES components at a time: the phi
+// image nearest each component's conditional mean (|u| <= pi), then the block's `images`
+// more, nearest first: u - 2 pi s, u + 2 pi s, u - 4 pi s, .. (s = the sign of u). The host
+// chose the count so that what is left out is below 2^-26 of the component's own term, or
+// beyond 9 sigma (make_query). Every loop's trip count is the same for every work item.
+float2 mixture_sums(__global const float* q, __global const VF* pd, const float theta, const float phi) {
+  const int blocks = (int)q[Q_BLOCKS];
+  VF ap = (VF)(0.0f), af = (VF)(0.0f);
+  for (int b = 0; b < blocks; ++b) {
+    __global const VF* r = pd + PDF_ROWS * b;
+    const VF dt = theta - r[0];
+    VF u = mad(-r[2], dt, phi - r[1]);
+    u = mad(rint(u * (0.5f / S_PI)), -2.0f * S_PI, u);
+    const VF xm = mad(r[3] * dt, dt, r[5]);
+    const VF a = r[4];
+    VF t = exp2_v(mad(a * u, u, xm));
+    const int images = (int)r[7].s0;
+    const VF s = copysign((VF)(2.0f * S_PI), u);
+    for (int j = 1; j <= images; ++j) {
+      const float n = (float)((j + 1) >> 1);
+      const VF v = (j & 1) ? u - n * s : u + n * s;
+      t += exp2_v(mad(a * v, v, xm));
     }
-    acc += sum * (float2)(g.s8, g.s9);
+    ap += t;
+    af = mad(t, r[6], af);
   }
-  return acc;
+  return (float2)(hsum(ap), hsum(af));
 }
 
 bool theta_inside(const float theta) { return theta >= THETA_LO && theta <= THETA_HI; }
 
 // pdf per steradian of the mixture sampler at (theta, phi) (phi in the world frame).
-float mixture_pdf_omega(__global const float* q, __global const float16* comps, const float theta, const float phi) {
+float mixture_pdf_omega(__global const float* q, __global const VF* pd, const float theta, const float phi) {
   if (!theta_inside(theta)) return 0.0f;
   const float j = jacobian(theta);
   if (!(j > 0.0f)) return 0.0f;
-  return mixture_sums(q, comps, theta, wrap_phi(phi - q[Q_ROTATE])).x / j;
+  return mixture_sums(q, pd, theta, wrap_phi(phi - q[Q_ROTATE])).x / j;
 }
 
 // Draws a point from the blended mixture with uniforms u (u.x slice, u.y component,
 // u.zw the normal pair). Returns (theta, phi); phi wrapped, in the world frame.
 float2 mixture_draw(__global const float* q, __global const float16* comps, const float4 u) {
   const int count = (int)q[Q_COUNT];
-  int k = 0;
-  float acc = q[Q_W];
-  while (k + 1 < count && u.x >= acc) acc += q[Q_W + (++k)];
+  // the slice: how many cumulative weights u.x has passed (the last slice takes the rest)
+  const int k = (count > 1 && u.x >= q[Q_CUM]) + (count > 2 && u.x >= q[Q_CUM + 1]) +
+                (count > 3 && u.x >= q[Q_CUM + 2]);
   const int first = (int)q[Q_FIRST + k], n = (int)q[Q_N + k];
-  // upper_bound: the first component whose cumulative weight exceeds u.y
-  int lo = 0, hi = n;
-  while (lo < hi) {
-    const int mid = (lo + hi) / 2;
-    if (comps[first + mid].sc > u.y) hi = mid;
-    else lo = mid + 1;
+  // upper_bound of u.y in the slice's cumulative weights, branch-free: lo = how many are <= u.y
+  __global const float* cdf = (__global const float*)(comps + first) + COMP_CDF;
+  int lo = 0;
+  for (int step = (int)q[Q_STEP]; step > 0; step >>= 1) {
+    const int j = lo + step;
+    lo = (j <= n && cdf[16 * (min(j, n) - 1)] <= u.y) ? j : lo;
   }
   const float16 g = comps[first + min(lo, n - 1)];
-  const float r = sqrt(-2.0f * log(1.0f - u.z));
-  const float z0 = r * cos(2.0f * S_PI * u.w), z1 = r * sin(2.0f * S_PI * u.w);
-  const float theta = g.s0 + g.s5 * z0;
+  const float r = sqrt(-2.0f * log_unit(1.0f - u.z));
+  const float2 sc = sincos_turn(u.w);
+  const float z0 = r * sc.y, z1 = r * sc.x;
+  const float theta = mad(g.s5, z0, g.s0);
   const float phi = wrap_phi(g.s1 + g.s6 * z0 + g.s7 * z1 + q[Q_ROTATE]);
   return (float2)(theta, phi);
 }
 
 // `n` samples first..first+n-1 of `stream`: (theta, phi, pdf_omega, valid).
-__kernel void sample_mixture(__global const float* q, __global const float16* comps, const uint key0,
-                             const uint key1, const uint stream, const ulong first, const uint n,
+__kernel void sample_mixture(__global const float* q, __global const float16* comps, __global const VF* pd,
+                             const uint key0, const uint key1, const uint stream, const ulong first, const uint n,
                              __global float4* out) {
   const uint i = get_global_id(0);
   if (i >= n) return;
   const float4 u = uniforms4(first + i, stream, (uint2)(key0, key1));
   const float2 p = mixture_draw(q, comps, u);
-  const float pdf = mixture_pdf_omega(q, comps, p.x, p.y);
+  const float pdf = mixture_pdf_omega(q, pd, p.x, p.y);
   const float valid = (theta_inside(p.x) && pdf > 0.0f) ? 1.0f : 0.0f;
   out[i] = (float4)(p.x, p.y, valid > 0.0f ? pdf : 0.0f, valid);
 }
 
 // pdf_omega and the stand-in f at n directions (theta, phi) (world phi): out (pdf, f).
-__kernel void eval_mixture(__global const float* q, __global const float16* comps, __global const float2* dirs,
+__kernel void eval_mixture(__global const float* q, __global const VF* pd, __global const float2* dirs,
                            const uint n, __global float2* out) {
   const uint i = get_global_id(0);
   if (i >= n) return;
@@ -170,7 +264,7 @@ __kernel void eval_mixture(__global const float* q, __global const float16* comp
   if (theta_inside(theta)) {
     const float j = jacobian(theta);
     if (j > 0.0f) {
-      r = mixture_sums(q, comps, theta, wrap_phi(phi - q[Q_ROTATE])) / j;
+      r = mixture_sums(q, pd, theta, wrap_phi(phi - q[Q_ROTATE])) / j;
 #if HEMISPHERE
       r.y /= cos(theta);
 #endif
@@ -295,7 +389,7 @@ int cdf_find(__global const float* cdf, const int n, const float u) {
 }
 
 // One estimate of L_o with uniforms u.
-float estimate(__global const float* q, __global const float16* comps, __global const float* geo,
+float estimate(__global const float* q, __global const float16* comps, __global const VF* pd, __global const float* geo,
                __global const float* f, __global const float* marg, __global const float* cond,
                __global const float* sc, __global const float* env, const float4 u) {
   const float rotate = q[Q_ROTATE];
@@ -305,7 +399,7 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
 #else
   const float j = jacobian(d.x);
-  float fv = j > 0.0f ? mixture_sums(q, comps, d.x, wrap_phi(d.y - rotate)).y / j : 0.0f;
+  float fv = j > 0.0f ? mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate)).y / j : 0.0f;
 #if HEMISPHERE
   fv = j > 0.0f ? fv / cos(d.x) : 0.0f;
 #endif
@@ -317,7 +411,7 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   if (!theta_inside(d.x)) return 0.0f;
   const float j = jacobian(d.x);
   if (!(j > 0.0f)) return 0.0f;
-  const float2 s = mixture_sums(q, comps, d.x, wrap_phi(d.y - rotate));
+  const float2 s = mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate));
   if (!(s.x > 0.0f)) return 0.0f;
 #if ESTIMATOR == 2
   // f c / pdf_omega = f c J / pdf_param
@@ -340,7 +434,7 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
   const float j = jacobian(d.x);
-  const float pm = j > 0.0f ? mixture_sums(q, comps, d.x, wrap_phi(d.y - rotate)).x / j : 0.0f;
+  const float pm = j > 0.0f ? mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate)).x / j : 0.0f;
   const float pdf = alpha * UNIFORM_PDF + (1.0f - alpha) * pm;
   if (!(pdf > 0.0f)) return 0.0f;
   return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
@@ -372,7 +466,8 @@ float estimate(__global const float* q, __global const float16* comps, __global 
 // Work item (run r, chunk c) sums the estimates of samples c*chunk .. (c+1)*chunk-1 of run
 // r (Kahan). Sample n of run r uses counter {n lo, n hi, stream, r}: independent of the
 // chunking. Chunk 0 also writes the prefix sums at N = 1, 2, 4, .., chunk/2.
-__kernel void integrate_chunks(__global const float* q, __global const float16* comps, __global const float* geo,
+__kernel void integrate_chunks(__global const float* q, __global const float16* comps, __global const VF* pd,
+                               __global const float* geo,
                                __global const float* f, __global const float* marg, __global const float* cond,
                                __global const float* sc, __global const float* env, const uint key0,
                                const uint key1, const uint stream, const uint runs, const uint chunks,
@@ -389,7 +484,7 @@ __kernel void integrate_chunks(__global const float* q, __global const float16* 
     const ulong n = (ulong)c * chunk + k;
     const uint4 bits = philox4x32((uint4)((uint)n, (uint)(n >> 32), stream, r), key);
     const float4 u = convert_float4(bits >> 8) * (1.0f / 16777216.0f);
-    const float e = estimate(q, comps, geo, f, marg, cond, sc, env, u);
+    const float e = estimate(q, comps, pd, geo, f, marg, cond, sc, env, u);
     const float y = e - comp;
     const float t = s + y;
     comp = (t - s) - y;

@@ -27,6 +27,14 @@ std::string num(double x) {
   return buf;
 }
 
+// Three significant digits.
+std::string short_num(double x) {
+  if (!std::isfinite(x)) return num(x);
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
 std::string fixed(double x, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, x);
@@ -85,8 +93,10 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
 
   std::vector<ConvergenceRow> rows;
   std::string tail = std::string(kTailHeader) + "\n";
-  Progress progress("converge " + spec.table_label,
-                    spec.directions.size() * spec.scenes.size() * spec.estimators.size(), "launches");
+  const int timing_rounds = spec.cpu ? 0 : std::max(0, spec.timing_rounds);
+  const std::size_t per_scene = spec.estimators.size() * std::size_t(1 + timing_rounds);
+  Progress progress("converge " + spec.table_label, spec.directions.size() * spec.scenes.size() * per_scene,
+                    "launches");
   std::size_t skipped = 0;
   for (const auto& [theta_o, phi_o] : spec.directions) {
     // A zero slice has nothing to integrate (and no CDF to sample): skip the direction,
@@ -96,7 +106,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
       log_line("converge: warning: " + spec.table + " at theta_o " + fixed(theta_o, 4) + " phi_o " + fixed(phi_o, 4) +
                ": the table slice is zero everywhere (nothing to integrate): direction skipped");
       ++skipped;
-      progress.advance(spec.scenes.size() * spec.estimators.size());
+      progress.advance(spec.scenes.size() * per_scene);
       continue;
     }
     // The tail diagnostic, scene-independent (L_i = 1).
@@ -138,7 +148,11 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
       if (!(ref > 0) || !std::isfinite(ref))
         throw InputError("converge: the reference integral at theta_o " + num(theta_o) + " in scene '" + light.name +
                          "' is " + num(ref) + " (the lighting or the table slice is zero)");
-      std::map<std::string, double> var_at_max;
+      // One launch per estimator (the convergence rows), then `timing_rounds` more timed
+      // launches of the same shape, interleaved over the estimators so that a change in
+      // the machine's load hits every estimator alike: ns_per_sample is the fastest.
+      std::vector<RunSums> sums;
+      std::vector<double> best;
       for (const Estimator e : spec.estimators) {
         RunSums s;
         if (spec.cpu) {
@@ -148,8 +162,32 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
         } else {
           s = integrate_device(devices.front(), p, e, spec.runs, spec.samples_max, spec.seed);
         }
-        const double ns = s.seconds * 1e9 / (double(spec.runs) * double(spec.samples_max));
-        auto rs = convergence_rows(s, ref, ns);
+        best.push_back(s.seconds);
+        sums.push_back(std::move(s));
+        progress.advance();
+      }
+      for (int round = 0; round < timing_rounds; ++round)
+        for (std::size_t i = 0; i < spec.estimators.size(); ++i) {
+          best[i] = std::min(best[i], time_integrate_device(devices.front(), p, spec.estimators[i], spec.runs,
+                                                            spec.samples_max, spec.seed));
+          progress.advance();
+        }
+      // One summary line per direction and scene; the details are in the CSV.
+      double var_us = -1, ns_us = -1;
+      for (std::size_t i = 0; i < spec.estimators.size(); ++i)
+        if (spec.estimators[i] == Estimator::UsTab) {
+          const auto rs = convergence_rows(sums[i], ref, 0);
+          var_us = rs.back().rmse * rs.back().rmse;
+          ns_us = best[i] * 1e9 / (double(spec.runs) * double(spec.samples_max));
+        }
+      std::string line = "converge: theta_o " + fixed(theta_o, 4) + " " + light.name + ", N " +
+                         std::to_string(spec.samples_max) + ": rel_rmse" +
+                         (var_us > 0 ? " (us_tab's variance over it)" : "") + ", ns/sample" +
+                         (ns_us > 0 ? " (over us_tab's)" : "") + ":";
+      for (std::size_t i = 0; i < spec.estimators.size(); ++i) {
+        const Estimator e = spec.estimators[i];
+        const double ns = best[i] * 1e9 / (double(spec.runs) * double(spec.samples_max));
+        auto rs = convergence_rows(sums[i], ref, ns);
         for (auto& r : rs) {
           r.table = spec.table_label;
           r.scene = light.name;
@@ -158,18 +196,14 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
           r.phi_o = phi_o;
         }
         const ConvergenceRow& last = rs.back();
-        var_at_max[estimator_name(e)] = last.rmse * last.rmse;
-        log_line("converge: theta_o " + fixed(theta_o, 4) + " " + light.name + " " + estimator_name(e) + ": N " +
-                 std::to_string(last.samples) + " rel_rmse " + num(last.rel_rmse) + " mean/reference - 1 " +
-                 num(last.mean / ref - 1) + ", " + fixed(ns, 2) + " ns/sample");
+        line += std::string(i ? ";" : "") + " " + estimator_name(e) + " " + short_num(last.rel_rmse);
+        if (var_us > 0 && e != Estimator::UsTab && last.rmse > 0)
+          line += " (" + short_num(var_us / (last.rmse * last.rmse)) + "x)";
+        line += ", " + fixed(ns, 0);
+        if (ns_us > 0 && e != Estimator::UsTab) line += " (" + fixed(ns / ns_us, 2) + "x)";
         rows.insert(rows.end(), rs.begin(), rs.end());
-        progress.advance();
       }
-      if (var_at_max.count("us_tab"))
-        for (const auto& [name, v] : var_at_max)
-          if (name != "us_tab" && v > 0)
-            log_line("converge: theta_o " + fixed(theta_o, 4) + " " + light.name + ": variance of us_tab / " + name +
-                     " at N " + std::to_string(spec.samples_max) + ": " + num(var_at_max["us_tab"] / v));
+      log_line(line);
     }
   }
   progress.finish();

@@ -24,6 +24,9 @@ struct StudySpec {
   double uniform_fraction = 0.1;
   std::string device;  // selector
   bool cpu = false;    // the CPU reference instead of the device kernels
+  // Timed launches per estimator after the first, interleaved over the estimators (the
+  // same launch shape): ns_per_sample is the fastest of them.
+  int timing_rounds = 2;
   std::string csv, tail_csv;
 };
 

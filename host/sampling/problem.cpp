@@ -30,20 +30,56 @@ Estimator parse_estimator(const std::string& name, const std::string& where) {
 
 bool uses_table(Estimator e) { return e != Estimator::UsGmm && e != Estimator::IsGmm; }
 
+static int block_images(double sigma_c) {
+  // Offsets from the conditional mean of the images beyond the nearest (|u0| <= pi), nearest
+  // first: j = 2n - 1 at u0 -+ 2 pi n (the other side), j = 2n at u0 +- 2 pi n (the same
+  // side); |u_j| >= j pi, and u_j^2 - u0^2 >= L_j = 4 pi^2 n (n - 1) (j odd) or 4 pi^2 n^2
+  // (j even). Image j is left out when either bound makes it negligible: beyond 9 sigma
+  // (below 2.6e-18 of the component's peak, the header's cut) or below e^-18 = 2^-26 of
+  // the component's own term at the nearest image (so below float rounding of the pdf).
+  if (!(9 * sigma_c > kPi)) return 0;
+  int images = 1;
+  for (int j = 2; j < 64; ++j) {
+    const double n = double((j + 1) / 2);
+    const double L = j % 2 ? 4 * kPi * kPi * n * (n - 1) : 4 * kPi * kPi * n * n;
+    if (9 * sigma_c > j * kPi && L / (2 * sigma_c * sigma_c) < 18.0) images = j;
+    else break;
+  }
+  return images;
+}
+
 QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit) {
   QueryMixture qm;
   qm.domain = set.domain == mix::Domain::Fiber ? Domain::Fiber : Domain::Hemisphere;
   qm.blend = set.blend(theta_o, phi_o);
   const auto& b = qm.blend;
-  qm.q.assign(16, 0.f);
+  qm.q.assign(QueryMixture::kQuery, 0.f);
   qm.q[0] = float(b.count);
   qm.q[1] = float(b.rotate);
-  std::size_t total = 0;
+  std::size_t total = 0, max_n = 0;
+  double cum = 0;
+  // The pdf's constants, one component per lane of blocks of kLanes (kernels/sample.cl,
+  // mixture_sums). At (dt, dp) from the mean, a component's term (blend weight x weight x
+  // normal density) is 2^(lw + a_t dt^2 + a_p u^2), u = dp - m dt the phi offset from the
+  // conditional mean given theta (m = -i_tp / i_pp the regression slope, a_t = -log2(e) /
+  // (2 s_tt), a_p = -log2(e) i_pp / 2, lw = log2(blend weight x weight x norm)). The kernel
+  // takes the phi image nearest the conditional mean, |u| <= pi, then `images` more, nearest
+  // first (block_images below). Components are sorted by that count so that blocks are
+  // alike; padding lanes have lw = -1000 (a zero term).
+  constexpr double kLog2e = 1.4426950408889634;
+  struct Lane {
+    float v[QueryMixture::kRows];
+    int images;
+  };
+  std::vector<Lane> lanes;
   for (int k = 0; k < b.count; ++k) {
     const mix::SliceMixture& s = set.slices[std::size_t(b.slice[k])];
     qm.q[std::size_t(2 + k)] = float(b.weight[k]);
     qm.q[std::size_t(6 + k)] = float(total);
     qm.q[std::size_t(10 + k)] = float(s.components.size());
+    cum += b.weight[k];
+    qm.q[std::size_t(19 + k)] = float(cum);
+    max_n = std::max(max_n, s.components.size());
     for (std::size_t j = 0; j < s.components.size(); ++j) {
       const mix::Gaussian& g = s.components[j];
       const float c[16] = {float(g.mu_t), float(g.mu_p), float(g.i_tt), float(g.i_tp), float(g.i_pp),
@@ -51,11 +87,36 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
                            float(b.weight[k] * g.weight * g.norm), float(b.weight[k] * s.scale * g.weight * g.norm / f_unit),
                            float(g.cut), float(g.images), float(s.cdf[j]), 0.f, 0.f, 0.f};
       qm.comps.insert(qm.comps.end(), c, c + 16);
+      const double w = b.weight[k] * g.weight * g.norm;
+      Lane l{};
+      l.v[0] = float(g.mu_t);
+      l.v[1] = float(wrap_phi(g.mu_p));
+      l.v[2] = float(-g.i_tp / g.i_pp);
+      l.v[3] = float(-0.5 * kLog2e / g.s_tt);
+      l.v[4] = float(-0.5 * kLog2e * g.i_pp);
+      l.v[5] = w > 0 ? float(std::max(std::log2(w), -1000.0)) : -1000.f;
+      l.v[6] = float(s.scale / f_unit);
+      l.images = block_images(1.0 / std::sqrt(g.i_pp));
+      lanes.push_back(l);
     }
     total += s.components.size();
   }
   qm.q[14] = float(total);
   if (total > 1u << 20) throw InputError("mixture query: too many components");
+  std::stable_sort(lanes.begin(), lanes.end(), [](const Lane& x, const Lane& y) { return x.images > y.images; });
+  const std::size_t blocks = (lanes.size() + QueryMixture::kLanes - 1) / QueryMixture::kLanes;
+  for (std::size_t bl = 0; bl < blocks; ++bl)
+    for (std::size_t r = 0; r < QueryMixture::kRows; ++r)
+      for (std::size_t i = 0; i < QueryMixture::kLanes; ++i) {
+        const std::size_t c = bl * QueryMixture::kLanes + i;
+        float v = c < lanes.size() ? lanes[c].v[r] : (r == 5 ? -1000.f : 0.f);
+        if (r == 7) v = i == 0 ? float(lanes[bl * QueryMixture::kLanes].images) : 0.f;  // sorted: the block's most
+        qm.pdf.push_back(v);
+      }
+  qm.q[15] = float(blocks);
+  std::size_t step = 1;
+  while (step * 2 <= max_n) step *= 2;
+  qm.q[18] = float(step);
   return qm;
 }
 

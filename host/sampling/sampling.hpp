@@ -25,10 +25,16 @@ std::uint32_t estimator_stream(int estimator);
 // ---- the mixture serving one omega_o, flattened (kernels/sample.cl layout) -----------
 
 struct QueryMixture {
+  static constexpr std::size_t kQuery = 32;  // floats in q
+  static constexpr std::size_t kLanes = 8;   // components per pdf block (kernels/sample.cl PDF_LANES)
+  static constexpr std::size_t kRows = 8;    // float8 rows per pdf block
   Domain domain = Domain::Fiber;
   mix::MixtureSet::Blend blend;
-  std::vector<float> q;      // 16 floats: count, rotate, weights, first, counts, total
-  std::vector<float> comps;  // 16 floats per component
+  // count, rotate, weights, first, counts, total, pdf blocks, broad blocks, extra
+  // images, search step, cumulative weights (kernels/sample.cl, Q_*)
+  std::vector<float> q;
+  std::vector<float> comps;  // 16 floats per component: the draw (and the reference layout)
+  std::vector<float> pdf;    // pdf blocks, then broad blocks: kRows x kLanes floats each
   std::size_t components() const { return comps.size() / 16; }
 };
 
@@ -115,5 +121,9 @@ struct RunSums {
 RunSums integrate_cpu(const Problem& p, Estimator e, int runs, std::uint64_t n_max, std::uint64_t seed);
 RunSums integrate_device(const Device& device, const Problem& p, Estimator e, int runs, std::uint64_t n_max,
                          std::uint64_t seed, std::uint32_t chunk = 256);
+// Seconds of one more launch of integrate_device's shape (after its untimed warm-up),
+// without reading the sums: the study's timing rounds, interleaved over the estimators.
+double time_integrate_device(const Device& device, const Problem& p, Estimator e, int runs, std::uint64_t n_max,
+                             std::uint64_t seed, std::uint32_t chunk = 256);
 
 }  // namespace bsdfmix
