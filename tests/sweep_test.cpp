@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <thread>
 
@@ -111,6 +112,22 @@ TEST_CASE("the L1 error integrates narrow components over their cells", "[fit][e
   for (std::size_t t = 0; t < 30; ++t)
     for (std::size_t p = 0; p < 60; ++p) lobe.w[t * 60 + p] = g.pdf_param(s.theta[t], s.phi[p]) * h * axis_step(s.phi);
   CHECK(l1_rel_error(lobe, g) < 1e-6);
+}
+
+TEST_CASE("a sweep that fails on a bad cell leaves no output and no checkpoint", "[fit][crash]") {
+  Progress::set_enabled(false);
+  TableMeta meta = make_grid(Domain::Fiber, 3, 1, 10, 20, true);
+  std::vector<float> v(meta.n_slices() * meta.cells_per_slice(), 1.0f);
+  v[2 * 200 + 7] = std::numeric_limits<float>::quiet_NaN();
+  const std::string table = (temp_dir() / "nan_cell.h5").string();
+  write_table(table, meta, v);
+  FitSection f = fit_settings("nan_cell");
+  f.batch = 8;  // one batch: the failure comes before any commit
+  fs::remove_all(f.output + ".parts");
+  CHECK_THROWS_WITH(run_sweep(table, f, ""), Catch::Contains("cell (theta_i 0, phi_i 7): NaN"));
+  CHECK_FALSE(fs::exists(f.output));
+  CHECK_FALSE(fs::exists(f.output + ".parts"));
+  CHECK_FALSE(fs::exists(f.report));
 }
 
 TEST_CASE("candidate K values cover the range", "[fit][search]") {

@@ -69,12 +69,7 @@ Checkpoint::Checkpoint(const std::string& output, const std::string& fingerprint
       fs::remove_all(dir);
     }
   }
-  if (!fs::exists(dir)) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec) throw IoError(dir_ + ": cannot create checkpoint directory: " + ec.message());
-    write_text_atomic((dir / kFingerprintFile).string(), fingerprint_);
-  }
+  if (!fs::exists(dir)) return;  // created by the first commit: a failed run leaves nothing
   std::size_t resumed = 0;
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
@@ -104,6 +99,13 @@ bool Checkpoint::done(std::size_t s) const { return s < done_.size() && done_[s]
 
 void Checkpoint::commit(const BatchPart& part) {
   if (part.slice_index.empty()) return;
+  const fs::path dir(dir_);
+  if (!fs::exists(dir / kFingerprintFile)) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw IoError(dir_ + ": cannot create checkpoint directory: " + ec.message());
+    write_text_atomic((dir / kFingerprintFile).string(), fingerprint_);
+  }
   const std::string path = (fs::path(dir_) / ("batch_" + std::to_string(part.slice_index.front()) + ".h5")).string();
   write_part(path, part);
   for (std::size_t s : part.slice_index) {
