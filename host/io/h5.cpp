@@ -1,6 +1,13 @@
 // A thin RAII layer over the HDF5 C API.
 #include "io/h5.hpp"
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <vector>
+
 #include <mutex>
 
 #include "core/error.hpp"
@@ -32,12 +39,86 @@ bool is_hdf5(const std::string& path) {
   return H5Fis_hdf5(path.c_str()) > 0;
 }
 
+namespace {
+
+// Reads every attribute of the object `name` below `root` (in the probe child).
+herr_t probe_object(hid_t root, const char* name, const H5O_info_t*, void*) {
+  const hid_t obj = H5Oopen(root, name, H5P_DEFAULT);
+  if (obj < 0) return 0;
+  H5O_info_t info;
+#if H5_VERSION_GE(1, 12, 0)
+  H5Oget_info3(obj, &info, H5O_INFO_NUM_ATTRS);
+#else
+  H5Oget_info2(obj, &info, H5O_INFO_NUM_ATTRS);
+#endif
+  for (hsize_t i = 0; i < info.num_attrs; ++i) {
+    const hid_t a = H5Aopen_by_idx(obj, ".", H5_INDEX_NAME, H5_ITER_INC, i, H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0) continue;
+    const hid_t type = H5Aget_type(a);
+    const hid_t space = H5Aget_space(a);
+    const hssize_t n = H5Sget_simple_extent_npoints(space);
+    if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0 && n == 1) {
+      const hid_t mem = H5Tcopy(H5T_C_S1);
+      H5Tset_size(mem, H5T_VARIABLE);
+      H5Tset_cset(mem, H5Tget_cset(type));
+      char* text = nullptr;
+      if (H5Aread(a, mem, &text) >= 0 && text) H5free_memory(text);
+      H5Tclose(mem);
+    } else if (n > 0 && n < (1 << 20)) {
+      std::vector<unsigned char> buf(static_cast<std::size_t>(n) * H5Tget_size(type) + 16);
+      H5Aread(a, type, buf.data());
+    }
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Aclose(a);
+  }
+  H5Oclose(obj);
+  return 0;
+}
+
+// Some corrupt metadata (a damaged global heap behind a string attribute) crashes or
+// hangs the HDF5 library itself. Every object's attributes are first read in a child
+// process: a crash or a hang there is reported as a corrupt file, never met here.
+void probe_metadata(const std::string& path) {
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid < 0) return;  // cannot probe: open directly
+  if (pid == 0) {
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f >= 0) {
+#if H5_VERSION_GE(1, 12, 0)
+      H5Ovisit3(f, H5_INDEX_NAME, H5_ITER_INC, probe_object, nullptr, H5O_INFO_BASIC);
+#else
+      H5Ovisit2(f, H5_INDEX_NAME, H5_ITER_INC, probe_object, nullptr, H5O_INFO_BASIC);
+#endif
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  for (int waited_ms = 0;; waited_ms += 10) {
+    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    if (r == pid) break;
+    if (r < 0) return;
+    if (waited_ms >= 30000) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      throw InputError(path + ": corrupt HDF5 metadata (the HDF5 library does not finish reading it)");
+    }
+    ::usleep(10000);
+  }
+  if (WIFSIGNALED(status))
+    throw InputError(path + ": corrupt HDF5 metadata (the HDF5 library crashes reading it)");
+}
+
+}  // namespace
+
 Handle open_file(const std::string& path) {
   quiet_errors();
   FILE* probe = std::fopen(path.c_str(), "rb");
   if (!probe) throw InputError(path + ": cannot open (no such file or not readable)");
   std::fclose(probe);
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  probe_metadata(path);
   Handle f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
   if (!f.valid()) throw InputError(path + ": cannot open as HDF5 (corrupt or truncated file)");
   return f;
