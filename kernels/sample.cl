@@ -23,6 +23,7 @@
 #endif
 
 #define S_PI 3.14159265358979323846f
+#define ROUND_MAGIC 12582912.0f  // 1.5 x 2^23: (x + it) - it rounds x to an integer (|x| < 2^22)
 
 #if HEMISPHERE
 #define THETA_LO 0.0f
@@ -101,11 +102,11 @@ float wrap_phi(const float phi) {
 // Polynomials for |a| <= pi/4 (Taylor; error below float rounding).
 float sin_poly(const float a) {
   const float a2 = a * a;
-  return a * mad(a2, mad(a2, mad(a2, mad(a2, 2.7557319e-6f, -1.9841270e-4f), 8.3333333e-3f), -1.6666667e-1f), 1.0f);
+  return a * fma(a2, fma(a2, fma(a2, fma(a2, 2.7557319e-6f, -1.9841270e-4f), 8.3333333e-3f), -1.6666667e-1f), 1.0f);
 }
 float cos_poly(const float a) {
   const float a2 = a * a;
-  return mad(a2, mad(a2, mad(a2, mad(a2, 2.4801587e-5f, -1.3888889e-3f), 4.1666667e-2f), -0.5f), 1.0f);
+  return fma(a2, fma(a2, fma(a2, fma(a2, 2.4801587e-5f, -1.3888889e-3f), 4.1666667e-2f), -0.5f), 1.0f);
 }
 
 // pi/2 split in two floats: (PIO2_HI - a) is exact for a in [pi/4, pi/2], so cos and sin
@@ -125,8 +126,8 @@ float jacobian(const float theta) {
 
 // sin and cos of 2 pi u (u in [0, 1)): quadrant by rounding, polynomials on [-pi/4, pi/4].
 float2 sincos_turn(const float u) {
-  const float x = u - rint(u);          // [-1/2, 1/2] turns
-  const float j = rint(4.0f * x);       // quadrant -2..2
+  const float x = u - ((u + ROUND_MAGIC) - ROUND_MAGIC);             // [-1/2, 1/2] turns
+  const float j = (4.0f * x + ROUND_MAGIC) - ROUND_MAGIC;            // quadrant -2..2
   const float a = (x - 0.25f * j) * (2.0f * S_PI);
   const float s = sin_poly(a), c = cos_poly(a);
   const int q = ((int)j) & 3;
@@ -147,20 +148,21 @@ float log_unit(const float v) {
   return mad((float)e, 0.693147181f, 2.0f * s * p);
 }
 
-// 2^x for x <= 127, 0 below -126: exponent bits plus a degree-6 polynomial for 2^f on
-// [0, 1) (relative error 1e-7, float rounding).
+// 2^x for x <= 127, 0 below -125: x = n + f with n = rint(x) (by adding and removing
+// 1.5 x 2^23, which also leaves n in the low mantissa bits), f in [-1/2, 1/2], a degree-6
+// polynomial for 2^f (relative error 1e-7, float rounding) and n added to its exponent.
 VF exp2_v(VF x) {
-  const VI dead = x < -126.0f;
-  x = clamp(x, -126.0f, 127.0f);
-  const VF fi = floor(x);
-  const VF f = x - fi;
-  VF p = mad(f, 2.161394423e-4f, 1.246734070e-3f);
-  p = mad(p, f, 9.675536062e-3f);
-  p = mad(p, f, 5.548521868e-2f);
-  p = mad(p, f, 2.402293254e-1f);
-  p = mad(p, f, 6.931470423e-1f);
-  p = mad(p, f, 1.0f);
-  const VF r = AS_VF(AS_VI(p) + (CONVERT_VI(fi) << 23));
+  const VI dead = x < -125.0f;
+  x = fmin(fmax(x, -125.0f), 127.0f);
+  const VF big = x + ROUND_MAGIC;
+  const VF f = x - (big - ROUND_MAGIC);
+  VF p = fma(f, 1.537071014e-4f, 1.339985307e-3f);
+  p = fma(p, f, 9.618373264e-3f);
+  p = fma(p, f, 5.550329023e-2f);
+  p = fma(p, f, 2.402264846e-1f);
+  p = fma(p, f, 6.931472056e-1f);
+  p = fma(p, f, 1.0f);
+  const VF r = AS_VF(AS_VI(p) + ((AS_VI(big) - 0x4B400000) << 23));
   return select(r, (VF)(0.0f), dead);
 }
 
@@ -189,20 +191,20 @@ float2 mixture_sums(__global const float* q, __global const VF* pd, const float 
   for (int b = 0; b < blocks; ++b) {
     __global const VF* r = pd + PDF_ROWS * b;
     const VF dt = theta - r[0];
-    VF u = mad(-r[2], dt, phi - r[1]);
-    u = mad(rint(u * (0.5f / S_PI)), -2.0f * S_PI, u);
-    const VF xm = mad(r[3] * dt, dt, r[5]);
+    VF u = fma(-r[2], dt, phi - r[1]);
+    u = fma((u * (0.5f / S_PI) + ROUND_MAGIC) - ROUND_MAGIC, -2.0f * S_PI, u);  // |u| <= pi
+    const VF xm = fma(r[3] * dt, dt, r[5]);
     const VF a = r[4];
-    VF t = exp2_v(mad(a * u, u, xm));
+    VF t = exp2_v(fma(a * u, u, xm));
     const int images = (int)r[7].s0;
     const VF s = copysign((VF)(2.0f * S_PI), u);
     for (int j = 1; j <= images; ++j) {
       const float n = (float)((j + 1) >> 1);
       const VF v = (j & 1) ? u - n * s : u + n * s;
-      t += exp2_v(mad(a * v, v, xm));
+      t += exp2_v(fma(a * v, v, xm));
     }
     ap += t;
-    af = mad(t, r[6], af);
+    af = fma(t, r[6], af);
   }
   return (float2)(hsum(ap), hsum(af));
 }
