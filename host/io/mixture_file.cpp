@@ -44,6 +44,20 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
   }
 }
 
+void MixtureFile::slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean,
+                               std::vector<double>& cov) const {
+  const std::size_t K = static_cast<std::size_t>(kmax);
+  const int kk = k[s];
+  w.assign(kk, 0.0);
+  mean.assign(2 * kk, 0.0);
+  cov.assign(3 * kk, 0.0);
+  for (int j = 0; j < kk; ++j) {
+    w[j] = weights[s * K + j];
+    for (int d = 0; d < 2; ++d) mean[2 * j + d] = means[(s * K + j) * 2 + d];
+    for (int d = 0; d < 3; ++d) cov[3 * j + d] = covariances[(s * K + j) * 3 + d];
+  }
+}
+
 std::uint64_t MixtureFile::payload_bytes() const {
   std::uint64_t b = 0;
   for (auto kk : k) b += std::uint64_t(kk) * 6 * sizeof(float);  // weight, mean (2), covariance (3)

@@ -31,6 +31,8 @@ struct MixtureFile {
   // Appends one slice; pads or widens to kmax as needed.
   void add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
                  const std::vector<double>& w, const std::vector<double>& mean, const std::vector<double>& cov);
+  // The k used components of slice s as parameter arrays (K, 2K, 3K).
+  void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
   // Stored bytes of the mixture parameters (weights, means, covariances of k used
   // components, and the per-slice scalars), the measure of compression.
   std::uint64_t payload_bytes() const;

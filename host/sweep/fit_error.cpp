@@ -56,9 +56,10 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
   const double total = s.total();
   if (!(total > 0)) return 0.0;
   const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
-  // A component narrower than about a cell is integrated over each cell (3 x 3
-  // midpoints); a wider one is well represented by its density at the cell center.
-  const double wide = 1.5 * std::max(dt, dp);
+  // A component narrower than half a cell (the table cannot resolve it: EM leaves it at
+  // its covariance floor, a quarter cell) is integrated over each cell (3 x 3 points);
+  // a wider one is compared like the table, by its density at the cell centers.
+  const double wide = 0.5 * std::min(dt, dp);
   std::vector<const mix::Gaussian*> broad, narrow;
   for (const auto& g : m.components) {
     const double half_tr = 0.5 * (g.s_tt + g.s_pp);

@@ -26,9 +26,10 @@ mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const st
 
 // sum_i |w_i - W m_i| / W, W = sum w, m_i the mixture's mass in cell i: the relative L1
 // error of the mixture as a stand-in for the slice (0 to 2). m_i is the density at the
-// cell center times the cell area for components wider than 1.5 cells, and the mean
-// over 3 x 3 points of the cell times its area for narrower ones (a component at the
-// covariance floor holds most of its mass in one cell, its center density does not).
+// cell center times the cell area (as the table samples f at cell centers), except for
+// components narrower than half a cell, which the table cannot resolve: their mean over
+// 3 x 3 points of the cell times its area (a component at the covariance floor holds
+// most of its mass in one cell; its center density overstates that 2.5x).
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m);
 
 }  // namespace bsdfmix

@@ -2,7 +2,6 @@
 #include "sweep/sweep.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -157,6 +156,240 @@ SliceSet make_set(Domain domain, const std::vector<SliceWork>& work, bool pooled
   return set;
 }
 
+// The fitting of one batch of slices: search, final fits, fallbacks, then its part.
+class BatchFitter {
+ public:
+  BatchFitter(const TableMeta& meta, const FitSection& fit, EmEngine& engine, std::string device_names)
+      : meta_(meta), fit_(fit), engine_(engine), devices_(std::move(device_names)),
+        ks_(candidate_ks(fit.k_min, fit.k_max)) {}
+
+  BatchPart fit(const TableReader& reader, const std::vector<SliceRef>& refs) {
+    const auto start = std::chrono::steady_clock::now();
+    load(reader, refs);
+    if (fit_.k_min != fit_.k_max) search();
+    final_fits();
+    reduce_k();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return part(seconds);
+  }
+
+ private:
+  void load(const TableReader& reader, const std::vector<SliceRef>& refs) {
+    work_.clear();
+    for (const SliceRef& ref : refs) {
+      SliceWork w;
+      w.ref = ref;
+      const auto f = reader.read_slice(ref.t_o, ref.p_o);
+      w.full.theta = meta_.theta_i;
+      w.full.phi = meta_.phi_i;
+      w.full.w = integrand_weights(meta_.domain, meta_.theta_i, meta_.phi_i, f.data());
+      w.total = w.full.total();
+      w.pooled = pool_slice(w.full, std::size_t(fit_.search_pool));
+      work_.push_back(std::move(w));
+    }
+    const std::size_t n = work_.size();
+    full_set_ = make_set(meta_.domain, work_, false);
+    chosen_.assign(n, fit_.k_min);
+    best_.assign(n, Fitted{});
+    failure_.assign(n, std::string());
+    reduced_from_.assign(n, 0);
+    search_rows_.str("");
+  }
+
+  // Keeps `f` as the slice's fit when it is usable and has a lower L1 error.
+  void offer(std::size_t s, const Fitted& f) {
+    if (f.ok && (!best_[s].ok || f.l1 < best_[s].l1)) best_[s] = f;
+    if (!f.ok && failure_[s].empty()) failure_[s] = f.failure;
+  }
+
+  // Every candidate K and restart of every slice in one submission; the criterion
+  // picks each slice's K, and the best restart of that K is its fit so far.
+  void search() {
+    std::vector<EmTask> tasks;
+    for (std::size_t s = 0; s < work_.size(); ++s) {
+      if (!(work_[s].total > 0)) continue;
+      for (int k : ks_)
+        for (int r = 0; r < fit_.restarts; ++r)
+          tasks.push_back(make_task(s, k, fit_.iterations, fit_.tolerance, task_seed(fit_.seed, work_[s].ref.index, k, r)));
+    }
+    const std::vector<EmResult> results =
+        engine_.fit(fit_.search_pool > 1 ? make_set(meta_.domain, work_, true) : full_set_, tasks);
+    std::size_t ti = 0;
+    for (std::size_t s = 0; s < work_.size(); ++s) {
+      if (!(work_[s].total > 0)) continue;
+      std::vector<Candidate> cands;
+      std::vector<Fitted> per_k;  // the best restart of each candidate
+      std::vector<std::string> rows;
+      for (int k : ks_) {
+        Candidate c{k, 1e300, false};
+        Fitted kbest;
+        for (int r = 0; r < fit_.restarts; ++r, ++ti) {
+          const Fitted f = evaluate(results[ti], work_[s].full);
+          if (f.ok && f.l1 < c.l1_rel) {
+            c.ok = true;
+            c.l1_rel = f.l1;
+            kbest = f;
+          }
+          const double l1 = f.ok ? f.l1 : 2.0;  // a failed restart: the worst error
+          rows.push_back(std::to_string(work_[s].ref.index) + "," + std::to_string(k) + "," + std::to_string(r) + "," +
+                         num(f.ok ? f.loglik : 0.0) + "," + num(l1) + "," + num(candidate_score(k, l1, fit_.k_penalty)) +
+                         ",");
+        }
+        cands.push_back(c);
+        per_k.push_back(kbest);
+      }
+      std::size_t pick = 0;
+      try {
+        pick = choose_candidate(cands, fit_.k_penalty, fit_.error_target);
+      } catch (const Error&) {
+        pick = 0;  // every candidate failed: the final fits try k_min
+      }
+      chosen_[s] = cands[pick].k;
+      best_[s] = per_k[pick];
+      std::size_t row = 0;
+      for (int k : ks_)
+        for (int r = 0; r < fit_.restarts; ++r, ++row) search_rows_ << rows[row] << (k == chosen_[s] ? "1" : "0") << "\n";
+    }
+  }
+
+  // The chosen K of every slice at full resolution, with more restarts and iterations;
+  // the lowest L1 error among them and the search's fits of that K is kept.
+  void final_fits() {
+    std::vector<EmTask> tasks;
+    for (std::size_t s = 0; s < work_.size(); ++s) {
+      if (!(work_[s].total > 0)) continue;
+      for (int r = 0; r < fit_.final_restarts; ++r)
+        tasks.push_back(make_task(s, chosen_[s], fit_.final_iterations, fit_.tolerance,
+                                  task_seed(fit_.seed, work_[s].ref.index, chosen_[s], -1 - r)));
+    }
+    run(tasks);
+  }
+
+  // A slice with fewer non-zero cells than K cannot hold K components: it is refitted
+  // with one component per non-zero cell.
+  void reduce_k() {
+    std::vector<EmTask> tasks;
+    for (std::size_t s = 0; s < work_.size(); ++s) {
+      if (best_[s].ok || !(work_[s].total > 0)) continue;
+      const int positive = static_cast<int>(
+          std::count_if(work_[s].full.w.begin(), work_[s].full.w.end(), [](double x) { return x > 0; }));
+      if (positive >= chosen_[s]) continue;
+      reduced_from_[s] = chosen_[s];
+      chosen_[s] = positive;
+      for (int r = 0; r < fit_.final_restarts; ++r)
+        tasks.push_back(make_task(s, positive, fit_.final_iterations, fit_.tolerance,
+                                  task_seed(fit_.seed, work_[s].ref.index, positive, -1 - r)));
+    }
+    run(tasks);
+  }
+
+  void run(const std::vector<EmTask>& tasks) {
+    if (tasks.empty()) return;
+    const std::vector<EmResult> results = engine_.fit(full_set_, tasks);
+    for (std::size_t i = 0; i < results.size(); ++i) offer(tasks[i].slice, evaluate(results[i], work_[tasks[i].slice].full));
+  }
+
+  std::string status(std::size_t s) const {
+    std::string st = "ok";
+    if (!(work_[s].total > 0)) {
+      st = "zero: every cell is zero; stored with scale 0";
+    } else if (!best_[s].ok) {
+      st = "failed: " + (failure_[s].empty() ? std::string("no usable fit") : failure_[s]) +
+           "; one moment-matched Gaussian stands in";
+    } else if (reduced_from_[s] > 0) {
+      st = "reduced: K lowered from " + std::to_string(reduced_from_[s]) + " to " + std::to_string(chosen_[s]) +
+           ", the number of non-zero cells";
+    }
+    std::replace(st.begin(), st.end(), ',', ';');
+    return st;
+  }
+
+  BatchPart part(double seconds) const {
+    BatchPart part;
+    part.mixture.domain = meta_.domain;
+    part.mixture.azimuthal = meta_.azimuthal;
+    std::ostringstream report;
+    for (std::size_t s = 0; s < work_.size(); ++s) {
+      const SliceWork& w = work_[s];
+      Fitted f = best_[s];
+      const std::string st = status(s);
+      if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
+        moment_gaussian(w.full, f.gmm.weight, f.gmm.mean, f.gmm.cov);
+        f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
+        f.loglik = 0;
+        f.iterations = 0;
+      }
+      const double theta_o = meta_.theta_o[w.ref.t_o], phi_o = meta_.phi_o[w.ref.p_o];
+      part.slice_index.push_back(w.ref.index);
+      part.mixture.add_slice(theta_o, phi_o, w.total, f.loglik, f.l1, f.gmm.weight, f.gmm.mean, f.gmm.cov);
+      report << w.ref.index << "," << num(theta_o) << "," << num(phi_o) << "," << f.gmm.weight.size() << ","
+             << f.iterations << "," << num(f.loglik) << "," << num(f.l1) << ","
+             << num(seconds / double(work_.size()), "%.6f") << "," << devices_ << "," << st << "\n";
+      if (st != "ok") log_line("slice " + std::to_string(w.ref.index) + ": " + st);
+    }
+    part.report_rows = report.str();
+    part.search_rows = search_rows_.str();
+    return part;
+  }
+
+  const TableMeta& meta_;
+  const FitSection& fit_;
+  EmEngine& engine_;
+  const std::string devices_;
+  const std::vector<int> ks_;
+  std::vector<SliceWork> work_;
+  SliceSet full_set_;
+  std::vector<int> chosen_, reduced_from_;
+  std::vector<Fitted> best_;
+  std::vector<std::string> failure_;
+  std::ostringstream search_rows_;
+};
+
+// The final outputs, assembled from the committed parts in slice order.
+SweepSummary write_outputs(const Checkpoint& checkpoint, const TableMeta& meta, const FitSection& fit) {
+  MixtureFile out;
+  out.domain = meta.domain;
+  out.azimuthal = meta.azimuthal;
+  out.table_source = meta.source;
+  out.fit_settings = fit_settings_json(fit);
+  out.table_theta_o = meta.theta_o;
+  out.table_phi_o = meta.phi_o;
+  std::string report = kReportHeader, search_csv = kSearchHeader;
+  SweepSummary sum;
+  std::vector<double> l1s;
+  for (const auto& [first, part] : checkpoint.parts()) {
+    const MixtureFile& m = part.mixture;
+    for (std::size_t s = 0; s < m.slices(); ++s) {
+      std::vector<double> w, mean, cov;
+      m.slice_params(s, w, mean, cov);
+      out.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov);
+      sum.k_histogram[m.k[s]]++;
+      l1s.push_back(m.l1_rel[s]);
+    }
+    report += part.report_rows;
+    for (std::size_t at = part.report_rows.find(",failed: "); at != std::string::npos;
+         at = part.report_rows.find(",failed: ", at + 1))
+      ++sum.failed;
+    search_csv += part.search_rows;
+  }
+  write_mixture_file(fit.output, out);
+  write_text_atomic(fit.report, report);
+  write_text_atomic(fit.search_report, search_csv);
+
+  sum.slices = out.slices();
+  std::sort(l1s.begin(), l1s.end());
+  if (!l1s.empty()) {
+    sum.l1_median = l1s[l1s.size() / 2];
+    sum.l1_p90 = l1s[std::min(l1s.size() - 1, std::size_t(std::ceil(0.9 * double(l1s.size()))) - 1)];
+    sum.l1_max = l1s.back();
+  }
+  sum.mixture_bytes = out.payload_bytes();
+  const std::uint64_t cells = meta.cells_per_slice();
+  sum.table_bytes = std::uint64_t(sum.slices) * cells * 4;
+  sum.full_bytes = std::uint64_t(sum.slices) * (meta.azimuthal ? meta.phi_i.size() : 1) * cells * 4;
+  return sum;
+}
+
 }  // namespace
 
 std::string SweepSummary::text() const {
@@ -224,224 +457,35 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
     else batches.push_back(std::move(b));
   }
   const std::vector<int> ks = candidate_ks(fit.k_min, fit.k_max);
-  const bool search = fit.k_min != fit.k_max;
-
   log_line("fit " + table_path + ": " + std::to_string(plan.size()) + " slice(s), " +
-           (search ? std::to_string(ks.size()) + " candidate K in [" + std::to_string(fit.k_min) + ", " +
-                         std::to_string(fit.k_max) + "]"
-                   : "K = " + std::to_string(fit.k_min)) +
+           (fit.k_min != fit.k_max ? std::to_string(ks.size()) + " candidate K in [" + std::to_string(fit.k_min) +
+                                         ", " + std::to_string(fit.k_max) + "]"
+                                   : "K = " + std::to_string(fit.k_min)) +
            ", on " + device_names);
   Progress progress("fit " + table_path, plan.size(), "slices");
   progress.advance(resumed);
 
-  std::size_t batches_run = 0;
-  for (const auto& refs : batches) {
-    if (batches_run++ == max_batches) {
+  BatchFitter fitter(meta, fit, engine, device_names);
+  std::size_t committed = resumed;
+  for (std::size_t b = 0; b < batches.size(); ++b) {
+    if (b == max_batches) {
       SweepSummary partial;
       partial.complete = false;
       partial.resumed = resumed;
-      partial.slices = checkpoint.parts().size();
+      partial.slices = committed;
       partial.devices = device_names;
       log_line("fit " + table_path + ": stopped after " + std::to_string(max_batches) + " batch(es); rerun to resume");
       return partial;
     }
-    const auto tb = std::chrono::steady_clock::now();
-    std::vector<SliceWork> work;
-    for (const SliceRef& ref : refs) {
-      SliceWork w;
-      w.ref = ref;
-      const auto f = reader.read_slice(w.ref.t_o, w.ref.p_o);
-      w.full.theta = meta.theta_i;
-      w.full.phi = meta.phi_i;
-      w.full.w = integrand_weights(meta.domain, meta.theta_i, meta.phi_i, f.data());
-      w.total = w.full.total();
-      w.pooled = pool_slice(w.full, std::size_t(fit.search_pool));
-      work.push_back(std::move(w));
-    }
-    std::vector<int> chosen(work.size(), fit.k_min);
-    std::vector<Fitted> best(work.size());  // per slice: the lowest-L1 fit of the chosen K so far
-    std::ostringstream search_rows, report_rows;
-    const SliceSet full_set = make_set(meta.domain, work, false);
-
-    // The search: every candidate K and restart of every slice in one submission.
-    if (search) {
-      std::vector<EmTask> tasks;
-      for (std::size_t s = 0; s < work.size(); ++s) {
-        if (!(work[s].total > 0)) continue;
-        for (int k : ks)
-          for (int r = 0; r < fit.restarts; ++r)
-            tasks.push_back(make_task(s, k, fit.iterations, fit.tolerance, task_seed(fit.seed, work[s].ref.index, k, r)));
-      }
-      const std::vector<EmResult> results =
-          engine.fit(fit.search_pool > 1 ? make_set(meta.domain, work, true) : full_set, tasks);
-      std::size_t ti = 0;
-      for (std::size_t s = 0; s < work.size(); ++s) {
-        if (!(work[s].total > 0)) continue;
-        std::vector<Candidate> cands;
-        std::vector<Fitted> per_k;  // the best restart of each candidate
-        std::vector<std::string> rows;
-        for (int k : ks) {
-          Candidate c;
-          c.k = k;
-          c.l1_rel = 1e300;
-          Fitted kbest;
-          for (int r = 0; r < fit.restarts; ++r, ++ti) {
-            const Fitted f = evaluate(results[ti], work[s].full);
-            if (f.ok && f.l1 < c.l1_rel) {
-              c.ok = true;
-              c.l1_rel = f.l1;
-              kbest = f;
-            }
-            rows.push_back(std::to_string(work[s].ref.index) + "," + std::to_string(k) + "," + std::to_string(r) + "," +
-                           num(f.ok ? f.loglik : 0.0) + "," + num(f.ok ? f.l1 : 2.0) + "," +
-                           num(candidate_score(k, f.ok ? f.l1 : 2.0, fit.k_penalty)) + ",");
-          }
-          cands.push_back(c);
-          per_k.push_back(kbest);
-        }
-        std::size_t pick = 0;
-        try {
-          pick = choose_candidate(cands, fit.k_penalty, fit.error_target);
-        } catch (const Error&) {
-          pick = 0;
-        }
-        chosen[s] = cands[pick].k;
-        best[s] = per_k[pick];
-        std::size_t row = 0;
-        for (int k : ks)
-          for (int r = 0; r < fit.restarts; ++r, ++row) search_rows << rows[row] << (k == chosen[s] ? "1" : "0") << "\n";
-      }
-    }
-
-    // The final fits of the chosen K at full resolution: more restarts and iterations;
-    // the lowest relative L1 error among them and the search's fits of that K is kept.
-    std::vector<EmTask> tasks;
-    for (std::size_t s = 0; s < work.size(); ++s) {
-      if (!(work[s].total > 0)) continue;
-      for (int r = 0; r < fit.final_restarts; ++r)
-        tasks.push_back(make_task(s, chosen[s], fit.final_iterations, fit.tolerance,
-                                  task_seed(fit.seed, work[s].ref.index, chosen[s], -1 - r)));
-    }
-    const std::vector<EmResult> finals = tasks.empty() ? std::vector<EmResult>{} : engine.fit(full_set, tasks);
-    std::vector<std::string> failure(work.size());
-    for (std::size_t i = 0; i < finals.size(); ++i) {
-      const std::size_t s = tasks[i].slice;
-      const Fitted f = evaluate(finals[i], work[s].full);
-      if (f.ok && (!best[s].ok || f.l1 < best[s].l1)) best[s] = f;
-      if (!f.ok && failure[s].empty()) failure[s] = f.failure;
-    }
-    // A slice with fewer non-zero cells than K cannot hold K components: refit it
-    // with one component per non-zero cell.
-    std::vector<EmTask> reduced;
-    std::vector<int> reduced_from(work.size(), 0);
-    for (std::size_t s = 0; s < work.size(); ++s) {
-      if (best[s].ok || !(work[s].total > 0)) continue;
-      const int positive = static_cast<int>(
-          std::count_if(work[s].full.w.begin(), work[s].full.w.end(), [](double x) { return x > 0; }));
-      if (positive >= chosen[s]) continue;
-      reduced_from[s] = chosen[s];
-      chosen[s] = positive;
-      for (int r = 0; r < fit.final_restarts; ++r)
-        reduced.push_back(make_task(s, positive, fit.final_iterations, fit.tolerance,
-                                    task_seed(fit.seed, work[s].ref.index, positive, -1 - r)));
-    }
-    if (!reduced.empty()) {
-      const std::vector<EmResult> refits = engine.fit(full_set, reduced);
-      for (std::size_t i = 0; i < refits.size(); ++i) {
-        const std::size_t s = reduced[i].slice;
-        const Fitted f = evaluate(refits[i], work[s].full);
-        if (f.ok && (!best[s].ok || f.l1 < best[s].l1)) best[s] = f;
-      }
-    }
-    const double batch_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tb).count();
-
-    BatchPart part;
-    part.mixture.domain = meta.domain;
-    part.mixture.azimuthal = meta.azimuthal;
-    for (std::size_t s = 0; s < work.size(); ++s) {
-      const SliceWork& w = work[s];
-      Fitted f = best[s];
-      std::string status = "ok";
-      if (!(w.total > 0)) {
-        status = "zero: every cell is zero; stored with scale 0";
-      } else if (!f.ok) {
-        status = "failed: " + (failure[s].empty() ? std::string("no usable fit") : failure[s]) +
-                 "; one moment-matched Gaussian stands in";
-      } else if (reduced_from[s] > 0) {
-        status = "reduced: K lowered from " + std::to_string(reduced_from[s]) + " to " + std::to_string(chosen[s]) +
-                 ", the number of non-zero cells";
-      }
-      std::replace(status.begin(), status.end(), ',', ';');
-      if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
-        moment_gaussian(w.full, f.gmm.weight, f.gmm.mean, f.gmm.cov);
-        f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
-        f.loglik = 0;
-        f.iterations = 0;
-      }
-      part.slice_index.push_back(w.ref.index);
-      part.mixture.add_slice(meta.theta_o[w.ref.t_o], meta.phi_o[w.ref.p_o], w.total, f.loglik, f.l1, f.gmm.weight,
-                             f.gmm.mean, f.gmm.cov);
-      report_rows << w.ref.index << "," << num(meta.theta_o[w.ref.t_o]) << "," << num(meta.phi_o[w.ref.p_o]) << ","
-                  << f.gmm.weight.size() << "," << f.iterations << "," << num(f.loglik) << "," << num(f.l1) << ","
-                  << num(batch_seconds / double(work.size()), "%.6f") << "," << device_names << "," << status << "\n";
-      if (status != "ok") log_line("slice " + std::to_string(w.ref.index) + ": " + status);
-    }
-    part.report_rows = report_rows.str();
-    part.search_rows = search_rows.str();
-    checkpoint.commit(part);
-    progress.advance(work.size());
+    checkpoint.commit(fitter.fit(reader, batches[b]));
+    committed += batches[b].size();
+    progress.advance(batches[b].size());
   }
   progress.finish();
 
-  // Assemble the outputs from the committed parts, in slice order.
-  MixtureFile out;
-  out.domain = meta.domain;
-  out.azimuthal = meta.azimuthal;
-  out.table_source = meta.source;
-  out.fit_settings = fit_settings_json(fit);
-  out.table_theta_o = meta.theta_o;
-  out.table_phi_o = meta.phi_o;
-  std::string report = kReportHeader, search_csv = kSearchHeader;
-  SweepSummary sum;
-  sum.resumed = resumed;
-  std::vector<double> l1s;
-  for (const auto& [first, part] : checkpoint.parts()) {
-    const MixtureFile& m = part.mixture;
-    const std::size_t K = std::size_t(m.kmax);
-    for (std::size_t s = 0; s < m.slices(); ++s) {
-      const int k = m.k[s];
-      std::vector<double> w(k), mean(2 * k), cov(3 * k);
-      for (int j = 0; j < k; ++j) {
-        w[j] = m.weights[s * K + j];
-        for (int d = 0; d < 2; ++d) mean[2 * j + d] = m.means[(s * K + j) * 2 + d];
-        for (int d = 0; d < 3; ++d) cov[3 * j + d] = m.covariances[(s * K + j) * 3 + d];
-      }
-      out.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov);
-      sum.k_histogram[k]++;
-      l1s.push_back(m.l1_rel[s]);
-    }
-    report += part.report_rows;
-    for (std::size_t at = part.report_rows.find(",failed: "); at != std::string::npos;
-         at = part.report_rows.find(",failed: ", at + 1))
-      ++sum.failed;
-    search_csv += part.search_rows;
-  }
-  write_mixture_file(fit.output, out);
-  write_text_atomic(fit.report, report);
-  write_text_atomic(fit.search_report, search_csv);
+  SweepSummary sum = write_outputs(checkpoint, meta, fit);
   checkpoint.remove();
-
-  sum.slices = out.slices();
-  std::sort(l1s.begin(), l1s.end());
-  if (!l1s.empty()) {
-    sum.l1_median = l1s[l1s.size() / 2];
-    sum.l1_p90 = l1s[std::min(l1s.size() - 1, std::size_t(std::ceil(0.9 * double(l1s.size()))) - 1)];
-    sum.l1_max = l1s.back();
-  }
-  sum.mixture_bytes = out.payload_bytes();
-  const std::uint64_t cells = meta.cells_per_slice();
-  sum.table_bytes = std::uint64_t(sum.slices) * cells * 4;
-  sum.full_bytes = std::uint64_t(sum.slices) * (meta.azimuthal ? meta.phi_i.size() : 1) * cells * 4;
+  sum.resumed = resumed;
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   sum.devices = device_names;
   return sum;
