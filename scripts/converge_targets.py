@@ -1,0 +1,183 @@
+#!/usr/bin/python3
+"""The convergence study's targets (docs/sampling.md, "Targets"), from convergence CSVs.
+
+For every (table, theta_o, phi_o, scene) of the CSVs, one row:
+  K           components of the main slice serving omega_o (tail CSV)
+  storage     table slice cells / (K x 6): floats of the table slice over floats of the
+              slice's mixture (weight, mean, covariance: 6 per component)
+  mis fewer   how many times fewer samples mis_tab needs than us_tab's 1024 to reach
+              us_tab's rel_rmse at N = 1024: 1024 / N_mis, N_mis = N_max (rel_rmse_mis at
+              N_max / rel_rmse_us at 1024)^2 (the error falls as 1 / sqrt(N))
+  mis time    the same in time: mis fewer x ns_us / ns_mis
+  cost        ns_per_sample over us_tab's (one launch shape for every estimator), for
+              is_tab, mis_tab and is_gmm: the cost of a mixture sample against a uniform one
+  mis/cdf     mis_tab's variance over cdf_tab's (at N_max); cdf_tab is exact under
+              constant lighting (zero variance but float rounding), so the ratio means
+              something only where the lighting varies
+  is fewer, is time   the same as mis fewer / mis time for is_tab, reported beside them
+  is tail     the tail CSV's largest f / pdf over the integral for is_tab, and the share
+              of the integral is_tab never samples (missed_is)
+
+Targets: mis fewer >= 10, mis time >= 5, cost <= 2 (every mixture estimator), mis/cdf <= 3,
+storage >= 100. Each failed target is marked with '!'.
+
+  scripts/converge_targets.py out/converge_polyester/polyester_convergence.csv \\
+      out/converge_cotton/cotton_convergence.csv [--n 1024] [--markdown]
+The tail CSV of X.csv is X_tail.csv unless --tail names them (same order).
+"""
+
+import argparse
+import csv
+import math
+import os
+import sys
+
+NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
+
+
+def fail(msg):
+    print("converge_targets: error: " + msg, file=sys.stderr)
+    sys.exit(1)
+
+
+def read(path, needed):
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        fail("cannot read %s: %s" % (path, e))
+    if not rows:
+        fail("%s: no rows" % path)
+    missing = [c for c in needed if c not in rows[0]]
+    if missing:
+        fail("%s: missing columns %s" % (path, ", ".join(missing)))
+    return rows
+
+
+def key(r):
+    return (r["table"], round(float(r["theta_o"]), 6), round(float(r["phi_o"]), 6))
+
+
+def fmt(x, digits=3):
+    if x is None:
+        return "-"
+    if isinstance(x, str):
+        return x
+    if not math.isfinite(x):
+        return "inf" if x > 0 else "nan"
+    if x != 0 and (abs(x) >= 1e5 or abs(x) < 1e-2):
+        return "%.1e" % x
+    if abs(x) >= 100:
+        return "%.0f" % x
+    return ("%." + str(digits) + "g") % x
+
+
+def targets(csvs, tails, n_target):
+    out = []
+    for path, tpath in zip(csvs, tails):
+        rows = read(path, NEEDED)
+        tail = {key(t): t for t in read(tpath, ["table", "theta_o", "phi_o", "k", "table_bytes", "max_weight_is"])}
+        groups = {}
+        for r in rows:
+            groups.setdefault(key(r) + (r["scene"],), {}).setdefault(r["estimator"], {})[int(r["samples"])] = r
+        for g in sorted(groups, key=lambda g: (g[0], g[1], g[2], g[3])):
+            est = groups[g]
+            if "us_tab" not in est:
+                continue
+            n_max = max(est["us_tab"])
+            if n_target not in est["us_tab"]:
+                fail("%s: us_tab has no row at N = %d" % (path, n_target))
+            r_us = float(est["us_tab"][n_target]["rel_rmse"])
+            ns_us = float(est["us_tab"][n_max]["ns_per_sample"])
+
+            def at_max(e, col):
+                return float(est[e][max(est[e])][col]) if e in est else None
+
+            def fewer(e):
+                r = at_max(e, "rel_rmse")
+                if r is None:
+                    return None
+                n_e = max(est[e]) * (r / r_us) ** 2
+                return n_target / n_e if n_e > 0 else math.inf
+
+            def cost(e):
+                ns = at_max(e, "ns_per_sample")
+                return ns / ns_us if ns is not None else None
+
+            def time_ratio(e):
+                f, c = fewer(e), cost(e)
+                return f / c if f is not None and c else None
+
+            def var(e):
+                r = at_max(e, "rel_rmse")
+                return r * r * max(est[e]) if r is not None else None
+
+            t = tail.get(g[:3], {})
+            k = int(t["k"]) if t else None
+            cells = int(t["table_bytes"]) // 4 if t else None
+            v_mis, v_cdf = var("mis_tab"), var("cdf_tab")
+            out.append(
+                dict(
+                    table=g[0], theta_o=g[1], phi_o=g[2], scene=g[3], k=k, cells=cells,
+                    storage=cells / (6.0 * k) if k else None,
+                    mis_fewer=fewer("mis_tab"), mis_time=time_ratio("mis_tab"),
+                    cost_is=cost("is_tab"), cost_mis=cost("mis_tab"), cost_isgmm=cost("is_gmm"),
+                    ns_us=ns_us,
+                    mis_cdf=v_mis / v_cdf if v_mis is not None and v_cdf else None,
+                    is_fewer=fewer("is_tab"), is_time=time_ratio("is_tab"),
+                    is_max_weight=float(t["max_weight_is"]) if t else None,
+                    is_missed=float(t["missed_is"]) if t and "missed_is" in t else None,
+                ))
+    return out
+
+
+def check(x, ok):
+    return fmt(x) if x is None or ok(x) else fmt(x) + " !"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("csv", nargs="+", help="convergence CSV(s)")
+    ap.add_argument("--tail", nargs="*", default=None, help="tail-risk CSV(s), one per CSV")
+    ap.add_argument("--n", type=int, default=1024, help="us_tab's sample count to match (1024)")
+    ap.add_argument("--markdown", action="store_true", help="a Markdown table (default: CSV)")
+    a = ap.parse_args()
+    tails = a.tail if a.tail else [os.path.splitext(p)[0] + "_tail.csv" for p in a.csv]
+    if len(tails) != len(a.csv):
+        fail("--tail needs one file per CSV")
+    rows = targets(a.csv, tails, a.n)
+    cols = [
+        ("table", "table", None), ("theta_o (deg)", "theta_o", None), ("scene", "scene", None), ("K", "k", None),
+        ("storage", "storage", lambda x: x >= 100), ("mis fewer N", "mis_fewer", lambda x: x >= 10),
+        ("mis less time", "mis_time", lambda x: x >= 5), ("us_tab ns", "ns_us", None),
+        ("cost is_tab", "cost_is", lambda x: x <= 2), ("cost mis_tab", "cost_mis", lambda x: x <= 2),
+        ("cost is_gmm", "cost_isgmm", lambda x: x <= 2), ("mis/cdf var", "mis_cdf", None),
+        ("is fewer N", "is_fewer", None), ("is less time", "is_time", None),
+        ("is max f/pdf", "is_max_weight", None), ("is missed", "is_missed", None),
+    ]
+
+    def cell(r, name, ok):
+        x = r[name]
+        if name == "theta_o":
+            return "%.0f" % math.degrees(x)
+        if name == "mis_cdf" and x is not None:
+            # cdf_tab is exact under constant lighting: the ratio is no target there
+            return fmt(x) if r["scene"] == "constant" or x <= 3 else fmt(x) + " !"
+        if ok is None:
+            return fmt(x) if not isinstance(x, (int, str)) or isinstance(x, bool) else str(x)
+        return check(x, ok)
+
+    if a.markdown:
+        print("| " + " | ".join(c[0] for c in cols) + " |")
+        print("|" + "---|" * len(cols))
+        for r in rows:
+            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
+    else:
+        w = csv.writer(sys.stdout)
+        w.writerow([c[1] for c in cols])
+        for r in rows:
+            w.writerow([r[n] for _, n, _ in cols])
+
+
+if __name__ == "__main__":
+    main()
