@@ -41,17 +41,23 @@ bool is_hdf5(const std::string& path) {
 
 namespace {
 
+// The number of attributes of an object (0 when it cannot be read).
+hsize_t attr_count(hid_t obj) {
+  H5O_info_t info;
+#if H5_VERSION_GE(1, 12, 0)
+  if (H5Oget_info3(obj, &info, H5O_INFO_NUM_ATTRS) < 0) return 0;
+#else
+  if (H5Oget_info2(obj, &info, H5O_INFO_NUM_ATTRS) < 0) return 0;
+#endif
+  return info.num_attrs;
+}
+
 // Reads every attribute of the object `name` below `root` (in the probe child).
 herr_t probe_object(hid_t root, const char* name, const H5O_info_t*, void*) {
   const hid_t obj = H5Oopen(root, name, H5P_DEFAULT);
   if (obj < 0) return 0;
-  H5O_info_t info;
-#if H5_VERSION_GE(1, 12, 0)
-  H5Oget_info3(obj, &info, H5O_INFO_NUM_ATTRS);
-#else
-  H5Oget_info2(obj, &info, H5O_INFO_NUM_ATTRS);
-#endif
-  for (hsize_t i = 0; i < info.num_attrs; ++i) {
+  const hsize_t count = attr_count(obj);
+  for (hsize_t i = 0; i < count; ++i) {
     const hid_t a = H5Aopen_by_idx(obj, ".", H5_INDEX_NAME, H5_ITER_INC, i, H5P_DEFAULT, H5P_DEFAULT);
     if (a < 0) continue;
     const hid_t type = H5Aget_type(a);
@@ -305,13 +311,8 @@ void write_double_attr(hid_t obj, const std::string& name, double value, const s
 
 std::vector<std::string> attr_names(hid_t obj) {
   std::vector<std::string> names;
-  H5O_info_t info;
-#if H5_VERSION_GE(1, 12, 0)
-  H5Oget_info3(obj, &info, H5O_INFO_NUM_ATTRS);
-#else
-  H5Oget_info2(obj, &info, H5O_INFO_NUM_ATTRS);
-#endif
-  for (hsize_t i = 0; i < info.num_attrs; ++i) {
+  const hsize_t count = attr_count(obj);
+  for (hsize_t i = 0; i < count; ++i) {
     char buf[256];
     if (H5Aget_name_by_idx(obj, ".", H5_INDEX_NAME, H5_ITER_INC, i, buf, sizeof buf, H5P_DEFAULT) >= 0)
       names.emplace_back(buf);
