@@ -26,53 +26,18 @@ Threading: n_jobs=1 (joblib runs the batches sequentially); the BLAS thread
 variables are set to 1 before numpy is imported.
 """
 
-import os
+from peer_protocol import Peer  # first: pins the thread pools before numpy loads
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-             "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS"):
-    os.environ[_var] = "1"
-
-import argparse
 import sys
 import time
 
-IMPL = "pomegranate"
-
-
-def fail(msg, code=1):
-    sys.stderr.write("%s: %s\n" % (IMPL, " ".join(str(msg).split())))
-    sys.exit(code)
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        fail("usage error: " + message)
-
-
-def parse_args():
-    p = _Parser(description="pomegranate weighted-EM peer timing")
-    p.add_argument("--data", required=True)
-    p.add_argument("--n", type=int, required=True)
-    p.add_argument("--k", type=int, required=True)
-    p.add_argument("--iterations", type=int, required=True)
-    p.add_argument("--seed", type=int, required=True)
-    p.add_argument("--verbose", action="store_true")
-    a = p.parse_args()
-    if a.n <= 0:
-        fail("--n must be positive")
-    if a.k < 2:
-        fail("--k must be at least 2 (pomegranate mixtures need two components)")
-    if a.k > a.n:
-        fail("--k must not exceed --n")
-    if a.iterations <= 0:
-        fail("--iterations must be positive")
-    if a.seed < 0 or a.seed >= 2 ** 32:
-        fail("--seed must be in [0, 2^32)")
-    return a
+PEER = Peer("pomegranate", "pomegranate weighted-EM peer timing", min_k=2)
+fail = PEER.fail
+IMPL = PEER.impl
 
 
 def main():
-    args = parse_args()
+    args = PEER.parse_args()
 
     try:
         import numpy
@@ -82,17 +47,7 @@ def main():
     except ImportError as e:
         fail("not installed (%s)" % e, 3)
 
-    try:
-        raw = numpy.fromfile(args.data, dtype="<f4")
-    except (OSError, ValueError) as e:
-        fail("cannot read %s: %s" % (args.data, e))
-    if raw.size != 3 * args.n:
-        fail("%s holds %d float32 values, expected 3 x %d" % (args.data, raw.size, args.n))
-    cells = raw.reshape(args.n, 3).astype(numpy.float64)
-    X = numpy.ascontiguousarray(cells[:, 0:2])
-    w = numpy.ascontiguousarray(cells[:, 2])
-    if not (numpy.isfinite(cells).all() and (w >= 0).all() and w.sum() > 0):
-        fail("data must be finite with weights >= 0 and a positive total")
+    X, w = PEER.load_cells(numpy, args)
 
     # summarize() is looked up on the instance by fit(), so a Python subclass
     # can stamp the end of each E-step without changing what is computed.

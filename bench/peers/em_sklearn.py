@@ -26,52 +26,19 @@ Threading: OMP/OpenBLAS/MKL thread variables are set to 1 before numpy is
 imported (the EM loop itself is numpy/BLAS code; k-means init is untimed).
 """
 
-import os
+from peer_protocol import Peer  # first: pins the thread pools before numpy loads
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-             "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS"):
-    os.environ[_var] = "1"
-
-import argparse
 import sys
 import time
 import warnings
 
-IMPL = "scikit-learn"
-
-
-def fail(msg, code=1):
-    sys.stderr.write("%s: %s\n" % (IMPL, " ".join(str(msg).split())))
-    sys.exit(code)
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):
-        fail("usage error: " + message)
-
-
-def parse_args():
-    p = _Parser(description="scikit-learn EM peer timing")
-    p.add_argument("--data", required=True)
-    p.add_argument("--n", type=int, required=True)
-    p.add_argument("--k", type=int, required=True)
-    p.add_argument("--iterations", type=int, required=True)
-    p.add_argument("--seed", type=int, required=True)
-    p.add_argument("--verbose", action="store_true")
-    a = p.parse_args()
-    if a.n <= 0:
-        fail("--n must be positive")
-    if a.k < 1 or a.k > a.n:
-        fail("--k must be in [1, n]")
-    if a.iterations <= 0:
-        fail("--iterations must be positive")
-    if a.seed < 0 or a.seed >= 2 ** 32:
-        fail("--seed must be in [0, 2^32)")
-    return a
+PEER = Peer("scikit-learn", "scikit-learn EM peer timing", min_k=1)
+fail = PEER.fail
+IMPL = PEER.impl
 
 
 def main():
-    args = parse_args()
+    args = PEER.parse_args()
 
     try:
         import numpy
@@ -83,16 +50,7 @@ def main():
 
     warnings.filterwarnings("ignore", category=ConvergenceWarning)
 
-    try:
-        raw = numpy.fromfile(args.data, dtype="<f4")
-    except (OSError, ValueError) as e:
-        fail("cannot read %s: %s" % (args.data, e))
-    if raw.size != 3 * args.n:
-        fail("%s holds %d float32 values, expected 3 x %d" % (args.data, raw.size, args.n))
-    cells = raw.reshape(args.n, 3).astype(numpy.float64)
-    if not numpy.isfinite(cells).all():
-        fail("data must be finite")
-    X = numpy.ascontiguousarray(cells[:, 0:2])
+    X, w = PEER.load_cells(numpy, args)
 
     # Stamps only; the E/M steps are the library's own.
     class TimedGM(GaussianMixture):
