@@ -99,29 +99,36 @@ double RglWarp2D::lookup(const std::vector<double>& a, std::size_t stride, std::
   return v;
 }
 
-double RglWarp2D::eval(double x, double y, const double* param) const {
-  Corner c[8];
-  const int nc = corners(param, c);
+RglWarp2D::Cell RglWarp2D::cell_at(double x, double y, const double* param) const {
+  Cell k;
+  k.nc = corners(param, k.c);
   const double px = clamp01(x) * double(nx_ - 1), py = clamp01(y) * double(ny_ - 1);
-  const std::size_t ix = std::min(std::size_t(px), nx_ - 2), iy = std::min(std::size_t(py), ny_ - 2);
-  const double fx = px - double(ix), fy = py - double(iy);
-  const std::size_t size = nx_ * ny_, i = iy * nx_ + ix;
-  const double v00 = lookup(data_, size, i, c, nc), v10 = lookup(data_, size, i + 1, c, nc),
-               v01 = lookup(data_, size, i + nx_, c, nc), v11 = lookup(data_, size, i + nx_ + 1, c, nc);
-  const double v = (1.0 - fy) * ((1.0 - fx) * v00 + fx * v10) + fy * ((1.0 - fx) * v01 + fx * v11);
+  k.ix = std::min(std::size_t(px), nx_ - 2);
+  k.iy = std::min(std::size_t(py), ny_ - 2);
+  k.fx = px - double(k.ix);
+  k.fy = py - double(k.iy);
+  const std::size_t size = nx_ * ny_;
+  k.i = k.iy * nx_ + k.ix;
+  k.v00 = lookup(data_, size, k.i, k.c, k.nc);
+  k.v10 = lookup(data_, size, k.i + 1, k.c, k.nc);
+  k.v01 = lookup(data_, size, k.i + nx_, k.c, k.nc);
+  k.v11 = lookup(data_, size, k.i + nx_ + 1, k.c, k.nc);
+  return k;
+}
+
+double RglWarp2D::eval(double x, double y, const double* param) const {
+  const Cell k = cell_at(x, y, param);
+  const double v = (1.0 - k.fy) * ((1.0 - k.fx) * k.v00 + k.fx * k.v10) + k.fy * ((1.0 - k.fx) * k.v01 + k.fx * k.v11);
   return density_ ? v * double(nx_ - 1) * double(ny_ - 1) : v;
 }
 
 std::array<double, 3> RglWarp2D::invert(double x, double y, const double* param) const {
-  Corner c[8];
-  const int nc = corners(param, c);
-  const double px = clamp01(x) * double(nx_ - 1), py = clamp01(y) * double(ny_ - 1);
-  const std::size_t ix = std::min(std::size_t(px), nx_ - 2), iy = std::min(std::size_t(py), ny_ - 2);
-  const double fx = px - double(ix), fy = py - double(iy);
-  const std::size_t size = nx_ * ny_, i = iy * nx_ + ix;
-  const double v00 = lookup(data_, size, i, c, nc), v10 = lookup(data_, size, i + 1, c, nc),
-               v01 = lookup(data_, size, i + nx_, c, nc), v11 = lookup(data_, size, i + nx_ + 1, c, nc);
-  const double c0 = (1.0 - fy) * v00 + fy * v01, c1 = (1.0 - fy) * v10 + fy * v11;
+  const Cell k = cell_at(x, y, param);
+  const Corner* c = k.c;
+  const int nc = k.nc;
+  const std::size_t iy = k.iy, i = k.i, size = nx_ * ny_;
+  const double fx = k.fx, fy = k.fy;
+  const double c0 = (1.0 - fy) * k.v00 + fy * k.v01, c1 = (1.0 - fy) * k.v10 + fy * k.v11;
   const double pdf = (1.0 - fx) * c0 + fx * c1;
   // x: the mass of the row (interpolated at fy) left of the point, over the row's total.
   double sx = fx * (c0 + 0.5 * fx * (c1 - c0));

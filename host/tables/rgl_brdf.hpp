@@ -42,7 +42,16 @@ class RglWarp2D {
     std::size_t slice;
     double weight;
   };
+  // The grid cell around (x, y) for the parameters: its corners' interpolation weights,
+  // the position inside it and the four data values.
+  struct Cell {
+    Corner c[8];
+    int nc;
+    std::size_t ix, iy, i;
+    double fx, fy, v00, v10, v01, v11;
+  };
   int corners(const double* param, Corner* out) const;
+  Cell cell_at(double x, double y, const double* param) const;
   double lookup(const std::vector<double>& a, std::size_t stride, std::size_t index, const Corner* c,
                 int n) const;
 
