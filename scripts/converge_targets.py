@@ -3,8 +3,9 @@
 
 For every (table, theta_o, phi_o, scene) of the CSVs, one row:
   K           components of the main slice serving omega_o (tail CSV)
-  storage     table slice cells / (K x 6): floats of the table slice over floats of the
-              slice's mixture (weight, mean, covariance: 6 per component)
+  storage     table_bytes / mixture_bytes of the tail CSV: the float32 cells of the table
+              slice over the slice's share of the mixture file's datasets as stored
+              (arrays padded to the file's largest K, per-slice scalars included)
   mis fewer   how many times fewer samples mis_tab needs than us_tab's 1024 to reach
               us_tab's rel_rmse at N = 1024: 1024 / N_mis, N_mis = N_max (rel_rmse_mis at
               N_max / rel_rmse_us at 1024)^2 (the error falls as 1 / sqrt(N))
@@ -76,7 +77,7 @@ def targets(csvs, tails, n_target):
     out = []
     for path, tpath in zip(csvs, tails):
         rows = read(path, NEEDED)
-        tail = {key(t): t for t in read(tpath, ["table", "theta_o", "phi_o", "k", "table_bytes", "max_weight_is"])}
+        tail = {key(t): t for t in read(tpath, ["table", "theta_o", "phi_o", "k", "table_bytes", "mixture_bytes", "max_weight_is"])}
         groups = {}
         for r in rows:
             groups.setdefault(key(r) + (r["scene"],), {}).setdefault(r["estimator"], {})[int(r["samples"])] = r
@@ -119,7 +120,7 @@ def targets(csvs, tails, n_target):
             out.append(
                 dict(
                     table=g[0], theta_o=g[1], phi_o=g[2], scene=g[3], k=k, cells=cells,
-                    storage=cells / (6.0 * k) if k else None,
+                    storage=int(t["table_bytes"]) / int(t["mixture_bytes"]) if t and int(t["mixture_bytes"]) else None,
                     mis_fewer=fewer("mis_tab"), mis_time=time_ratio("mis_tab"),
                     cost_is=cost("is_tab"), cost_mis=cost("mis_tab"), cost_isgmm=cost("is_gmm"),
                     ns_us=ns_us,

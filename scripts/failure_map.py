@@ -3,7 +3,7 @@
 
 For every case in configs/stress/ (one config per case) this script
   1. builds the case's table (out/failure_map/<case>/table.h5; synthetic cases with
-     h5py following DESIGN.md's table format, fiber cases with `bsdfmix generate`),
+     h5py following the table format of docs/formats.md, fiber cases with `bsdfmix generate`),
   2. runs `bsdfmix fit` and `bsdfmix converge` on it through the binary,
   3. reads every output (mixture file, fit report, search CSV, convergence and tail
      CSVs) and records the relative L1 error, the chosen K, the failure status, the

@@ -2,7 +2,9 @@
 """Chart of `bsdfmix bench em` CSVs: point-component updates per second of every
 implementation measured, one group of bars per K, log scale (PNG and SVG).
 
-  scripts/plot_bench.py out/bench/em_k16.csv out/bench/em_k50.csv -o out/bench/em_throughput
+  scripts/plot_bench.py bench/results/em_k16_amd-epyc-2c.csv bench/results/em_k50_amd-epyc-2c.csv -o out/em_throughput
+
+(docs/images/em_throughput.png is the PNG of that command; bench/results/README.md.)
 """
 
 import argparse
@@ -17,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("csv", nargs="+", help="bench em CSVs (impl,k,cells,slices,iterations,seconds_per_iteration,pc_per_s)")
+    ap.add_argument("csv", nargs="+", help="bench em CSVs (impl,k,cells,slices,iterations,seconds_per_iteration,pc_per_s[,reps,threads,...])")
     ap.add_argument("-o", "--out", required=True, help="output path without extension")
     a = ap.parse_args()
     rows = []
@@ -51,7 +53,15 @@ def main():
     ax.set_xticklabels(["K = %d" % k for k in ks])
     ax.set_ylabel("point-component updates per second")
     device = next((r["impl"] for r in rows if r["impl"].startswith("bsdfmix")), "bsdfmix")
-    ax.set_title("Weighted EM throughput on 90 x 180 slices\n%s (peers and the reference: one core)" % device, fontsize=9)
+    ours = next((r for r in rows if r["impl"].startswith("bsdfmix")), {})
+    if ours.get("cpu_model"):  # CSVs with the machine columns
+        others = sorted({r.get("threads", "?") for r in rows if not r["impl"].startswith("bsdfmix")})
+        title = "Weighted EM throughput on 90 x 180 slices, best of %s\n%s, %s logical CPUs: bsdfmix %s threads, others %s" % (
+            ours.get("reps", "?"), ours["cpu_model"], ours.get("logical_cpus", "?"), ours.get("threads", "?"),
+            "/".join(others))
+    else:
+        title = "Weighted EM throughput on 90 x 180 slices\n%s (peers and the reference: one core)" % device
+    ax.set_title(title, fontsize=9)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(True, axis="y", which="both", alpha=0.3)
     for ext in ("png", "svg"):

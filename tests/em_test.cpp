@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <set>
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
@@ -126,6 +127,54 @@ TEST_CASE("kernels match the reference for several K, both precisions", "[em]") 
       REQUIRE(got[i].ok);
       CHECK(got[i].iterations == ref[i].iterations);
       // Measured: |dL| <= 2e-7, weights 2e-7, means 1e-6 rad, covariances 2e-5 relative.
+      CHECK(std::abs(got[i].loglik - ref[i].loglik) < 2e-5);
+      const Diff d = compare(got[i].gmm, ref[i].gmm);
+      CHECK(d.weight < 2e-5);
+      CHECK(d.mean < 5e-5);
+      CHECK(d.cov_rel < 5e-4);
+    }
+  }
+}
+
+// Every K_MAX bucket the engine compiles (k_bucket: 4, 8, ..., 128 for kEmMaxK, the
+// largest K it and a config accept), each at a K inside it, K = 50 among them; the CPU layout in
+// both precisions and the GPU layout in fp32 (a GPU's usual precision). A slice of many
+// lobes, so that large K spreads over structure instead of re-seeding empty components.
+TEST_CASE("kernels match the reference in every K bucket the engine compiles", "[em][buckets]") {
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 90, 180);
+  std::vector<Gmm> lobes;
+  for (int i = 0; i < 24; ++i) {
+    const double u = (i * 0.618034) - std::floor(i * 0.618034), v = (i * 0.754878) - std::floor(i * 0.754878);
+    lobes.push_back(lobe(0.5 + u, -1.2 + 2.4 * u, -kPi + 2 * kPi * v, 0.06 + 0.1 * v, 0.1 + 0.2 * u, 0.4 * (u - v)));
+  }
+  set.weights = {mixture_weights(set.grid, join(lobes))};
+  for (double& w : set.weights[0]) w += 2e-3;  // a floor: no cell is empty
+  const std::vector<int> ks = {3, 8, 12, 24, 50, 100};
+  std::set<int> buckets;
+  std::vector<EmTask> tasks;
+  for (int k : ks) {
+    EmTask t{0, k, fixed(k <= 50 ? 12 : 6)};
+    tasks.push_back(t);
+    buckets.insert(em_detail::k_bucket(k));
+  }
+  CHECK(buckets == std::set<int>{4, 8, 16, 32, 64, 128});
+  CHECK(em_detail::k_bucket(kEmMaxK) == 128);  // no K the engine accepts needs a larger bucket
+  const auto ref = em_fit_reference(set, tasks);
+  struct Run {
+    EmPrecision precision;
+    bool gpu_layout;
+  };
+  for (const Run run : {Run{EmPrecision::Auto, false}, Run{EmPrecision::Fp32, false}, Run{EmPrecision::Fp32, true}}) {
+    EmEngine eng(select_devices(""), 1, run.precision);
+    eng.set_gpu_layout(run.gpu_layout);
+    const auto got = eng.fit(set, tasks);
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      INFO("precision " << precision_name(run.precision) << (run.gpu_layout ? ", GPU layout" : ", CPU layout")
+                        << ", K = " << tasks[i].k << " (bucket " << em_detail::k_bucket(tasks[i].k) << ")");
+      REQUIRE(ref[i].ok);
+      REQUIRE(got[i].ok);
+      CHECK(got[i].iterations == ref[i].iterations);
       CHECK(std::abs(got[i].loglik - ref[i].loglik) < 2e-5);
       const Diff d = compare(got[i].gmm, ref[i].gmm);
       CHECK(d.weight < 2e-5);

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <atomic>
+#include <condition_variable>
 #include <chrono>
 #include <cstdlib>
 #include <mutex>
@@ -32,11 +33,15 @@ TEST_CASE("run_on_workers runs every job once and keeps every worker busy", "[sc
   std::vector<std::atomic<int>> runs(40);
   std::mutex m;
   std::set<std::size_t> workers;
+  std::condition_variable all_in;
+  // Each job waits until three distinct workers hold a job: the run completes only if
+  // every worker takes part, on any machine and under any load (no clock involved).
   run_on_workers(runs.size(), 3, [&](std::size_t w, std::size_t j) {
     ++runs[j];
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    std::lock_guard<std::mutex> lock(m);
+    std::unique_lock<std::mutex> lock(m);
     workers.insert(w);
+    all_in.notify_all();
+    all_in.wait(lock, [&] { return workers.size() == 3; });
   });
   for (auto& r : runs) CHECK(r == 1);
   CHECK(workers.size() == 3);

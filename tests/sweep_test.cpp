@@ -8,16 +8,21 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <hdf5.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <random>
 #include <thread>
 
 #include "config/config.hpp"
 #include "core/error.hpp"
+#include "core/output_lock.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
@@ -181,34 +186,51 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
       default: return {{0.6, -0.3, -1.0, 0.2, 0.0, 0.8}, {0.4, 0.4, 1.5, 0.25, 0.05, 1.0}};
     }
   });
-  FitSection f = fit_settings("known");
-  f.k_max = 10;
-  const SweepSummary s = run_sweep(table, f, "");
-  CHECK(s.slices == 4);
-  const MixtureFile m = read_mixture_file(f.output);
-  REQUIRE(m.slices() == 4);
-  INFO("chosen K: " << m.k[0] << " " << m.k[1] << " " << m.k[2] << " " << m.k[3]);
-  CHECK(m.k[0] == 3);
-  CHECK(m.k[1] <= 2);
-  CHECK(m.k[2] > m.k[3]);
-  for (std::size_t i = 0; i < 4; ++i) {
-    INFO("slice " << i << " l1 " << m.l1_rel[i]);
-    CHECK(m.l1_rel[i] < 0.03);
+  for (const std::string method : {"smem", "restarts"}) {
+    INFO("search: " << method);
+    FitSection f = fit_settings("known_" + method);
+    f.k_max = 10;
+    f.search = method;
+    const SweepSummary s = run_sweep(table, f, "");
+    CHECK(s.slices == 4);
+    const MixtureFile m = read_mixture_file(f.output);
+    REQUIRE(m.slices() == 4);
+    INFO("chosen K: " << m.k[0] << " " << m.k[1] << " " << m.k[2] << " " << m.k[3]);
+    CHECK(m.k[0] == 3);
+    CHECK(m.k[1] <= 2);
+    CHECK(m.k[2] > m.k[3]);
+    for (std::size_t i = 0; i < 4; ++i) {
+      INFO("slice " << i << " l1 " << m.l1_rel[i]);
+      CHECK(m.l1_rel[i] < 0.03);
+    }
+    // The CSVs follow their contracts.
+    const std::string report = slurp(f.report), search = slurp(f.search_report);
+    CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n", 0) == 0);
+    CHECK(std::count(report.begin(), report.end(), ',') == 5 * 9);  // 10 fields a row, no comma inside one
+    CHECK(search.rfind("slice,k,restart,loglik,l1_rel,score,chosen\n", 0) == 0);
+    CHECK(std::count(report.begin(), report.end(), '\n') == 5);
+    std::size_t rows = 0;
+    std::map<std::string, int> chosen_per_slice;
+    std::istringstream lines(search);
+    std::string line;
+    std::getline(lines, line);
+    while (std::getline(lines, line)) {
+      ++rows;
+      CHECK(std::count(line.begin(), line.end(), ',') == 6);
+      if (line.substr(line.size() - 2) == ",1") chosen_per_slice[line.substr(0, line.find(','))]++;
+    }
+    if (method == "restarts") {
+      // 4 slices x 9 candidates (1..8, 10) x 2 restarts, one chosen K per slice (2 rows each).
+      CHECK(rows == 4 * 9 * 2);
+      CHECK(chosen_per_slice == std::map<std::string, int>{{"0", 2}, {"1", 2}, {"2", 2}, {"3", 2}});
+    } else {
+      // One row per slice and K walked (the walk stops early), one chosen row per slice.
+      CHECK(rows >= 4 * 2);
+      CHECK(rows <= 4 * 9);
+      CHECK(chosen_per_slice == std::map<std::string, int>{{"0", 1}, {"1", 1}, {"2", 1}, {"3", 1}});
+    }
+    CHECK_FALSE(fs::exists(f.output + ".parts"));
   }
-  // The CSVs follow their contracts.
-  const std::string report = slurp(f.report), search = slurp(f.search_report);
-  CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n", 0) == 0);
-  CHECK(std::count(report.begin(), report.end(), ',') == 5 * 9);  // 10 fields a row, no comma inside one
-  CHECK(search.rfind("slice,k,restart,loglik,l1_rel,score,chosen\n", 0) == 0);
-  CHECK(std::count(report.begin(), report.end(), '\n') == 5);
-  // 4 slices x 9 candidates (1..8, 10) x 2 restarts, one chosen K per slice (2 rows each).
-  CHECK(std::count(search.begin(), search.end(), '\n') == 1 + 4 * 9 * 2);
-  std::size_t chosen_rows = 0;
-  std::istringstream lines(search);
-  std::string line;
-  while (std::getline(lines, line)) chosen_rows += line.size() > 2 && line.substr(line.size() - 2) == ",1";
-  CHECK(chosen_rows == 4 * 2);
-  CHECK_FALSE(fs::exists(f.output + ".parts"));
 }
 
 TEST_CASE("an error target picks the smallest K that meets it", "[fit][search]") {
@@ -304,11 +326,37 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   CHECK(slurp(whole.search_report) == slurp(part.search_report));
 }
 
-TEST_CASE("kill -9 at random moments never leaves a bad file, and a rerun resumes to the same result", "[fit][crash]") {
+namespace {
+
+// Committed part files of a checkpoint directory (temporaries of a killed writer excluded).
+std::size_t committed_parts(const fs::path& parts) {
+  std::error_code ec;
+  std::size_t n = 0;
+  for (fs::directory_iterator it(parts, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    n += name.rfind("batch_", 0) == 0 && name.find(".partial-") == std::string::npos && it->path().extension() == ".h5";
+  }
+  return n;
+}
+
+std::string run_captured(const std::string& cmd, int* rc) {
+  const std::string out = (temp_dir() / "captured.txt").string();
+  *rc = std::system((cmd + " > " + out + " 2>&1").c_str());
+  return slurp(out);
+}
+
+}  // namespace
+
+// The kills are placed by events, not by a clock: each attempt is killed right after
+// it is seen to commit a chosen number of batches (the first attempt after its first),
+// at a random point of the batch it is then fitting or writing. The outcome is the
+// same on a fast or a slow machine.
+TEST_CASE("kill -9 during a sweep never leaves a bad file, and a rerun resumes to the same result", "[fit][crash]") {
   const fs::path dir = temp_dir() / "kill";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const std::string table = mixture_table("kill.h5", 32, 40, 80, [](std::size_t t) -> std::vector<Lobe> {
+  constexpr std::size_t kSlices = 32, kBatch = 2, kBatches = kSlices / kBatch;
+  const std::string table = mixture_table("kill.h5", kSlices, 40, 80, [](std::size_t t) -> std::vector<Lobe> {
     return {{0.4, -0.5 + 0.03 * double(t), -0.5, 0.02, 0.0, 0.05},
             {0.3, 0.4, 1.0 + 0.05 * double(t), 0.03, 0.0, 0.04},
             {0.3, 0.0, 2.8, 0.01, 0.0, 0.2}};
@@ -318,60 +366,183 @@ TEST_CASE("kill -9 at random moments never leaves a bad file, and a rerun resume
     std::ofstream(cfg) << "table: " << table << "\nfit:\n  output: " << (dir / (stem + "_mixture.h5")).string()
                        << "\n  report: " << (dir / (stem + "_fit.csv")).string()
                        << "\n  search_report: " << (dir / (stem + "_search.csv")).string()
-                       << "\n  k_max: 8\n  restarts: 2\n  final_restarts: 2\n  batch: 2\n";
+                       << "\n  k_max: 8\n  restarts: 2\n  final_restarts: 2\n  batch: " << kBatch << "\n";
     return cfg;
   };
   const std::string ref_cfg = write_config("ref"), cfg = write_config("killed");
   const std::string bin = BSDFMIX_BINARY;
-  const auto t0 = std::chrono::steady_clock::now();
   REQUIRE(std::system((bin + " fit -q " + ref_cfg).c_str()) == 0);
-  const int ref_ms = int(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   const MixtureFile ref = read_mixture_file((dir / "ref_mixture.h5").string());
+  const std::string out = (dir / "killed_mixture.h5").string();
+  const fs::path parts = out + ".parts";
 
-  // Kill each attempt at a random moment of what an uninterrupted run takes; each
-  // attempt resumes the previous ones' committed batches.
   std::mt19937 rng(12345);
-  std::uniform_int_distribution<int> delay_ms(ref_ms / 20, ref_ms / 3);
-  INFO("uninterrupted run: " << ref_ms << " ms");
   int kills = 0;
-  bool finished = false;
-  for (int attempt = 0; attempt < 8; ++attempt) {
+  std::size_t target = 0;
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    // Kill once `target` batches are committed; never past three quarters of the
+    // sweep, so no attempt can finish it.
+    target = attempt == 0 ? 1 : std::min<std::size_t>(committed_parts(parts) + 1 + rng() % 3, kBatches * 3 / 4);
+    if (committed_parts(parts) >= target) break;
+    const int extra_polls = int(rng() % 40);  // a random point within the next batch
     const pid_t pid = fork();
     if (pid == 0) {
       execl(bin.c_str(), bin.c_str(), "fit", "-q", cfg.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
-    kills += kill(pid, SIGKILL) == 0;
     int status = 0;
+    bool exited = false;
+    int polls_after = -1;
+    while (!(exited = waitpid(pid, &status, WNOHANG) == pid)) {
+      if (polls_after < 0 && committed_parts(parts) >= target) polls_after = 0;
+      if (polls_after >= 0 && polls_after++ >= extra_polls) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+    INFO("attempt " << attempt << ", target " << target << " batches");
+    REQUIRE_FALSE(exited);  // the run cannot end before a quarter of its batches are left
+    kills += kill(pid, SIGKILL) == 0;
     waitpid(pid, &status, 0);
-    // The mixture file is either absent or complete (readable and valid).
-    const std::string out = (dir / "killed_mixture.h5").string();
-    if (fs::exists(out)) {
-      CHECK_NOTHROW(read_mixture_file(out));
-      finished = true;
-      break;  // the run finished before the kill
+    REQUIRE((WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL));
+    // Nothing half-written: no final file yet, and every committed part reads whole.
+    CHECK_FALSE(fs::exists(out));
+    for (const auto& e : fs::directory_iterator(parts)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind("batch_", 0) == 0 && name.find(".partial-") == std::string::npos)
+        CHECK_NOTHROW(read_mixture_file(e.path().string()));
     }
   }
-  CHECK(kills > 0);
-  const std::string summary = (dir / "summary.txt").string();
-  REQUIRE(std::system((bin + " fit -q " + cfg + " > " + summary).c_str()) == 0);
-  // The rerun resumed from batches the killed runs had committed.
-  const std::string text = slurp(summary);
+  CHECK(kills >= 1);
+  const std::size_t committed = committed_parts(parts);
+  REQUIRE(committed >= 1);
+  REQUIRE(committed <= kBatches * 3 / 4 + 1);
+
+  int rc = 0;
+  const std::string text = run_captured(bin + " fit -q " + cfg, &rc);
   INFO(text);
+  REQUIRE(rc == 0);
+  // The rerun resumed exactly the batches the killed runs had committed.
   const auto at = text.find(" resumed from checkpoint");
   REQUIRE(at != std::string::npos);
   const std::size_t open = text.rfind('(', at);
-  const int resumed = std::stoi(text.substr(open + 1, at - open - 1));
-  if (!finished) CHECK(resumed > 0);
-  CHECK(resumed < 32);
-  const MixtureFile got = read_mixture_file((dir / "killed_mixture.h5").string());
+  CHECK(std::stoul(text.substr(open + 1, at - open - 1)) == committed * kBatch);
+  const MixtureFile got = read_mixture_file(out);
   CHECK(got.k == ref.k);
   CHECK(got.weights == ref.weights);
   CHECK(got.means == ref.means);
   CHECK(got.covariances == ref.covariances);
   CHECK(got.l1_rel == ref.l1_rel);
   CHECK(slurp((dir / "killed_search.csv").string()) == slurp((dir / "ref_search.csv").string()));
-  for (const auto& e : fs::directory_iterator(dir))
+  for (const auto& e : fs::recursive_directory_iterator(dir))
     CHECK(e.path().filename().string().find(".partial-") == std::string::npos);
+  CHECK_FALSE(fs::exists(parts));
+  CHECK_FALSE(fs::exists(out + ".lock"));
+}
+
+TEST_CASE("a second run on the same output fails at once, naming the run that holds it", "[fit][crash]") {
+  Progress::set_enabled(false);
+  const std::string table = mixture_table("lock.h5", 2, 20, 40, [](std::size_t) -> std::vector<Lobe> {
+    return {{1.0, 0.1, 0.5, 0.03, 0.0, 0.05}};
+  });
+  FitSection f = fit_settings("lock");
+  f.k_max = 2;
+  fs::remove(f.output);
+  const std::string cfg = (temp_dir() / "lock.yaml").string();
+  std::ofstream(cfg) << "table: " << table << "\nfit:\n  output: " << f.output << "\n  report: " << f.report
+                     << "\n  search_report: " << f.search_report << "\n  k_max: 2\n";
+  {
+    const OutputLock held(f.output);
+    CHECK_THROWS_WITH(OutputLock(f.output), Catch::Contains("in use by another bsdfmix run (pid " +
+                                                            std::to_string(getpid()) + " on "));
+    int rc = 0;
+    const std::string err = run_captured(std::string(BSDFMIX_BINARY) + " fit -q " + cfg, &rc);
+    CHECK(rc != 0);
+    CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+    CHECK_THAT(err, Catch::Contains(f.output + ": in use by another bsdfmix run (pid " + std::to_string(getpid())));
+    CHECK_FALSE(fs::exists(f.output));
+  }
+  // Released (as a killed holder's lock is, with its process), the output is free.
+  int rc = 0;
+  run_captured(std::string(BSDFMIX_BINARY) + " fit -q " + cfg, &rc);
+  CHECK(rc == 0);
+  CHECK_NOTHROW(read_mixture_file(f.output));
+  CHECK_FALSE(fs::exists(f.output + ".lock"));
+}
+
+TEST_CASE("a checkpoint is not reused after the table is rewritten with the same size and source", "[fit][crash]") {
+  Progress::set_enabled(false);
+  auto lobes_at = [](double mt) {
+    return [mt](std::size_t t) -> std::vector<Lobe> {
+      return {{0.7, mt + 0.02 * double(t), -1.0, 0.02, 0.0, 0.05}, {0.3, -0.3, 1.5, 0.03, 0.0, 0.04}};
+    };
+  };
+  const std::string table = mixture_table("rewritten.h5", 6, 24, 48, lobes_at(0.2));
+  const auto size_before = fs::file_size(table);
+  FitSection f = fit_settings("rewritten");
+  f.batch = 2;
+  f.k_max = 3;
+  fs::remove_all(f.output + ".parts");
+  CHECK_FALSE(run_sweep(table, f, "", 1).complete);
+  REQUIRE(fs::exists(f.output + ".parts"));
+
+  // Same path, same size, same source attribute; other values.
+  mixture_table("rewritten.h5", 6, 24, 48, lobes_at(-0.4));
+  REQUIRE(fs::file_size(table) == size_before);
+  const SweepSummary resumed = run_sweep(table, f, "");
+  CHECK(resumed.resumed == 0);
+  const MixtureFile got = read_mixture_file(f.output);
+
+  FitSection fresh = fit_settings("rewritten_fresh");
+  fresh.batch = 2;
+  fresh.k_max = 3;
+  run_sweep(table, fresh, "");
+  const MixtureFile want = read_mixture_file(fresh.output);
+  CHECK(got.k == want.k);
+  CHECK(got.means == want.means);
+  CHECK(got.covariances == want.covariances);
+
+  // Unchanged, the same partial run is resumed.
+  fs::remove(f.output);
+  CHECK_FALSE(run_sweep(table, f, "", 1).complete);
+  CHECK(run_sweep(table, f, "").resumed == 2);
+}
+
+TEST_CASE("the summary's sizes are the files' bytes: on disk and as their datasets store them", "[fit]") {
+  Progress::set_enabled(false);
+  const std::string table = mixture_table("sizes.h5", 5, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
+    if (t == 0) return {{1.0, 0.1, 0.5, 0.03, 0.0, 0.05}};
+    return {{0.5, 0.1, 0.5, 0.03, 0.0, 0.05}, {0.3, -0.4, -2.0, 0.02, 0.0, 0.03}, {0.2, 0.5, 2.0, 0.02, 0.0, 0.03}};
+  });
+  FitSection f = fit_settings("sizes");
+  f.k_max = 4;
+  const SweepSummary sum = run_sweep(table, f, "");
+  CHECK(sum.mixture_file_bytes == fs::file_size(f.output));
+  CHECK(sum.table_file_bytes == fs::file_size(table));
+  CHECK(sum.table_bytes == 5u * 30u * 60u * 4u);
+  CHECK(sum.table_slices == 5);
+  CHECK(sum.symmetry_factor == 60);  // phi_o stands for as many directions as phi_i has cells
+
+  // An independent reader: the storage HDF5 reports for each dataset of /mixture.
+  const hid_t file = H5Fopen(f.output.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(file >= 0);
+  const hid_t group = H5Gopen2(file, "mixture", H5P_DEFAULT);
+  std::uint64_t stored = 0;
+  H5Literate(group, H5_INDEX_NAME, H5_ITER_NATIVE, nullptr,
+              [](hid_t g, const char* name, const H5L_info_t*, void* acc) -> herr_t {
+                const hid_t d = H5Dopen2(g, name, H5P_DEFAULT);
+                if (d >= 0) {
+                  *static_cast<std::uint64_t*>(acc) += H5Dget_storage_size(d);
+                  H5Dclose(d);
+                }
+                return 0;
+              },
+              &stored);
+  H5Gclose(group);
+  H5Fclose(file);
+  CHECK(sum.mixture_bytes == stored);
+  const MixtureFile m = read_mixture_file(f.output);
+  CHECK(m.payload_bytes() == stored);
+  CHECK(m.kmax >= 3);  // padded: slice 0 holds fewer components than Kmax
+  const std::string text = sum.text();
+  CHECK_THAT(text, Catch::Contains("table            file "));
+  CHECK_THAT(text, Catch::Contains("symmetry         azimuthal: one stored slice stands for 60 phi_o"));
 }

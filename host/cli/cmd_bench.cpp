@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/bench_machine.hpp"
 #include "cli/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -42,17 +43,55 @@ struct Row {
   int k = 0;
   std::size_t cells = 0, slices = 0;
   int iterations = 0;
-  double seconds_per_iteration = 0;
+  double seconds_per_iteration = 0;  // the fastest of `reps` timed runs
+  int reps = 0;
+  int threads = 0;    // worker threads (CPU), or compute units of the OpenCL device(s)
+  std::string build;  // how the timed code was compiled
   double pc_per_s() const {
     return static_cast<double>(cells) * k * static_cast<double>(slices) / seconds_per_iteration;
   }
 };
 
-// Arithmetic operations per point-component update in em_estep, counted from the
-// kernel source: 15 for the log-density (offsets, nearest-image wrap, quadratic
-// form, running max), 2 + one exp2 for the responsibility, 18 for the six
-// statistics (offsets again, scaling, 3 adds, 3 FMAs); an FMA counts as 2, exp2 as 1.
-constexpr double kFlopsPerUpdate = 36.0;
+// Floating-point operations per point-component update in em_estep, counted from
+// kernels/em.cl (an FMA counts 2; compares, selects, fmax and integer ops count 0):
+//   log-density pass: dt, dp, the two wrap adds, cp3 * dp, dp * dp, 3 FMAs  = 12
+//   responsibility:   E - m, exp2_neg (3 adds for the rounding and f, 6 FMAs of
+//                     the degree-6 polynomial = 15), s += r                  = 17
+//   statistics pass:  dt, dp, the two wrap adds, f * E, rw * dt, rw * dp,
+//                     3 adds, 3 FMAs                                         = 16
+// 45 flops in 33 arithmetic instructions (12 of them FMAs), beside 16 compares,
+// selects, fmax and integer ops. Per-cell work (coordinates, w / s, log2) is
+// amortized over K and not counted. Keep in step with the kernel.
+constexpr double kFlopsPerUpdate = 45.0;
+
+// How the host code (bsdfmix, the CPU reference) and the Armadillo peer were
+// compiled: set by CMakeLists.txt and bench/peers/CMakeLists.txt.
+#ifdef BSDFMIX_CXX_BUILD
+const char* const kHostBuild = BSDFMIX_CXX_BUILD;
+#else
+const char* const kHostBuild = "unknown";
+#endif
+#ifdef BSDFMIX_PEER_ARMADILLO_BUILD
+const char* const kArmadilloBuild = BSDFMIX_PEER_ARMADILLO_BUILD;
+#else
+const char* const kArmadilloBuild = "unknown";
+#endif
+#ifdef BSDFMIX_PEER_ARMADILLO_GENERIC_BUILD
+const char* const kArmadilloGenericBuild = BSDFMIX_PEER_ARMADILLO_GENERIC_BUILD;
+#else
+const char* const kArmadilloGenericBuild = "unknown";
+#endif
+
+// A CSV field, quoted where it holds a comma, a quote or a line break.
+std::string csv_field(const std::string& v) {
+  if (v.find_first_of(",\"\n\r") == std::string::npos) return v;
+  std::string out = "\"";
+  for (char c : v) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
 
 std::string exe_dir() {
   char buf[4096];
@@ -73,43 +112,6 @@ std::string shell_quote(const std::string& s) {
 }
 
 bool file_exists(const std::string& p) { return ::access(p.c_str(), F_OK) == 0; }
-
-// SIMD float lanes of this CPU, from /proc/cpuinfo flags.
-int cpu_simd_floats() {
-  std::ifstream f("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(f, line)) {
-    if (line.rfind("flags", 0) != 0) continue;
-    if (line.find(" avx512f") != std::string::npos) return 16;
-    if (line.find(" avx") != std::string::npos) return 8;
-    return 4;
-  }
-  return 4;
-}
-
-// Single-precision peak (FLOP/s) of a device, and how it was estimated.
-double peak_flops(const Device& dev, std::string& how) {
-  const auto& info = dev.info();
-  const double mhz = dev.cl_device().getInfo<CL_DEVICE_MAX_CLOCK_FREQUENCY>();
-  if (info.is_cpu()) {
-    const int simd = cpu_simd_floats();
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "%u cores x %.2f GHz x %d float lanes x 2 (one FMA per cycle)",
-                  info.compute_units, mhz / 1000, simd);
-    how = buf;
-    return info.compute_units * mhz * 1e6 * simd * 2.0;
-  }
-  std::string vendor = info.vendor;
-  std::transform(vendor.begin(), vendor.end(), vendor.begin(), ::tolower);
-  if (vendor.find("nvidia") != std::string::npos) {
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "%u SMs x %.2f GHz x 128 FP32 lanes x 2 (FMA)", info.compute_units, mhz / 1000);
-    how = buf;
-    return info.compute_units * mhz * 1e6 * 128 * 2.0;
-  }
-  how = "unknown for this device kind";
-  return 0;
-}
 
 // Writes one slice as float32 (theta, phi, weight) triples; weights scaled to mean 1.
 void write_peer_data(const std::string& path, const SliceGrid& grid, const std::vector<double>& w) {
@@ -177,6 +179,7 @@ void bench_em(const BenchOptions& o, const Common& common) {
   if (o.slices < 1) throw ConfigError("bench em: --slices must be at least 1");
   if (o.repeat < 1) throw ConfigError("bench em: --repeat must be at least 1");
   prepare_output(o.csv);
+  const double load_before = load_average_1min();  // before this run adds its own load
 
   // The data: 90 x 180 fiber slices, each a synthetic multi-lobe mixture.
   SliceSet set;
@@ -190,13 +193,28 @@ void bench_em(const BenchOptions& o, const Common& common) {
   settings.restarts = 1;
   settings.seed = o.seed;
   std::vector<EmTask> tasks;
-  for (int s = 0; s < o.slices; ++s) tasks.push_back({static_cast<std::size_t>(s), o.k, settings});
+  for (int s = 0; s < o.slices; ++s) tasks.push_back({static_cast<std::size_t>(s), o.k, settings, {}});
 
   std::vector<Row> rows;
   auto devices = select_devices(common.device);
-  const Device first = devices.front();
-  std::string device_names;
-  for (const auto& d : devices) device_names += (device_names.empty() ? "" : " + ") + d.info().name;
+  std::string device_names, device_versions, kernel_build;
+  int device_units = 0;
+  bool all_cpu = true;
+  for (const auto& d : devices) {
+    const auto& info = d.info();
+    device_names += (device_names.empty() ? "" : " + ") + info.name;
+    device_versions += (device_versions.empty() ? "" : " + ") + info.version + " (driver " + info.driver + ")";
+    kernel_build += (kernel_build.empty() ? "" : " + ") + info.platform + " " + info.driver;
+    device_units += static_cast<int>(info.compute_units);
+    all_cpu = all_cpu && info.is_cpu();
+  }
+  // The options are those host/fit/em_engine.cpp and build_program pass; PoCL's CPU
+  // devices compile with LLVM for the host CPU (the device name names the target).
+  kernel_build = "kernels: OpenCL C built at run time by " + kernel_build + " (-cl-std=CL1.2 -cl-denorms-are-zero" +
+                 (all_cpu && kernel_build.find("Portable Computing Language") != std::string::npos
+                      ? "; PoCL: LLVM for the host CPU"
+                      : "") +
+                 "); host: " + kHostBuild;
   EmEngine engine(std::move(devices), o.queues, parse_precision(o.precision));
 
   // Warm-up (kernel build), then the timed fit.
@@ -213,118 +231,185 @@ void bench_em(const BenchOptions& o, const Common& common) {
                     std::to_string(results[i].iterations) + " of " + std::to_string(iterations) +
                     " iterations" + (results[i].ok ? "" : ": " + results[i].failure));
   };
-  // The best of `repeat` timed fits (the machine may be shared).
-  double spi = 0;
-  EmTiming timing;
-  for (int rep = 0; rep < o.repeat; ++rep) {
-    double t;
+  // One timed bsdfmix fit of all slices: seconds per iteration.
+  auto time_bsdfmix = [&]() {
     if (engine.queue_count() == 1) {
       check(engine.fit(set, tasks), o.iterations);
-      t = engine.last_timing().iterate_seconds / o.iterations;
-    } else {  // overlapping queues: difference of wall times of I and 1 iterations
-      std::vector<EmTask> one = tasks;
-      for (auto& task : one) task.settings.iterations = 1;
-      check(engine.fit(set, one), 1);
-      const double t1 = engine.last_timing().seconds;
-      check(engine.fit(set, tasks), o.iterations);
-      t = (engine.last_timing().seconds - t1) / (o.iterations - 1);
+      return engine.last_timing().iterate_seconds / o.iterations;
     }
-    if (rep == 0 || t < spi) {
-      spi = t;
-      timing = engine.last_timing();
-    }
-  }
-  rows.push_back({"bsdfmix (" + device_names + ")", o.k, cells, static_cast<std::size_t>(o.slices), o.iterations, spi});
+    // Overlapping queues: difference of wall times of I and 1 iterations.
+    std::vector<EmTask> one = tasks;
+    for (auto& task : one) task.settings.iterations = 1;
+    check(engine.fit(set, one), 1);
+    const double t1 = engine.last_timing().seconds;
+    check(engine.fit(set, tasks), o.iterations);
+    return (engine.last_timing().seconds - t1) / (o.iterations - 1);
+  };
 
-  // The CPU reference on one slice.
+  // The CPU reference and the peers fit the first slice.
   const em_detail::PreparedSlice slice0 = em_detail::prepare_slice(set, 0);
-  if (o.reference) {
-    const Gmm init = em_detail::initialize(set.grid, slice0.w, 0, o.k, 0, settings);
-    double secs = 0;
-    for (int rep = 0; rep < o.repeat; ++rep) {
-      double t = 0;
-      em_detail::run_reference(set.grid, slice0.w, init, settings, &t);
-      if (rep == 0 || t < secs) secs = t;
-    }
-    rows.push_back({"cpu_reference", o.k, cells, 1, o.iterations, secs / o.iterations});
-  }
+  Gmm ref_init;
+  if (o.reference) ref_init = em_detail::initialize(set.grid, slice0.w, 0, o.k, 0, settings);
 
-  // Peers on the same first slice.
+  struct Peer {
+    std::string name, program;
+    bool python;
+    std::string build;
+    std::string cmd;
+    Row best;
+    int reps = 0;
+    bool failed = false;
+  };
+  std::vector<Peer> peers;
+  struct Unlink {
+    std::string path;
+    ~Unlink() {
+      if (!path.empty()) ::unlink(path.c_str());
+    }
+  } data;
   if (o.peers) {
     char tmpl[] = "/tmp/bsdfmix_bench_XXXXXX";
     const int fd = ::mkstemp(tmpl);
     if (fd < 0) throw IoError("bench: cannot create a temporary file in /tmp");
     ::close(fd);
-    const std::string data = tmpl;
-    write_peer_data(data, set.grid, slice0.w);
-    const std::string args = " --data " + shell_quote(data) + " --n " + std::to_string(cells) + " --k " +
+    data.path = tmpl;
+    write_peer_data(data.path, set.grid, slice0.w);
+    const std::string args = " --data " + shell_quote(data.path) + " --n " + std::to_string(cells) + " --k " +
                              std::to_string(o.k) + " --iterations " + std::to_string(o.iterations) +
                              " --seed " + std::to_string(o.seed);
     const std::string src = BSDFMIX_SOURCE_DIR;
-    struct Peer {
-      std::string name, program;
-      bool python;
+    const std::string python_build = "prebuilt python3 packages (not rebuilt); BLAS/OpenMP pools pinned to 1 thread";
+    const std::vector<Peer> all = {
+        {"pomegranate", src + "/bench/peers/em_pomegranate.py", true, python_build, "", {}, 0, false},
+        {"scikit-learn", src + "/bench/peers/em_sklearn.py", true, python_build, "", {}, 0, false},
+        {"armadillo", exe_dir() + "/bench/peers/bsdfmix_peer_armadillo", false, kArmadilloBuild, "", {}, 0, false},
+        // The same program without -march=native (built where the flags differ).
+        {"armadillo_generic", exe_dir() + "/bench/peers/bsdfmix_peer_armadillo_generic", false,
+         kArmadilloGenericBuild, "", {}, 0, false},
     };
-    const std::vector<Peer> peers = {
-        {"pomegranate", src + "/bench/peers/em_pomegranate.py", true},
-        {"scikit-learn", src + "/bench/peers/em_sklearn.py", true},
-        {"armadillo", exe_dir() + "/bench/peers/bsdfmix_peer_armadillo", false},
-    };
-    for (const auto& p : peers) {
+    for (Peer p : all) {
       if (!file_exists(p.program)) {
         log_line("bench: peer " + p.name + " not found (" + p.program + ")");
         continue;
       }
-      if (!common.quiet) log_line("bench: running peer " + p.name);
-      const std::string cmd =
-          (p.python ? std::string("/usr/bin/python3 ") : std::string()) + shell_quote(p.program) + args +
-          (common.quiet ? " 2>/dev/null" : "");
-      Row r;
-      if (run_peer(p.name, cmd, r)) rows.push_back(r);
+      p.cmd = (p.python ? std::string("/usr/bin/python3 ") : std::string()) + shell_quote(p.program) + args +
+              (common.quiet ? " 2>/dev/null" : "");
+      peers.push_back(p);
     }
-    ::unlink(data.c_str());
   }
+
+  // `repeat` rounds, each timing every row once (bsdfmix, the reference, each peer)
+  // and measuring the FMA peak of the CPU (all logical CPUs at once): on a shared
+  // machine a burst of other work then spoils one run of each row rather than every
+  // run of one row. Each row keeps its fastest run, the peak its highest.
+  const std::string cpu = cpu_model_name();
+  const int cpus = logical_cpus();
+  double spi = 0, ref_seconds = 0;
+  EmTiming timing;
+  FmaPeak peak;
+  for (int rep = 0; rep < o.repeat; ++rep) {
+    if (!common.quiet) log_line("bench: round " + std::to_string(rep + 1) + " of " + std::to_string(o.repeat));
+    const double t = time_bsdfmix();
+    if (rep == 0 || t < spi) {
+      spi = t;
+      timing = engine.last_timing();
+    }
+    if (o.reference) {
+      double tr = 0;
+      em_detail::run_reference(set.grid, slice0.w, ref_init, settings, &tr);
+      if (rep == 0 || tr < ref_seconds) ref_seconds = tr;
+    }
+    for (auto& p : peers) {
+      if (p.failed) continue;
+      Row r;
+      if (!run_peer(p.name, p.cmd, r)) {
+        p.failed = true;
+        log_line("bench: peer " + p.name + " dropped (failed in round " + std::to_string(rep + 1) + ")");
+        continue;
+      }
+      if (p.reps == 0 || r.seconds_per_iteration < p.best.seconds_per_iteration) p.best = r;
+      ++p.reps;
+    }
+    const FmaPeak pk = measure_fma_peak(cpus, 1);
+    if (rep == 0 || pk.flops_per_s > peak.flops_per_s) peak = pk;
+  }
+
+  rows.push_back({"bsdfmix (" + device_names + ")", o.k, cells, static_cast<std::size_t>(o.slices), o.iterations, spi,
+                  o.repeat, device_units, kernel_build});
+  if (o.reference)
+    rows.push_back({"cpu_reference", o.k, cells, 1, o.iterations, ref_seconds / o.iterations, o.repeat, 1, kHostBuild});
+  for (const auto& p : peers) {
+    if (p.failed) continue;
+    Row r = p.best;
+    r.impl = p.name;  // armadillo_generic prints "armadillo"
+    r.reps = p.reps;
+    r.threads = 1;  // every peer pins itself to one thread (bench/peers/README.md)
+    r.build = p.build;
+    rows.push_back(r);
+  }
+
+  // The percentage of the FMA peak only where the kernels ran on this CPU.
+  const double ours = rows.front().pc_per_s();
+  const double achieved = ours * kFlopsPerUpdate;
+  const bool have_pct = all_cpu && peak.flops_per_s > 0;
+  const double pct = have_pct ? 100 * achieved / peak.flops_per_s : 0;
 
   // CSV and table.
   std::ostringstream csv;
-  csv << "impl,k,cells,slices,iterations,seconds_per_iteration,pc_per_s\n";
-  for (const auto& r : rows) {
+  csv << "impl,k,cells,slices,iterations,seconds_per_iteration,pc_per_s,reps,threads,build,"
+         "cpu_model,logical_cpus,opencl_device,opencl_version,fma_peak_gflops,fma_peak_isa,"
+         "loadavg_before,flops_per_update,gflops,pct_of_fma_peak\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
     char line[512];
-    std::snprintf(line, sizeof line, "%s,%d,%zu,%zu,%d,%.6g,%.6g\n", r.impl.c_str(), r.k, r.cells, r.slices,
-                  r.iterations, r.seconds_per_iteration, r.pc_per_s());
+    std::snprintf(line, sizeof line, "%s,%d,%zu,%zu,%d,%.6g,%.6g,%d,%d,", csv_field(r.impl).c_str(), r.k, r.cells,
+                  r.slices, r.iterations, r.seconds_per_iteration, r.pc_per_s(), r.reps, r.threads);
+    csv << line << csv_field(r.build) << ',' << csv_field(cpu) << ',' << cpus << ',' << csv_field(device_names)
+        << ',' << csv_field(device_versions) << ',';
+    if (peak.flops_per_s > 0) {
+      std::snprintf(line, sizeof line, "%.4g", peak.flops_per_s / 1e9);
+      csv << line;
+    }
+    std::snprintf(line, sizeof line, ",%s,%.2f,", csv_field(peak.isa).c_str(), load_before);
     csv << line;
+    if (i == 0) {  // the flop count is the kernel's: bsdfmix row only
+      std::snprintf(line, sizeof line, "%.0f,%.4g,", kFlopsPerUpdate, achieved / 1e9);
+      csv << line;
+      if (have_pct) {
+        std::snprintf(line, sizeof line, "%.3g", pct);
+        csv << line;
+      }
+    } else {
+      csv << ",,";
+    }
+    csv << '\n';
   }
   write_text_atomic(o.csv, csv.str());
 
-  const double ours = rows.front().pc_per_s();
-  std::printf("EM throughput, K = %d, %zu-cell slices (90 x 180), %d iterations\n", o.k, cells, o.iterations);
-  std::printf("%-48s %7s %9s %13s %17s %10s %9s\n", "impl", "slices", "cells", "s/iteration",
+  std::printf("EM throughput, K = %d, %zu-cell slices (90 x 180), %d iterations, best of %d\n", o.k, cells,
+              o.iterations, o.repeat);
+  std::printf("machine: %s, %d logical CPUs, 1-minute load average %.2f before the run; OpenCL: %s, %s\n",
+              cpu.c_str(), cpus, load_before, device_names.c_str(), device_versions.c_str());
+  std::printf("%-48s %7s %7s %9s %13s %17s %10s %9s\n", "impl", "threads", "slices", "cells", "s/iteration",
               "ms/slice-iter", "G pc/s", "vs ours");
   for (const auto& r : rows)
-    std::printf("%-48s %7zu %9zu %13.6f %17.4f %10.4f %9.4f\n", r.impl.c_str(), r.slices, r.cells,
+    std::printf("%-48s %7d %7zu %9zu %13.6f %17.4f %10.4f %9.4f\n", r.impl.c_str(), r.threads, r.slices, r.cells,
                 r.seconds_per_iteration, 1e3 * r.seconds_per_iteration / static_cast<double>(r.slices),
                 r.pc_per_s() / 1e9, r.pc_per_s() / ours);
-  std::string how;
-  // CPU devices share the host's cores (PoCL presents one CPU as several devices):
-  // count the host once; other devices add up.
-  double peak = peak_flops(first, how);
-  bool all_cpu = true;
-  for (const auto& d : engine.devices()) all_cpu = all_cpu && d.info().is_cpu();
-  if (!all_cpu) {
-    peak = 0;
-    for (const auto& d : engine.devices()) {
-      std::string h;
-      peak += peak_flops(d, h);
-    }
-  }
-  const double achieved = ours * kFlopsPerUpdate;
-  if (peak > 0)
-    std::printf("arithmetic: %.0f flops per update -> %.1f GFLOP/s of a %.1f GFLOP/s single-precision peak "
-                "(%s): %.1f%% of peak\n",
-                kFlopsPerUpdate, achieved / 1e9, peak / 1e9, how.c_str(), 100 * achieved / peak);
+  for (const auto& r : rows) std::printf("build of %s: %s\n", r.impl.c_str(), r.build.c_str());
+  if (peak.flops_per_s > 0)
+    std::printf("measured FMA peak: %.1f GFLOP/s (%d threads x %d chains of %s FMAs, best of %d)\n",
+                peak.flops_per_s / 1e9, peak.threads, peak.chains, peak.isa.c_str(), o.repeat);
   else
-    std::printf("arithmetic: %.0f flops per update -> %.1f GFLOP/s (peak %s)\n", kFlopsPerUpdate,
-                achieved / 1e9, how.c_str());
+    std::printf("FMA peak: %s\n", peak.isa.c_str());
+  if (have_pct)
+    std::printf("arithmetic: %.0f flops per update (counted from kernels/em.cl) -> %.1f GFLOP/s: %.1f%% of the "
+                "measured FMA peak\n",
+                kFlopsPerUpdate, achieved / 1e9, pct);
+  else
+    std::printf("arithmetic: %.0f flops per update (counted from kernels/em.cl) -> %.1f GFLOP/s (no peak measured "
+                "for this device)\n",
+                kFlopsPerUpdate, achieved / 1e9);
   std::printf("profile (timed fit): host init %.3f s, iterations %.3f s over %zu batch(es), final log-likelihood "
               "and read-back %.3f s, precision %s\n",
               timing.init_seconds, timing.iterate_seconds, timing.batches, timing.finish_seconds,
@@ -343,7 +428,9 @@ void add_bench(CLI::App& app, Common& common) {
   em->add_option("--iterations", o.iterations, "EM iterations timed")->capture_default_str();
   em->add_option("--slices", o.slices, "90 x 180 slices fitted by bsdfmix (peers and reference: 1)")
       ->capture_default_str();
-  em->add_option("--repeat", o.repeat, "timed runs of bsdfmix and the reference; the fastest is kept")
+  em->add_option("--repeat", o.repeat,
+                 "rounds, each timing every row (bsdfmix, reference, each peer) and the FMA peak once; each row "
+                 "keeps its fastest run")
       ->capture_default_str();
   em->add_option("--queues", o.queues, "work queues per device")->capture_default_str();
   em->add_option("--precision", o.precision, "auto, fp32 or fp64 accumulation")->capture_default_str();

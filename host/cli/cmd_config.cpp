@@ -4,6 +4,7 @@
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "pipeline/stages.hpp"
+#include "scale/mpi_farm.hpp"
 
 namespace bsdfmix::cli {
 
@@ -33,6 +34,11 @@ void add_fit(CLI::App& app, Common& common) {
     const Config c = load_config(file);
     if (!c.fit) throw ConfigError(file + ": fit: section missing (add `fit:` to use the defaults)");
     const std::string dev = device_for(c, common.device);
+    scale::MpiFarm mpi;  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
+    if (mpi.worker()) {
+      const bool remade = (c.generate && c.generate->force) || (c.import && c.import->force);
+      return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev);
+    }
     stage_table(c, dev);
     stage_fit(c, dev, max_batches);
   });

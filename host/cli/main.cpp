@@ -15,7 +15,7 @@ namespace bsdfmix::cli {
 void add_common_options(CLI::App& sub, Common& common) {
   sub.add_option("--device", common.device,
                  "OpenCL device(s): index, name substring, cpu, gpu or all, comma-separated "
-                 "(default: $BSDFMIX_DEVICE, else the config's, else 0)");
+                 "(default: the config's device:, else $BSDFMIX_DEVICE, else 0)");
   sub.add_flag("-q,--quiet", common.quiet, "no progress or log lines on stderr");
 }
 
@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
   cli::add_sample(app, common);
   cli::add_converge(app, common);
   cli::add_run(app, common);
+  cli::add_catalog(app, common);
   cli::add_bench(app, common);
   try {
     app.parse(argc, argv);

@@ -39,6 +39,7 @@ struct FitSection {
   double k_penalty = 0.004;
   std::optional<double> error_target;
   int search_pool = 1;
+  std::string search = "smem";  // smem: walk K with split-and-merge moves; restarts: independent restarts per K
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 

@@ -1,6 +1,7 @@
 // The `fit` section: the Gaussian-count search and the final fits.
 #include "config/config.hpp"
 #include "core/domain.hpp"
+#include "fit/em.hpp"
 
 namespace bsdfmix {
 
@@ -9,8 +10,8 @@ FitSection parse_fit(const ConfigNode& n) {
   f.output = n.str("output");
   f.report = n.str("report");
   f.search_report = n.str("search_report");
-  f.k_min = static_cast<int>(n.integer("k_min", 1, 256));
-  f.k_max = static_cast<int>(n.integer("k_max", 1, 256));
+  f.k_min = static_cast<int>(n.integer("k_min", 1, kEmMaxK));
+  f.k_max = static_cast<int>(n.integer("k_max", 1, kEmMaxK));
   if (f.k_max < f.k_min) n.fail("k_max", std::to_string(f.k_max) + " is below k_min " + std::to_string(f.k_min));
   f.seed = static_cast<std::uint64_t>(n.integer("seed", 0, INT64_MAX));
   f.restarts = static_cast<int>(n.integer("restarts", 1, 1000));
@@ -22,6 +23,9 @@ FitSection parse_fit(const ConfigNode& n) {
   f.k_penalty = n.number("k_penalty", 0.0, 1.0);
   if (n.has("error_target")) f.error_target = n.number("error_target", 1e-6, 2.0);
   f.search_pool = static_cast<int>(n.integer("search_pool", 1, 16));
+  f.search = n.str("search");
+  if (f.search != "smem" && f.search != "restarts")
+    n.fail("search", "'" + f.search + "' is not a search method (expected smem or restarts)");
   if (n.has("theta_o")) {
     f.theta_o = n.numbers("theta_o");
     for (double t : f.theta_o)

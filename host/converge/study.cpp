@@ -114,13 +114,15 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
                               spec.uniform_fraction);
     const TailDiagnostic td = tail_diagnostic(p0);
     const auto& b = p0.query.blend;
-    int main_slice = b.slice[0];
+    int main = 0;  // the slice with the largest blend weight
     for (int k = 1; k < b.count; ++k)
-      if (b.weight[k] > b.weight[0]) main_slice = b.slice[k];
+      if (b.weight[k] > b.weight[main]) main = k;
+    const int main_slice = b.slice[main];
     const int k_used = mf.k[std::size_t(main_slice)];
     const double l1 = mf.l1_rel[std::size_t(main_slice)];
     const std::uint64_t table_bytes = table.meta().cells_per_slice() * sizeof(float);
-    const std::uint64_t mix_bytes = std::uint64_t(k_used) * 6 * sizeof(float) + 3 * sizeof(double);
+    // The slice's share of the mixture file's datasets: its padded row and its scalars.
+    const std::uint64_t mix_bytes = mf.payload_bytes() / std::max<std::uint64_t>(mf.slices(), 1);
     tail += spec.table_label + "," + num(theta_o) + "," + num(phi_o) + "," + std::to_string(k_used) + "," + num(l1) +
             "," + num(td.reference) + "," + num(td.stand_in) + "," + num(td.stand_in / td.reference - 1) + "," +
             num(td.relvar_us) + "," + num(td.relvar_is) + "," + num(td.relvar_mis) + "," + num(td.max_weight_is) +

@@ -1,6 +1,7 @@
 // The Monte Carlo convergence study (docs/sampling.md): for each outgoing direction,
 // scene and estimator, R runs of up to N_max samples in one launch; rows for
-// N = 1, 2, 4, .., N_max of the convergence CSV (DESIGN.md), and the tail-risk CSV.
+// N = 1, 2, 4, .., N_max of the convergence CSV, and the tail-risk CSV (both in
+// docs/formats.md, "CSV files").
 #pragma once
 
 #include <cstdint>

@@ -54,6 +54,19 @@ void AtomicOutput::commit() {
   if (std::rename(temp_.c_str(), path_.c_str()) != 0)
     throw IoError(path_ + ": cannot rename temporary file into place: " + std::strerror(errno));
   committed_ = true;
+  fsync_directory(path_);
+}
+
+void fsync_directory(const std::string& path) {
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw IoError(path + ": cannot open directory " + dir.string() + " to sync it: " + std::strerror(errno));
+  const int rc = ::fsync(fd);
+  const int err = errno;
+  ::close(fd);
+  if (rc != 0 && err != EINVAL)  // EINVAL: a file system that cannot sync directories
+    throw IoError(path + ": fsync of directory " + dir.string() + " failed: " + std::strerror(err));
 }
 
 void write_text_atomic(const std::string& path, const std::string& text) {

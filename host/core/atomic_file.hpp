@@ -23,12 +23,15 @@ class AtomicOutput {
 
   const std::string& temp_path() const { return temp_; }
   const std::string& path() const { return path_; }
-  void commit();  // fsync + rename; throws IoError
+  void commit();  // fsync, rename, fsync of the directory; throws IoError
 
  private:
   std::string path_, temp_;
   bool committed_ = false;
 };
+
+// Makes the directory entry of `path` durable (after a rename or a create).
+void fsync_directory(const std::string& path);
 
 // Writes `text` to `path` atomically.
 void write_text_atomic(const std::string& path, const std::string& text);

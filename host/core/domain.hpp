@@ -1,4 +1,5 @@
-// Angular domains, cell grids, Jacobians and integrand weights (DESIGN.md, "Angular conventions").
+// Angular domains, cell grids, Jacobians and integrand weights (docs/formats.md,
+// "Angular conventions").
 #pragma once
 
 #include <cstddef>

@@ -29,6 +29,9 @@ struct EmTask {
   std::size_t slice = 0;
   int k = 1;
   EmSettings settings;
+  // An explicit start: when non-empty (k components), restart 0 starts from it
+  // instead of the k-means++ initialization; restarts r >= 1 are initialized as usual.
+  Gmm init = {};
 };
 
 struct EmResult {

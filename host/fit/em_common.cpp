@@ -66,6 +66,19 @@ void validate_tasks(const SliceSet& set, const std::vector<EmTask>& tasks) {
     if (!(t.settings.min_weight >= 0) || !(t.settings.min_weight < 1))
       throw ConfigError(where + "min_weight must be in [0, 1)");
     if (!std::isfinite(t.settings.cov_floor)) throw ConfigError(where + "cov_floor must be finite");
+    if (!t.init.weight.empty()) {
+      const Gmm& g = t.init;
+      if (g.k() != t.k || g.mean.size() != 2 * g.weight.size() || g.cov.size() != 3 * g.weight.size())
+        throw ConfigError(where + "the initial mixture must have K = " + std::to_string(t.k) + " components");
+      for (int j = 0; j < g.k(); ++j) {
+        const double a = g.cov[3 * j], b = g.cov[3 * j + 1], c = g.cov[3 * j + 2];
+        if (!(g.weight[j] > 0) || !std::isfinite(g.weight[j]) || !std::isfinite(g.mean[2 * j]) ||
+            !std::isfinite(g.mean[2 * j + 1]) || !(a > 0) || !(c > 0) || !std::isfinite(a + b + c) ||
+            !(a * c - b * b > 0))
+          throw ConfigError(where + "initial component " + std::to_string(j) +
+                            " needs a positive weight, finite mean and positive-definite covariance");
+      }
+    }
   }
 }
 
@@ -218,6 +231,18 @@ Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t 
   }
   for (int j = 0; j < k; ++j) g.weight[j] = wsum > 0 ? g.weight[j] / wsum : 1.0 / k;
   return g;
+}
+
+Gmm task_start(const SliceGrid& grid, const std::vector<double>& w, const EmTask& task, int restart) {
+  if (restart == 0 && !task.init.weight.empty()) {
+    Gmm g = task.init;
+    double sum = 0;
+    for (double x : g.weight) sum += x;
+    for (double& x : g.weight) x /= sum;
+    for (int j = 0; j < g.k(); ++j) g.mean[2 * j + 1] = wrap_phi(g.mean[2 * j + 1]);
+    return g;
+  }
+  return initialize(grid, w, task.slice, task.k, restart, task.settings);
 }
 
 double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm) {

@@ -197,7 +197,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     run_on_workers(P, init_threads, [&](std::size_t, std::size_t i) {
       const Problem& pr = problems[batch.problems[i]];
       const EmTask& t = tasks[pr.task];
-      const Gmm g = initialize(grid, prepared[t.slice]->w, t.slice, t.k, pr.restart, t.settings);
+      const Gmm g = task_start(grid, prepared[t.slice]->w, t, pr.restart);
       double* st = &state[i * nstate];
       for (int j = 0; j < t.k; ++j) {
         st[0 * K + j] = g.weight[j];

@@ -39,6 +39,10 @@ void floor_covariance(double& stt, double& stp, double& spp, double floor);
 Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t slice, int k,
                int restart, const EmSettings& settings);
 
+// The start of restart `restart` of a task: its explicit `init` for restart 0 when it
+// has one, else initialize().
+Gmm task_start(const SliceGrid& grid, const std::vector<double>& w, const EmTask& task, int restart);
+
 // The reference EM from `init` (double precision); loglik of the final state with
 // the exact periodic density. `iterate_seconds` receives the time of the iterations.
 EmResult run_reference(const SliceGrid& grid, const std::vector<double>& w, const Gmm& init,

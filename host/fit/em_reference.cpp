@@ -197,8 +197,7 @@ std::vector<EmResult> em_fit_reference(const SliceSet& set, const std::vector<Em
     }
     std::string first_failure;
     for (int r = 0; r < t.settings.restarts; ++r) {
-      EmResult res = run_reference(set.grid, ps.w, initialize(set.grid, ps.w, t.slice, t.k, r, t.settings),
-                                   t.settings);
+      EmResult res = run_reference(set.grid, ps.w, task_start(set.grid, ps.w, t, r), t.settings);
       if (!res.ok) {
         if (first_failure.empty()) first_failure = res.failure;
         continue;

@@ -144,7 +144,8 @@ std::string describe_generic(const std::string& path) {
                       100 * l1[std::min(l1.size() - 1, (l1.size() * 9 + 9) / 10 - 1)], 100 * l1.back());
         s << buf;
       }
-      s << "\n  parameters " << bytes_text(double(m.payload_bytes())) << "\n";
+      s << "\n  datasets   " << bytes_text(double(m.payload_bytes())) << " as stored ([S, Kmax] arrays, Kmax "
+        << m.kmax << ")\n";
     }
   }
   s << "  file size  " << bytes_text(double(std::filesystem::file_size(path))) << "\n";

@@ -1,6 +1,7 @@
 // The HDF5 mixture file: write atomically, read with validation.
 #include "io/mixture_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -59,10 +60,11 @@ void MixtureFile::slice_params(std::size_t s, std::vector<double>& w, std::vecto
 }
 
 std::uint64_t MixtureFile::payload_bytes() const {
-  std::uint64_t b = 0;
-  for (auto kk : k) b += std::uint64_t(kk) * 6 * sizeof(float);  // weight, mean (2), covariance (3)
-  b += slices() * (2 * sizeof(double) + sizeof(double) + sizeof(std::int32_t));  // direction, scale, k
-  return b;
+  // Exactly what write_mixture_group stores: the padded [S, kmax] float arrays, the
+  // per-slice doubles and int32 K, and the table's omega_o axes.
+  const std::uint64_t S = slices(), K = std::uint64_t(std::max(kmax, 0));
+  return S * K * 6 * sizeof(float) + S * 5 * sizeof(double) + S * sizeof(std::int32_t) +
+         (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
 }
 
 void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& path) {

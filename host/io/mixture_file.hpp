@@ -1,5 +1,6 @@
-// The HDF5 mixture file of DESIGN.md (group /mixture): S fitted slices, each a 2D
-// Gaussian mixture over (theta_i, phi_i), written atomically and validated on read.
+// The HDF5 mixture file (group /mixture; docs/formats.md, "Mixture file"): S fitted
+// slices, each a 2D Gaussian mixture over (theta_i, phi_i), written atomically and
+// validated on read.
 #pragma once
 
 #include <bsdfmix/mixture.hpp>
@@ -33,8 +34,8 @@ struct MixtureFile {
                  const std::vector<double>& w, const std::vector<double>& mean, const std::vector<double>& cov);
   // The k used components of slice s as parameter arrays (K, 2K, 3K).
   void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
-  // Stored bytes of the mixture parameters (weights, means, covariances of k used
-  // components, and the per-slice scalars), the measure of compression.
+  // Bytes of the datasets as the file stores them (H5Dget_storage_size of each),
+  // padding to kmax included: the measure of compression.
   std::uint64_t payload_bytes() const;
 };
 

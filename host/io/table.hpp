@@ -1,4 +1,5 @@
-// The HDF5 table file of DESIGN.md (group /table), read and written one omega_o slice at a time.
+// The HDF5 table file (group /table; docs/formats.md, "Table file"), read and written
+// one omega_o slice at a time.
 #pragma once
 
 #include <cstddef>

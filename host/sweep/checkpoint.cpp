@@ -33,6 +33,7 @@ BatchPart read_part(const std::string& path) {
   h5::Handle g = h5::open_group(f.get(), "mixture", path);
   part.report_rows = h5::read_string_attr(g.get(), "report_rows", path);
   part.search_rows = h5::read_string_attr(g.get(), "search_rows", path);
+  part.slices_hash = h5::read_string_attr(g.get(), "slices_hash", path);
   std::istringstream idx(h5::read_string_attr(g.get(), "slice_index", path));
   std::size_t s;
   while (idx >> s) part.slice_index.push_back(s);
@@ -52,6 +53,7 @@ void write_part(const std::string& path, const BatchPart& part) {
     h5::write_string_attr(g.get(), "slice_index", idx.str(), path);
     h5::write_string_attr(g.get(), "report_rows", part.report_rows, path);
     h5::write_string_attr(g.get(), "search_rows", part.search_rows, path);
+    h5::write_string_attr(g.get(), "slices_hash", part.slices_hash, path);
     if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0) throw IoError(path + ": flush failed (disk full?)");
   }
   out.commit();
@@ -64,10 +66,8 @@ Checkpoint::Checkpoint(const std::string& output, const std::string& fingerprint
   const fs::path dir(dir_);
   if (fs::exists(dir)) {
     const fs::path fp = dir / kFingerprintFile;
-    if (!fs::exists(fp) || slurp(fp) != fingerprint_) {
-      log_line("discarding " + dir_ + ": made with another table or other settings");
-      fs::remove_all(dir);
-    }
+    if (!fs::exists(fp) || slurp(fp) != fingerprint_)
+      discard("made with another table, other settings, another build or another numeric path");
   }
   if (!fs::exists(dir)) return;  // created by the first commit: a failed run leaves nothing
   std::size_t resumed = 0;
@@ -95,6 +95,23 @@ Checkpoint::Checkpoint(const std::string& output, const std::string& fingerprint
   if (resumed) log_line("resuming: " + std::to_string(resumed) + " slice(s) already fitted in " + dir_);
 }
 
+void Checkpoint::discard(const std::string& why) {
+  log_line("discarding " + dir_ + ": " + why);
+  std::error_code ec;
+  fs::remove_all(dir_, ec);
+  if (ec) throw IoError(dir_ + ": cannot remove stale checkpoint: " + ec.message());
+  parts_.clear();
+  done_.clear();
+}
+
+void Checkpoint::verify(const std::function<std::string(const std::vector<std::size_t>&)>& hash_of) {
+  for (const auto& [first, part] : parts_)
+    if (hash_of(part.slice_index) != part.slices_hash) {
+      discard("the table's content changed since slice " + std::to_string(first) + " was fitted");
+      return;
+    }
+}
+
 bool Checkpoint::done(std::size_t s) const { return s < done_.size() && done_[s]; }
 
 void Checkpoint::commit(const BatchPart& part) {
@@ -104,6 +121,7 @@ void Checkpoint::commit(const BatchPart& part) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) throw IoError(dir_ + ": cannot create checkpoint directory: " + ec.message());
+    fsync_directory(dir_);
     write_text_atomic((dir / kFingerprintFile).string(), fingerprint_);
   }
   const std::string path = (fs::path(dir_) / ("batch_" + std::to_string(part.slice_index.front()) + ".h5")).string();

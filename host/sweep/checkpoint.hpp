@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@ struct BatchPart {
   std::vector<std::size_t> slice_index;
   MixtureFile mixture;
   std::string report_rows, search_rows;  // CSV rows, newline-terminated, no header
+  std::string slices_hash;               // content hash of the table slices it was fitted to
 };
 
 class Checkpoint {
@@ -31,6 +33,11 @@ class Checkpoint {
   const std::map<std::size_t, BatchPart>& parts() const { return parts_; }
   bool done(std::size_t slice_index) const;
 
+  // Checks every committed part against the table as it is now: `hash_of` returns the
+  // content hash of the given slices. On any mismatch every part is discarded (the
+  // table was rewritten since), with a log line saying so.
+  void verify(const std::function<std::string(const std::vector<std::size_t>&)>& hash_of);
+
   // Commits one part atomically (write to a temporary, then rename).
   void commit(const BatchPart& part);
 
@@ -40,6 +47,8 @@ class Checkpoint {
   const std::string& dir() const { return dir_; }
 
  private:
+  void discard(const std::string& why);
+
   std::string dir_, fingerprint_;
   std::map<std::size_t, BatchPart> parts_;
   std::vector<bool> done_;

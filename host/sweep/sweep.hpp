@@ -5,11 +5,15 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "config/config.hpp"
+#include "sweep/checkpoint.hpp"
+#include "sweep/slice_plan.hpp"
 
 namespace bsdfmix {
 
@@ -18,9 +22,14 @@ struct SweepSummary {
   std::size_t slices = 0, resumed = 0, failed = 0;
   std::map<int, std::size_t> k_histogram;
   double l1_median = 0, l1_p90 = 0, l1_max = 0;
-  std::uint64_t mixture_bytes = 0;   // parameters stored (DESIGN.md payload)
-  std::uint64_t table_bytes = 0;     // the fitted slices as the table stores them (float32)
-  std::uint64_t full_bytes = 0;      // the full 4D float32 table those slices stand for
+  // Sizes, in the bytes a user ships: files on disk and their dataset payloads.
+  std::uint64_t mixture_file_bytes = 0;  // the mixture file on disk
+  std::uint64_t mixture_bytes = 0;       // its datasets as stored ([S, Kmax] padded arrays included)
+  std::uint64_t table_file_bytes = 0;    // the table file on disk
+  std::uint64_t table_bytes = 0;         // the fitted slices' cells in the table (float32)
+  std::size_t table_slices = 0;          // slices the table holds (the plan may fit fewer)
+  std::uint64_t full_bytes = 0;          // the fitted slices' cells without azimuthal symmetry (float32)
+  std::size_t symmetry_factor = 1;       // phi_o slices one stored slice stands for
   double seconds = 0;
   std::string devices;
   std::string text() const;          // the printed summary
@@ -31,5 +40,33 @@ struct SweepSummary {
 // resumes from the checkpoint.
 SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
                        std::size_t max_batches = SIZE_MAX);
+
+// How run_sweep fits its batches. Without a farm, one after the other in this process.
+// A farm (the MPI task farm, scale/mpi_farm.hpp) fits them wherever it likes: it calls
+// `commit` once per batch, in any order, on the calling thread, and may fit a batch here
+// with `fit_here`. The fit of a batch depends only on its slices and the settings, so
+// where and in which order batches are fitted does not change the result.
+class BatchFarm {
+ public:
+  virtual ~BatchFarm() = default;
+  virtual void run(const std::vector<std::vector<SliceRef>>& batches,
+                   const std::function<BatchPart(const std::vector<SliceRef>&)>& fit_here,
+                   const std::function<void(BatchPart&&)>& commit) = 0;
+};
+// Installs the farm every later run_sweep uses (nullptr: none); not owned.
+void set_batch_farm(BatchFarm* farm);
+
+// The fitting half of a sweep, without checkpoint or outputs: what a remote worker of a
+// farm runs. Fits batches of `table_path` exactly as run_sweep does.
+class BatchWorker {
+ public:
+  BatchWorker(const std::string& table_path, const FitSection& fit, const std::string& device_selector);
+  ~BatchWorker();
+  BatchPart fit(const std::vector<SliceRef>& batch);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace bsdfmix

@@ -1,4 +1,4 @@
-// Tabulates the fiber model into a table file (DESIGN.md "Table file"), slice batches
+// Tabulates the fiber model into a table file (docs/formats.md, "Table file"), slice batches
 // evaluated by kernels/fiber.cl and streamed to disk; plus the CPU path the tests use.
 #pragma once
 

@@ -2,9 +2,10 @@
 // and Fur Model for Production Path Tracing"), as pbrt-v4's HairBxDF evaluates it, in
 // double precision: the CPU reference of kernels/fiber.cl (docs/fiber.md).
 //
-// Conventions (DESIGN.md, domain `fiber`): theta in [-pi/2, pi/2] with sin(theta) =
-// dot(omega, tangent), phi the azimuth around the fiber axis. Our f is the far-field
-// BCSDF summed over the lobes p = 0 (R), 1 (TT), 2 (TRT) and the residual p = 3,
+// Conventions (docs/formats.md, "Angular conventions", domain `fiber`): theta in
+// [-pi/2, pi/2] with sin(theta) = dot(omega, tangent), phi the azimuth around the fiber
+// axis. Our f is the far-field BCSDF summed over the lobes p = 0 (R), 1 (TT), 2 (TRT)
+// and the residual p = 3,
 //     f(omega_o, omega_i) = (1/2) integral_{-1}^{1} sum_p M_p A_p N_p dh,
 // i.e. pbrt's HairBxDF::f times |cos theta_i| in its shading frame, averaged over the
 // offset h. With that, L_o = integral L_i f d(omega_i), d(omega) = cos(theta) dtheta dphi,

@@ -1,8 +1,8 @@
 // Evaluation of a measured BRDF of the RGL material database (Dupuy & Jakob 2018,
 // "An adaptive parameterization for efficient material acquisition and rendering").
 //
-// Direction convention (DESIGN.md): the file's tabulated direction (its theta_i/phi_i
-// parameter axes; Mitsuba's si.wi, pbrt-v4's wo) is the view direction, our omega_o.
+// Direction convention (docs/formats.md, "RGL tables"): the file's tabulated direction
+// (its theta_i/phi_i parameter axes; Mitsuba's si.wi, pbrt-v4's wo) is the view direction, our omega_o.
 // The direction the file's warps produce (Mitsuba's wo) is the light direction, our
 // omega_i. f = (measured value) * D(wm) / (4 sigma(omega_o)) / cos(theta_i): Mitsuba's
 // `eval` divided by the cosine of the light direction, pbrt-v4's MeasuredBxDF::f.

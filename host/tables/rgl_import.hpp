@@ -1,4 +1,5 @@
-// Tabulates a measured RGL BRDF on the hemisphere grid of DESIGN.md (azimuthal symmetry).
+// Tabulates a measured RGL BRDF on the hemisphere grid (docs/formats.md, "Grids"),
+// with azimuthal symmetry.
 #pragma once
 
 #include <cstddef>

@@ -1,7 +1,7 @@
 // bsdfmix/mixture.hpp: evaluate and importance-sample the Gaussian mixtures of a bsdfmix
 // mixture file on the CPU. Self-contained: needs only the C++17 standard library, so a
 // renderer can copy this one header. Read the file with any HDF5 reader and fill a
-// MixtureSet (see bsdfmix's DESIGN.md, "Mixture file"), or use bsdfmix's own reader.
+// MixtureSet (see bsdfmix's docs/formats.md, "Mixture file"), or use bsdfmix's own reader.
 //
 // Conventions. A slice mixture is a density over (theta, phi) in radians, phi periodic
 // in [-pi, pi): the density at a point is the sum over components and over the phi

@@ -1,0 +1,157 @@
+#!/usr/bin/python3
+"""The Gaussian-count search before and after, side by side in one run of one binary.
+
+`fit.search: restarts` (independent k-means++ restarts at every candidate K) against
+`fit.search: smem` (the walk over K with split-and-merge moves, docs/fitting.md), on the
+thesis-scale polyester table (180 slices of 90 x 180) and the three RGL materials of
+data/rgl (90 slices of 90 x 180 each): the search with the default settings (K in
+[1, 32]: chosen K, L1 at the chosen K, wall time) and pinned K = 8 and 16 (L1 median and
+p90, wall time). Writes bench/results/search_compare.csv (with the CPU model) and, with
+--chart, docs/images/search_l1_vs_k.png: L1 against K before and after for the sharpest
+and the broadest polyester slice.
+
+    bench/search_compare.py [--bsdfmix build/bsdfmix] [--work out/bench_search]
+                            [--tables polyester,satin,paper,sunflower] [--fixed 8,16] [--chart]
+"""
+import argparse
+import csv
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+RGL = {
+    "satin": "satin_rosaline_rgb.bsdf",
+    "paper": "paper_white_rgb.bsdf",
+    "sunflower": "cg_sunflower_rgb.bsdf",
+}
+
+
+def cpu_model():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def make_table(bsdfmix, work, name):
+    path = os.path.join(work, name + ".h5")
+    if os.path.exists(path):
+        return path
+    if name in RGL:
+        cmd = [bsdfmix, "import", "rgl", os.path.join(ROOT, "data", "rgl", RGL[name]), "-o", path, "--quiet"]
+    else:
+        cmd = [bsdfmix, "generate", "fiber", "-q", "--preset", name, "--theta-o", "180", "--theta-i", "90",
+               "--phi-i", "180", "-o", path]
+    subprocess.run(cmd, check=True)
+    return path
+
+
+def fit(bsdfmix, work, table, stem, search, k_min=1, k_max=32, extra=""):
+    out = os.path.join(work, stem)
+    for suffix in ("_mixture.h5",):
+        if os.path.exists(out + suffix):
+            os.remove(out + suffix)
+    cfg = out + ".yaml"
+    with open(cfg, "w") as f:
+        f.write(f"table: {table}\nfit:\n  output: {out}_mixture.h5\n  report: {out}_fit.csv\n"
+                f"  search_report: {out}_search.csv\n  k_min: {k_min}\n  k_max: {k_max}\n  search: {search}\n{extra}")
+    start = time.monotonic()
+    subprocess.run([bsdfmix, "fit", "-q", cfg], check=True)
+    seconds = time.monotonic() - start
+    with open(out + "_fit.csv") as f:
+        rows = list(csv.DictReader(f))
+    ks = [int(r["k"]) for r in rows]
+    l1 = sorted(float(r["l1_rel"]) for r in rows)
+    p90 = l1[min(len(l1) - 1, max(0, -(-9 * len(l1) // 10) - 1))]
+    return {"slices": len(rows), "mean_k": statistics.mean(ks), "l1_median": l1[len(l1) // 2], "l1_p90": p90,
+            "seconds": seconds, "rows": rows}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bsdfmix", default=os.path.join(ROOT, "build", "bsdfmix"))
+    ap.add_argument("--work", default=os.path.join(ROOT, "out", "bench_search"))
+    ap.add_argument("--tables", default="polyester,satin,paper,sunflower")
+    ap.add_argument("--fixed", default="8,16")
+    ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "search_compare.csv"))
+    ap.add_argument("--chart", action="store_true")
+    args = ap.parse_args()
+    os.makedirs(args.work, exist_ok=True)
+    os.makedirs(os.path.dirname(args.csv), exist_ok=True)
+    cpu = cpu_model()
+    fixed = [int(k) for k in args.fixed.split(",") if k]
+    results = []
+    for name in args.tables.split(","):
+        table = make_table(args.bsdfmix, args.work, name)
+        for search in ("restarts", "smem"):
+            r = fit(args.bsdfmix, args.work, table, f"{name}_{search}_search", search)
+            print(f"{name:10s} {search:8s} search: {r['slices']} slices, mean K {r['mean_k']:.2f}, L1 median "
+                  f"{100 * r['l1_median']:.2f}% p90 {100 * r['l1_p90']:.2f}%, {r['seconds']:.1f} s", flush=True)
+            results.append((name, search, "search", r))
+            for k in fixed:
+                r = fit(args.bsdfmix, args.work, table, f"{name}_{search}_k{k}", search, k, k)
+                print(f"{name:10s} {search:8s} K = {k:2d}: L1 median {100 * r['l1_median']:.2f}% p90 "
+                      f"{100 * r['l1_p90']:.2f}%, {r['seconds']:.1f} s", flush=True)
+                results.append((name, search, f"k{k}", r))
+    with open(args.csv, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["table", "search", "run", "slices", "mean_k", "l1_median", "l1_p90", "seconds", "cpu"])
+        for name, search, run, r in results:
+            w.writerow([name, search, run, r["slices"], f"{r['mean_k']:.3f}", f"{r['l1_median']:.5f}",
+                        f"{r['l1_p90']:.5f}", f"{r['seconds']:.1f}", cpu])
+    print("wrote", args.csv)
+    if args.chart:
+        chart(args)
+
+
+def chart(args):
+    """L1 against K, before and after, for the sharpest and the broadest polyester slice
+    (the largest and the smallest chosen K of the `restarts` search): both searches
+    with k_penalty 0 on those two slices, so that every K is fitted."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    table = make_table(args.bsdfmix, args.work, "polyester")
+    rows = fit(args.bsdfmix, args.work, table, "polyester_restarts_search", "restarts")["rows"]
+    sharp = max(rows, key=lambda r: (int(r["k"]), float(r["l1_rel"])))
+    broad = min(rows, key=lambda r: (int(r["k"]), float(r["l1_rel"])))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, (label, row) in zip(axes, (("sharp", sharp), ("broad", broad))):
+        theta = float(row["theta_o"])
+        for search, style in (("restarts", "o-"), ("smem", "s-")):
+            stem = f"chart_{label}_{search}"
+            fit(args.bsdfmix, args.work, table, stem, search,
+                extra=f"  k_penalty: 0.0\n  theta_o: [{theta!r}]\n")
+            best = {}
+            with open(os.path.join(args.work, stem + "_search.csv")) as f:
+                for r in csv.DictReader(f):
+                    if int(r["slice"]) != int(row["slice"]):
+                        continue
+                    k, l1 = int(r["k"]), float(r["l1_rel"])
+                    best[k] = min(best.get(k, 9.0), l1)
+            ks = sorted(best)
+            ax.plot(ks, [100 * best[k] for k in ks], style, ms=3,
+                    label="before: k-means++ restarts" if search == "restarts" else "after: walk + split-and-merge")
+        ax.set_title(f"polyester slice {row['slice']} (theta_o {float(row['theta_o']):.2f} rad), {label}")
+        ax.set_xlabel("K")
+        ax.set_ylabel("relative L1 error (%)")
+        ax.set_yscale("log")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+    fig.tight_layout()
+    out = os.path.join(ROOT, "docs", "images", "search_l1_vs_k.png")
+    fig.savefig(out, dpi=110)
+    print("wrote", out)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

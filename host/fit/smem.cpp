@@ -1,0 +1,297 @@
+// Split-and-merge moves on fitted slice mixtures.
+#include "fit/smem.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <thread>
+#include <limits>
+#include <queue>
+
+#include "core/domain.hpp"
+#include "fit/em_internal.hpp"
+#include "fit/scheduler.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+double wrap_diff(double d) { return d - 2 * kPi * std::nearbyint(d / (2 * kPi)); }
+
+// Largest eigenvalue of [a b; b c] and its unit eigenvector; with minor, the smallest
+// and the eigenvector perpendicular.
+void principal_axis(double a, double b, double c, double& lambda, double& vx, double& vy, bool minor = false) {
+  const double disc = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  lambda = 0.5 * (a + c) + disc;
+  if (std::abs(b) > 0) {
+    vx = lambda - c;
+    vy = b;
+  } else if (a >= c) {
+    vx = 1;
+    vy = 0;
+  } else {
+    vx = 0;
+    vy = 1;
+  }
+  const double n = std::sqrt(vx * vx + vy * vy);
+  vx /= n;
+  vy /= n;
+  if (minor) {
+    lambda = std::max(0.5 * (a + c) - disc, 0.0);
+    const double t = vx;
+    vx = -vy;
+    vy = t;
+  }
+}
+
+}  // namespace
+
+ComponentScores score_components(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm,
+                                 std::size_t max_pairs) {
+  const int k = gmm.k();
+  const std::size_t np = grid.phi.size(), n = w.size();
+  // Per component: mean, inverse covariance, log normalization.
+  std::vector<double> ia(k), ib(k), ic(k), lnorm(k), lw(k);
+  for (int j = 0; j < k; ++j) {
+    const double a = gmm.cov[3 * j], b = gmm.cov[3 * j + 1], c = gmm.cov[3 * j + 2];
+    const double det = a * c - b * b;
+    ia[j] = c / det;
+    ib[j] = -b / det;
+    ic[j] = a / det;
+    lnorm[j] = -std::log(2 * kPi) - 0.5 * std::log(det);
+    lw[j] = std::log(std::max(gmm.weight[j], std::numeric_limits<double>::min()));
+  }
+  // Pass 1: log N_k(x_i) (nearest image), responsibilities, per-component sums.
+  std::vector<double> logn(n * static_cast<std::size_t>(k)), logs(n);
+  std::vector<double> mass(k, 0.0), zmax(k, -std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = grid.theta[i / np], ph = grid.phi[i % np];
+    double m = -std::numeric_limits<double>::infinity();
+    for (int j = 0; j < k; ++j) {
+      const double dt = t - gmm.mean[2 * j], dp = wrap_diff(ph - gmm.mean[2 * j + 1]);
+      const double l = lnorm[j] - 0.5 * (ia[j] * dt * dt + 2 * ib[j] * dt * dp + ic[j] * dp * dp);
+      logn[i * k + j] = l;
+      zmax[j] = std::max(zmax[j], l);
+      m = std::max(m, lw[j] + l);
+    }
+    double s = 0;
+    for (int j = 0; j < k; ++j) s += std::exp(lw[j] + logn[i * k + j] - m);
+    logs[i] = m + std::log(s);
+  }
+  // log Z_k = log sum_i N_k(x_i), and the claimed mass A_k = sum_i w_i r_ik.
+  std::vector<double> zsum(k, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int j = 0; j < k; ++j) {
+      zsum[j] += std::exp(logn[i * k + j] - zmax[j]);
+      if (w[i] > 0) mass[j] += w[i] * std::exp(lw[j] + logn[i * k + j] - logs[i]);
+    }
+  ComponentScores out;
+  out.split.assign(k, 0.0);
+  std::vector<double> kl(k, 0.0), self(k, 0.0), cross(static_cast<std::size_t>(k) * k, 0.0);
+  // Second and fourth moments of the claimed weights along both covariance axes.
+  std::vector<double> ax(2 * k), ay(2 * k), m2(2 * k, 0.0), m4(2 * k, 0.0);
+  for (int j = 0; j < k; ++j)
+    for (int q = 0; q < 2; ++q) {
+      double lambda;
+      principal_axis(gmm.cov[3 * j], gmm.cov[3 * j + 1], gmm.cov[3 * j + 2], lambda, ax[2 * j + q], ay[2 * j + q], q == 1);
+    }
+  std::vector<int> active;
+  std::vector<double> ract;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(w[i] > 0)) continue;
+    active.clear();
+    ract.clear();
+    for (int j = 0; j < k; ++j) {
+      const double lr = lw[j] + logn[i * k + j] - logs[i];
+      const double r = std::exp(lr);
+      if (!(r > 0) || !(mass[j] > 0)) continue;
+      // f log(f / p), f = w r / A, p = N / Z.
+      // f log(f / p) in logs (w r can underflow where log f cannot).
+      const double logf = std::log(w[i]) + lr - std::log(mass[j]);
+      const double logp = logn[i * k + j] - zmax[j] - std::log(zsum[j]);
+      kl[j] += std::exp(logf) * (logf - logp);
+      self[j] += w[i] * r * r;
+      const double dt = grid.theta[i / np] - gmm.mean[2 * j], dp = wrap_diff(grid.phi[i % np] - gmm.mean[2 * j + 1]);
+      for (int q = 0; q < 2; ++q) {
+        const double u = ax[2 * j + q] * dt + ay[2 * j + q] * dp, u2 = u * u;
+        m2[2 * j + q] += w[i] * r * u2;
+        m4[2 * j + q] += w[i] * r * u2 * u2;
+      }
+      if (r > 1e-6) {
+        active.push_back(j);
+        ract.push_back(r);
+      }
+    }
+    for (std::size_t a = 0; a < active.size(); ++a)
+      for (std::size_t b = a + 1; b < active.size(); ++b)
+        cross[static_cast<std::size_t>(active[a]) * k + active[b]] += w[i] * ract[a] * ract[b];
+  }
+  double total = 0;
+  for (int j = 0; j < k; ++j) total += mass[j];
+  // Split score: the claimed share of the slice times the local divergence.
+  for (int j = 0; j < k; ++j) out.split[j] = total > 0 ? mass[j] / total * std::max(kl[j], 0.0) : 0.0;
+  out.axis.assign(k, 0);
+  for (int j = 0; j < k; ++j) {
+    auto kurtosis = [&](int q) { return m2[2 * j + q] > 0 ? m4[2 * j + q] * mass[j] / (m2[2 * j + q] * m2[2 * j + q]) : 3.0; };
+    if (mass[j] > 0 && kurtosis(1) < kurtosis(0)) out.axis[j] = 1;
+  }
+  std::vector<std::pair<double, std::pair<int, int>>> pairs;
+  for (int a = 0; a < k; ++a)
+    for (int b = a + 1; b < k; ++b) {
+      const double d = std::sqrt(self[a] * self[b]);
+      const double c = d > 0 ? cross[static_cast<std::size_t>(a) * k + b] / d : 0.0;
+      if (c > 0) pairs.push_back({c, {a, b}});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) {
+    return x.first != y.first ? x.first > y.first : x.second < y.second;
+  });
+  for (std::size_t p = 0; p < pairs.size() && p < max_pairs; ++p) out.merge.push_back(pairs[p].second);
+  return out;
+}
+
+Gmm split_component(const Gmm& gmm, int j, double floor, int axis) {
+  Gmm g = gmm;
+  const double a = g.cov[3 * j], b = g.cov[3 * j + 1], c = g.cov[3 * j + 2];
+  double lambda, vx, vy;
+  principal_axis(a, b, c, lambda, vx, vy, axis == 1);
+  const double step = 0.5 * std::sqrt(lambda);
+  // Each half: covariance minus step^2 v v^T (the pair keeps the parent's moments).
+  double na = a - step * step * vx * vx, nb = b - step * step * vx * vy, nc = c - step * step * vy * vy;
+  em_detail::floor_covariance(na, nb, nc, floor);
+  const double mt = g.mean[2 * j], mp = g.mean[2 * j + 1];
+  g.weight[j] *= 0.5;
+  g.weight.push_back(g.weight[j]);
+  g.mean[2 * j] = mt - step * vx;
+  g.mean[2 * j + 1] = wrap_phi(mp - step * vy);
+  g.mean.push_back(mt + step * vx);
+  g.mean.push_back(wrap_phi(mp + step * vy));
+  g.cov[3 * j] = na;
+  g.cov[3 * j + 1] = nb;
+  g.cov[3 * j + 2] = nc;
+  g.cov.insert(g.cov.end(), {na, nb, nc});
+  return g;
+}
+
+Gmm merge_components(const Gmm& gmm, int i, int j) {
+  if (i > j) std::swap(i, j);
+  Gmm g = gmm;
+  const double wi = g.weight[i], wj = g.weight[j], w = wi + wj;
+  const double ti = g.mean[2 * i], pi = g.mean[2 * i + 1];
+  const double tj = g.mean[2 * j], pj = pi + wrap_diff(g.mean[2 * j + 1] - pi);
+  const double mt = (wi * ti + wj * tj) / w, mp = (wi * pi + wj * pj) / w;
+  auto moment = [&](int q, double t, double p) {
+    const double dt = t - mt, dp = p - mp;
+    return std::array<double, 3>{g.cov[3 * q] + dt * dt, g.cov[3 * q + 1] + dt * dp, g.cov[3 * q + 2] + dp * dp};
+  };
+  const auto mi = moment(i, ti, pi), mj = moment(j, tj, pj);
+  g.weight[i] = w;
+  g.mean[2 * i] = mt;
+  g.mean[2 * i + 1] = wrap_phi(mp);
+  for (int q = 0; q < 3; ++q) g.cov[3 * i + q] = (wi * mi[q] + wj * mj[q]) / w;
+  g.weight.erase(g.weight.begin() + j);
+  g.mean.erase(g.mean.begin() + 2 * j, g.mean.begin() + 2 * j + 2);
+  g.cov.erase(g.cov.begin() + 3 * j, g.cov.begin() + 3 * j + 3);
+  return g;
+}
+
+Gmm grow_mixture(const Gmm& gmm, const ComponentScores& scores, int k_new, double floor) {
+  Gmm g = gmm;
+  std::vector<double> score = scores.split;
+  std::vector<int> axis = scores.axis;
+  score.resize(g.k(), 0.0);
+  axis.resize(g.k(), 0);
+  while (g.k() < k_new) {
+    int worst = 0;
+    for (int j = 1; j < g.k(); ++j)
+      if (score[j] > score[worst] || (score[j] == score[worst] && g.weight[j] > g.weight[worst])) worst = j;
+    g = split_component(g, worst, floor, axis[worst]);
+    score[worst] *= 0.5;
+    score.push_back(score[worst]);
+    axis[worst] = 0;
+    axis.push_back(0);
+  }
+  return g;
+}
+
+std::vector<Gmm> smem_candidates(const Gmm& gmm, const ComponentScores& scores, int count, double floor) {
+  std::vector<Gmm> out;
+  const int k = gmm.k();
+  if (k < 3) return out;
+  std::vector<int> order(k);
+  for (int j = 0; j < k; ++j) order[j] = j;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return scores.split[a] > scores.split[b]; });
+  for (const auto& [i, j] : scores.merge) {
+    if (static_cast<int>(out.size()) >= count) break;
+    int l = -1;
+    for (int c : order)
+      if (c != i && c != j) {
+        l = c;
+        break;
+      }
+    if (l < 0) continue;
+    // Merge first (indices above j shift down by one), then split.
+    Gmm g = merge_components(gmm, i, j);
+    const int l2 = l > std::max(i, j) ? l - 1 : l;
+    out.push_back(split_component(g, l2, floor, scores.axis.empty() ? 0 : scores.axis[l]));
+  }
+  return out;
+}
+
+std::vector<EmResult> split_merge_fit(const EmFitter& fitter, const SliceSet& set, const std::vector<EmTask>& tasks,
+                                      const SmemSettings& settings, std::vector<int>* accepted) {
+  std::vector<EmResult> best = fitter(set, tasks);
+  if (accepted) accepted->assign(tasks.size(), 0);
+  const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
+  // A task whose moves all failed tries the next moves of its list in the next round;
+  // one that improved starts a fresh list from its new fit.
+  std::vector<int> offset(tasks.size(), 0);
+  for (int round = 0; round < settings.rounds; ++round) {
+    // Moves per task, chosen on the host (in parallel over tasks).
+    std::vector<std::vector<Gmm>> moves(tasks.size());
+    run_on_workers(tasks.size(), std::min(threads, std::max<std::size_t>(tasks.size(), 1)),
+                   [&](std::size_t, std::size_t i) {
+                     const EmTask& t = tasks[i];
+                     if (!best[i].ok || t.k < 3) return;
+                     const double floor = em_detail::cov_floor(set.grid, t.settings);
+                     const int want = offset[i] + settings.candidates;
+                     const ComponentScores sc = score_components(set.grid, set.weights[t.slice], best[i].gmm,
+                                                                 static_cast<std::size_t>(want));
+                     moves[i] = smem_candidates(best[i].gmm, sc, want, floor);
+                     moves[i].erase(moves[i].begin(),
+                                    moves[i].begin() + std::min<std::size_t>(moves[i].size(), offset[i]));
+                   });
+    std::vector<EmTask> next;
+    std::vector<std::size_t> owner;
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      for (Gmm& g : moves[i]) {
+        EmTask t = tasks[i];
+        t.settings.restarts = 1;
+        t.init = std::move(g);
+        next.push_back(std::move(t));
+        owner.push_back(i);
+      }
+    if (next.empty()) break;
+    const std::vector<EmResult> res = fitter(set, next);
+    std::vector<EmResult> pick(tasks.size());
+    std::vector<bool> improved(tasks.size(), false);
+    for (std::size_t m = 0; m < res.size(); ++m) {
+      const std::size_t i = owner[m];
+      const double bar = improved[i] ? pick[i].loglik : best[i].loglik + 1e-9 * std::max(1.0, std::abs(best[i].loglik));
+      if (res[m].ok && res[m].loglik > bar) {
+        pick[i] = res[m];
+        improved[i] = true;
+      }
+    }
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      if (improved[i]) {
+        best[i] = std::move(pick[i]);
+        if (accepted) ++(*accepted)[i];
+        offset[i] = 0;
+      } else {
+        offset[i] += settings.candidates;
+      }
+  }
+  return best;
+}
+
+}  // namespace bsdfmix

@@ -1,0 +1,141 @@
+// BatchPart <-> bytes: a versioned header, then every field in a fixed order, each
+// vector as its length followed by its raw elements.
+#include "scale/part_codec.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <type_traits>
+
+#include "core/error.hpp"
+
+namespace bsdfmix::scale {
+
+namespace {
+
+constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
+constexpr std::uint32_t kVersion = 1;
+
+class Writer {
+ public:
+  template <class T>
+  void pod(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
+    out.insert(out.end(), p, p + sizeof(T));
+  }
+  template <class T>
+  void vec(const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    pod(std::uint64_t(v.size()));
+    const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
+    out.insert(out.end(), p, p + v.size() * sizeof(T));
+  }
+  void str(const std::string& s) {
+    pod(std::uint64_t(s.size()));
+    out.insert(out.end(), s.begin(), s.end());
+  }
+  std::vector<std::uint8_t> out;
+};
+
+class Reader {
+ public:
+  Reader(const std::uint8_t* d, std::size_t n) : data_(d), size_(n) {}
+  template <class T>
+  T pod() {
+    T v;
+    take(&v, sizeof(T));
+    return v;
+  }
+  template <class T>
+  std::vector<T> vec() {
+    const std::uint64_t n = pod<std::uint64_t>();
+    if (n > (size_ - at_) / sizeof(T)) fail();
+    std::vector<T> v(n);
+    take(v.data(), n * sizeof(T));
+    return v;
+  }
+  std::string str() {
+    const std::uint64_t n = pod<std::uint64_t>();
+    if (n > size_ - at_) fail();
+    std::string s(reinterpret_cast<const char*>(data_ + at_), n);
+    at_ += n;
+    return s;
+  }
+  bool done() const { return at_ == size_; }
+  [[noreturn]] static void fail() { throw InputError("batch part message: truncated or malformed"); }
+
+ private:
+  void take(void* dst, std::size_t n) {
+    if (n > size_ - at_) fail();
+    if (n) std::memcpy(dst, data_ + at_, n);
+    at_ += n;
+  }
+  const std::uint8_t* data_;
+  std::size_t size_, at_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_part(const BatchPart& p) {
+  Writer w;
+  w.pod(kMagic);
+  w.pod(kVersion);
+  std::vector<std::uint64_t> idx(p.slice_index.begin(), p.slice_index.end());
+  w.vec(idx);
+  const MixtureFile& m = p.mixture;
+  w.pod(std::int32_t(m.domain));
+  w.pod(std::uint8_t(m.azimuthal));
+  w.str(m.table_source);
+  w.str(m.fit_settings);
+  w.vec(m.table_theta_o);
+  w.vec(m.table_phi_o);
+  w.vec(m.theta_o);
+  w.vec(m.phi_o);
+  w.vec(m.scale);
+  w.vec(m.loglik);
+  w.vec(m.l1_rel);
+  w.vec(m.k);
+  w.pod(std::int32_t(m.kmax));
+  w.vec(m.weights);
+  w.vec(m.means);
+  w.vec(m.covariances);
+  w.str(p.report_rows);
+  w.str(p.search_rows);
+  w.str(p.slices_hash);
+  return std::move(w.out);
+}
+
+BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
+  Reader r(data, size);
+  if (r.pod<std::uint32_t>() != kMagic || r.pod<std::uint32_t>() != kVersion) Reader::fail();
+  BatchPart p;
+  for (std::uint64_t i : r.vec<std::uint64_t>()) p.slice_index.push_back(std::size_t(i));
+  MixtureFile& m = p.mixture;
+  m.domain = static_cast<Domain>(r.pod<std::int32_t>());
+  m.azimuthal = r.pod<std::uint8_t>() != 0;
+  m.table_source = r.str();
+  m.fit_settings = r.str();
+  m.table_theta_o = r.vec<double>();
+  m.table_phi_o = r.vec<double>();
+  m.theta_o = r.vec<double>();
+  m.phi_o = r.vec<double>();
+  m.scale = r.vec<double>();
+  m.loglik = r.vec<double>();
+  m.l1_rel = r.vec<double>();
+  m.k = r.vec<std::int32_t>();
+  m.kmax = r.pod<std::int32_t>();
+  m.weights = r.vec<float>();
+  m.means = r.vec<float>();
+  m.covariances = r.vec<float>();
+  p.report_rows = r.str();
+  p.search_rows = r.str();
+  p.slices_hash = r.str();
+  const std::size_t S = m.slices(), K = std::size_t(std::max(m.kmax, 0));
+  if (!r.done() || p.slice_index.size() != S || m.phi_o.size() != S || m.scale.size() != S ||
+      m.loglik.size() != S || m.l1_rel.size() != S || m.k.size() != S || m.weights.size() != S * K ||
+      m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K)
+    Reader::fail();
+  return p;
+}
+
+}  // namespace bsdfmix::scale

@@ -1,0 +1,301 @@
+// Past one machine: a batch part survives its trip through bytes exactly; `mpirun -n 2`
+// and `-n 3` fits write the same mixture file, bit for bit, as a 1-process fit (also
+// when a stopped MPI run is resumed); a catalog fits its tables into one mixture file
+// each and writes its summary CSV. The MPI runs stay on this machine (shared memory).
+// labels: scale fit
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "io/mixture_file.hpp"
+#include "io/table.hpp"
+#include "scale/catalog.hpp"
+#include "scale/part_codec.hpp"
+
+using namespace bsdfmix;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / "bsdfmix_mpi_test";
+  fs::create_directories(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), {});
+}
+
+struct Run {
+  int code;
+  std::string out, err;
+};
+
+// Runs `prefix bsdfmix args` through the shell; prefix is "" or an mpirun line.
+Run run(const std::string& prefix, const std::string& args) {
+  const fs::path out = temp_dir() / "out.txt", err = temp_dir() / "err.txt";
+  const std::string cmd = prefix + std::string(BSDFMIX_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+// mpirun on this machine only: shared memory between the ranks, root allowed (CI runs
+// as root), more ranks than cores allowed.
+std::string mpirun(int ranks) {
+  setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  setenv("OMPI_MCA_rmaps_base_oversubscribe", "1", 1);
+  return "mpirun -n " + std::to_string(ranks) + " --oversubscribe --bind-to none --mca btl self,vader ";
+}
+
+// A small fiber table: two lobes per slice, moving with theta_o.
+std::string small_table() {
+  const std::string path = (temp_dir() / "small_table.h5").string();
+  if (fs::exists(path)) return path;
+  const std::size_t n_to = 12, nt = 16, np = 32;
+  TableMeta m = make_grid(Domain::Fiber, n_to, 1, nt, np, true);
+  m.source = R"({"model": "mpi test"})";
+  std::vector<float> v;
+  for (std::size_t t = 0; t < n_to; ++t)
+    for (std::size_t i = 0; i < nt; ++i)
+      for (std::size_t j = 0; j < np; ++j) {
+        const double a = m.theta_i[i], b = m.phi_i[j], c = 0.1 * double(t);
+        const double l1 = std::exp(-((a - c) * (a - c) + (b - 1.0) * (b - 1.0)) / 0.08);
+        const double l2 = 0.5 * std::exp(-((a + c) * (a + c) + (b + 2.0) * (b + 2.0)) / 0.2);
+        v.push_back(float(l1 + l2 + 0.01));
+      }
+  write_table(path, m, v);
+  return path;
+}
+
+// A fit config of the small table writing to <stem>_*.
+std::string fit_config(const std::string& stem) {
+  const fs::path d = temp_dir();
+  const std::string path = (d / (stem + ".yaml")).string();
+  std::ofstream f(path);
+  f << "table: " << small_table() << "\n"
+    << "fit:\n  output: " << (d / (stem + "_mixture.h5")).string() << "\n  report: " << (d / (stem + "_fit.csv")).string()
+    << "\n  search_report: " << (d / (stem + "_search.csv")).string()
+    << "\n  k_min: 1\n  k_max: 4\n  restarts: 1\n  final_restarts: 2\n  iterations: 30\n  final_iterations: 60\n"
+    << "  batch: 2\n";
+  return path;
+}
+
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+void require_same_mixture(const std::string& a_path, const std::string& b_path) {
+  const MixtureFile a = read_mixture_file(a_path), b = read_mixture_file(b_path);
+  REQUIRE(a.slices() > 0);
+  CHECK(a.slices() == b.slices());
+  CHECK(a.kmax == b.kmax);
+  CHECK(same_bits(a.k, b.k));
+  CHECK(same_bits(a.weights, b.weights));
+  CHECK(same_bits(a.means, b.means));
+  CHECK(same_bits(a.covariances, b.covariances));
+  CHECK(same_bits(a.l1_rel, b.l1_rel));
+  CHECK(same_bits(a.loglik, b.loglik));
+  CHECK(same_bits(a.scale, b.scale));
+  CHECK(same_bits(a.theta_o, b.theta_o));
+  CHECK(a.fit_settings == b.fit_settings);
+}
+
+// The farm's closing log line: batches in all and those rank 0 fitted itself.
+std::pair<int, int> farm_batches(const std::string& err) {
+  std::smatch m;
+  const std::regex re(R"(mpi: (\d+) ranks, (\d+) batches \((\d+) fitted by rank 0\))");
+  if (!std::regex_search(err, m, re)) return {-1, -1};
+  return {std::stoi(m[2]), std::stoi(m[3])};
+}
+
+const std::string& reference_mixture() {
+  static const std::string path = [] {
+    const std::string cfg = fit_config("one");
+    const Run r = run("", "fit " + cfg + " -q");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    return (temp_dir() / "one_mixture.h5").string();
+  }();
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]") {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-3, 3);
+  BatchPart p;
+  p.mixture.domain = Domain::Hemisphere;
+  p.mixture.azimuthal = false;
+  p.mixture.table_source = R"({"model": "x"})";
+  p.mixture.fit_settings = R"({"k_max": 3})";
+  p.mixture.table_theta_o = {0.1, 0.2};
+  p.mixture.table_phi_o = {0.0, 1.0, 2.0};
+  for (std::size_t s = 0; s < 5; ++s) {
+    const int k = 1 + int(s % 3);
+    std::vector<double> w, mean, cov;
+    for (int j = 0; j < k; ++j) {
+      w.push_back(std::abs(u(rng)) + 0.1);
+      mean.insert(mean.end(), {u(rng), u(rng)});
+      cov.insert(cov.end(), {1.0 + std::abs(u(rng)), 0.1 * u(rng), 1.0 + std::abs(u(rng))});
+    }
+    p.mixture.add_slice(u(rng), u(rng), std::abs(u(rng)), u(rng), s == 4 ? 0.0 : std::abs(u(rng)), w, mean, cov);
+    p.slice_index.push_back(100 + 3 * s);
+  }
+  p.mixture.loglik[2] = -0.0;  // the sign of zero survives too
+  p.report_rows = "100,0.1,0,1,5,-1.5,0.01,0.1,cpu,ok\n";
+  p.search_rows = std::string("103,2,0,-1,0.2,0.208,1\n") + std::string(1, '\0') + "x";  // any bytes
+  p.slices_hash = "0123456789abcdef";
+
+  const std::vector<std::uint8_t> bytes = scale::encode_part(p);
+  const BatchPart q = scale::decode_part(bytes.data(), bytes.size());
+  CHECK(q.slice_index == p.slice_index);
+  CHECK(q.mixture.domain == p.mixture.domain);
+  CHECK(q.mixture.azimuthal == p.mixture.azimuthal);
+  CHECK(q.mixture.table_source == p.mixture.table_source);
+  CHECK(q.mixture.fit_settings == p.mixture.fit_settings);
+  CHECK(same_bits(q.mixture.table_theta_o, p.mixture.table_theta_o));
+  CHECK(same_bits(q.mixture.table_phi_o, p.mixture.table_phi_o));
+  for (auto f : {&MixtureFile::theta_o, &MixtureFile::phi_o, &MixtureFile::scale, &MixtureFile::loglik,
+                 &MixtureFile::l1_rel})
+    CHECK(same_bits(q.mixture.*f, p.mixture.*f));
+  CHECK(same_bits(q.mixture.k, p.mixture.k));
+  CHECK(q.mixture.kmax == p.mixture.kmax);
+  CHECK(same_bits(q.mixture.weights, p.mixture.weights));
+  CHECK(same_bits(q.mixture.means, p.mixture.means));
+  CHECK(same_bits(q.mixture.covariances, p.mixture.covariances));
+  CHECK(q.report_rows == p.report_rows);
+  CHECK(q.search_rows == p.search_rows);
+  CHECK(q.slices_hash == p.slices_hash);
+  CHECK(std::signbit(q.mixture.loglik[2]));
+  CHECK(scale::encode_part(q) == bytes);
+
+  // Truncated or padded bytes are refused, never half-read.
+  for (std::size_t n : {std::size_t(0), std::size_t(7), bytes.size() / 2, bytes.size() - 1})
+    CHECK_THROWS_AS(scale::decode_part(bytes.data(), n), InputError);
+  std::vector<std::uint8_t> longer = bytes;
+  longer.push_back(0);
+  CHECK_THROWS_AS(scale::decode_part(longer.data(), longer.size()), InputError);
+}
+
+TEST_CASE("mpirun -n 2 and -n 3 fits equal the 1-process fit bit for bit", "[scale]") {
+  const std::string one = reference_mixture();
+  for (int ranks : {2, 3}) {
+    INFO(ranks << " ranks");
+    const std::string stem = "ranks" + std::to_string(ranks);
+    const Run r = run(mpirun(ranks), "fit " + fit_config(stem));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    // 12 slices in batches of 2: 6 batches, some fitted by the workers.
+    const auto [batches, by_root] = farm_batches(r.err);
+    CHECK(batches == 6);
+    CHECK(by_root >= 0);
+    CHECK(by_root < batches);
+    CHECK_FALSE(fs::exists(temp_dir() / (stem + "_mixture.h5.parts")));
+    require_same_mixture(one, (temp_dir() / (stem + "_mixture.h5")).string());
+    CHECK(std::count(r.out.begin(), r.out.end(), '\n') > 0);  // rank 0 printed the summary once
+    CHECK(r.out.find("fit ") == r.out.rfind("fit "));
+  }
+}
+
+TEST_CASE("a stopped 2-rank fit resumes to the 1-process file", "[scale]") {
+  const std::string one = reference_mixture();
+  const std::string cfg = fit_config("resumed");
+  const std::string out = (temp_dir() / "resumed_mixture.h5").string();
+  fs::remove(out);
+  Run r = run(mpirun(2), "fit " + cfg + " -q --max-batches 2");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_FALSE(fs::exists(out));
+  CHECK(fs::exists(out + ".parts"));
+  r = run(mpirun(2), "fit " + cfg);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("resuming: 4 slice(s)"));
+  require_same_mixture(one, out);
+}
+
+TEST_CASE("without mpirun a fit makes no MPI call", "[scale]") {
+  // A plain run prints no farm line and needs no launcher.
+  const Run r = run("", "fit " + fit_config("plain"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("mpi:") == std::string::npos);
+  require_same_mixture(reference_mixture(), (temp_dir() / "plain_mixture.h5").string());
+}
+
+TEST_CASE("a catalog fits every table into its own mixture file and writes the summary", "[scale]") {
+  const fs::path d = temp_dir() / "catalog";
+  fs::remove_all(d);
+  fs::create_directories(d);
+  const std::string cfg = (temp_dir() / "catalog.yaml").string();
+  {
+    std::ofstream f(cfg);
+    f << "catalog:\n  dir: " << d.string() << "\n  presets: [silk, wool]\n"
+      << "  generate: {theta_o: 4, theta_i: 12, phi_i: 24}\n"
+      << "  fit: {k_min: 1, k_max: 3, restarts: 1, final_restarts: 1, iterations: 20, final_iterations: 40}\n"
+      << "  tables:\n    - table: " << small_table() << "\n      name: small\n      fit: {k_max: 2}\n";
+  }
+  const scale::Catalog cat = scale::load_catalog(cfg);
+  REQUIRE(cat.entries.size() == 3);
+  CHECK(cat.entries[0].name == "silk");
+  CHECK(cat.entries[2].config.fit->k_max == 2);
+  CHECK(cat.entries[0].config.fit->k_max == 3);
+
+  const Run r = run("", "catalog " + cfg + " -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::string csv = slurp(d / "summary.csv");
+  INFO(csv);
+  CHECK(csv.rfind("table,slices,mean_k,l1_median,l1_p90,table_bytes,mixture_bytes,seconds\n", 0) == 0);
+  CHECK(std::count(csv.begin(), csv.end(), '\n') == 4);
+  CHECK_THAT(csv, Catch::Contains("\nsilk,4,"));
+  CHECK_THAT(csv, Catch::Contains("\nwool,4,"));
+  CHECK_THAT(csv, Catch::Contains("\nsmall,12,"));
+  for (const char* n : {"silk", "wool", "small"}) {
+    INFO(n);
+    const MixtureFile m = read_mixture_file((d / (std::string(n) + "_mixture.h5")).string());
+    CHECK(m.slices() == (std::string(n) == "small" ? 12u : 4u));
+  }
+
+  // The same catalog on 2 ranks: the same mixture files.
+  const fs::path d2 = temp_dir() / "catalog2";
+  fs::remove_all(d2);
+  const std::string cfg2 = (temp_dir() / "catalog2.yaml").string();
+  {
+    std::string text = slurp(cfg);
+    text.replace(text.find(d.string()), d.string().size(), d2.string());
+    std::ofstream(cfg2) << text;
+  }
+  const Run r2 = run(mpirun(2), "catalog " + cfg2 + " -q");
+  INFO(r2.err);
+  REQUIRE(r2.code == 0);
+  for (const char* n : {"silk", "wool", "small"}) {
+    INFO(n);
+    require_same_mixture((d / (std::string(n) + "_mixture.h5")).string(), (d2 / (std::string(n) + "_mixture.h5")).string());
+  }
+}
+
+TEST_CASE("catalog errors name the key", "[scale]") {
+  CHECK_THROWS_WITH(scale::parse_catalog("catalog:\n  presets: [silk]\n  colour: red\n", "c.yaml"),
+                    Catch::Contains("colour"));
+  CHECK_THROWS_WITH(scale::parse_catalog("catalog:\n  dir: x\n", "c.yaml"), Catch::Contains("lists no table"));
+  CHECK_THROWS_WITH(scale::parse_catalog("catalog:\n  presets: [silk]\n  fit: {k_maxx: 3}\n", "c.yaml"),
+                    Catch::Contains("k_maxx"));
+  CHECK_THROWS_WITH(scale::parse_catalog("catalog:\n  presets: [silk, silk]\n", "c.yaml"),
+                    Catch::Contains("names two tables"));
+}

@@ -1,0 +1,398 @@
+// The Gaussian-count search on slices that are known mixtures (2 to 6 components, with
+// overlapping pairs, lobes across the phi seam and lobes near the theta border): the
+// true K, the recovered parameters, and split-and-merge fits that are never worse than
+// plain EM from the same start.
+// labels: fit
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <numeric>
+#include <random>
+#include <cstdio>
+#include <sstream>
+
+#include "config/config.hpp"
+#include "core/error.hpp"
+#include "device/device.hpp"
+#include "fit/em.hpp"
+#include "fit/em_internal.hpp"
+#include "fit/smem.hpp"
+#include "fit/synthetic.hpp"
+#include "io/mixture_file.hpp"
+#include "io/table.hpp"
+#include "sweep/fit_error.hpp"
+#include "sweep/sweep.hpp"
+
+using namespace bsdfmix;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / "bsdfmix_search_test";
+  fs::create_directories(d);
+  return d;
+}
+
+// Uniform [0, 1) from a 64-bit generator whose output the standard fixes.
+struct Uniform {
+  std::mt19937_64 g;
+  explicit Uniform(std::uint64_t seed) : g(seed) {}
+  double operator()() { return double(g() >> 11) * 0x1.0p-53; }
+  double operator()(double lo, double hi) { return lo + (hi - lo) * (*this)(); }
+};
+
+enum class Case { Plain, Overlap, Seam, Border };
+
+struct Known {
+  Gmm gmm;
+  Case kind = Case::Plain;
+};
+
+double wrapped(double d) { return d - 2 * kPi * std::nearbyint(d / (2 * kPi)); }
+
+// A random mixture of k components in the fiber domain, with one special case: two
+// components 0.13 rad apart (overlap), one whose phi spread crosses +-pi (seam), or
+// one whose mean lies 2.5 to 3 standard deviations inside the theta border (border).
+// Other pairs are at least 3 combined standard deviations apart, so k is the truth.
+Known random_known(int k, Case kind, std::uint64_t seed) {
+  Uniform u(seed);
+  for (int attempt = 0;; ++attempt) {
+    Known out;
+    out.kind = kind;
+    Gmm& g = out.gmm;
+    std::vector<double> st(k), sp(k);
+    for (int j = 0; j < k; ++j) {
+      st[j] = u(0.06, 0.16);
+      sp[j] = u(0.10, 0.35);
+      double mt = u(-1.1, 1.1), mp = u(-kPi, kPi);
+      if (kind == Case::Overlap && j == 1) {  // beside component 0, 0.13 rad apart
+        st[0] = st[1] = 0.04;
+        g.cov[0] = st[0] * st[0];
+        g.cov[1] = 0;
+        g.cov[2] = sp[0] * sp[0];
+        mt = g.mean[0] + 0.13;
+        mp = wrap_phi(g.mean[1] + u(-0.03, 0.03));
+      }
+      if (kind == Case::Seam && j == 0) mp = wrap_phi(kPi - u(0.0, 1.0) * sp[j]);
+      if (kind == Case::Border && j == 0) mt = (u() < 0.5 ? -1 : 1) * (kPi / 2 - u(2.5, 3.0) * st[j]);
+      const double rho = u(-0.5, 0.5);
+      g.weight.push_back(u(0.6, 1.4));
+      g.mean.insert(g.mean.end(), {mt, wrap_phi(mp)});
+      g.cov.insert(g.cov.end(), {st[j] * st[j], rho * st[j] * sp[j], sp[j] * sp[j]});
+    }
+    if (kind == Case::Overlap) g.cov[4] = 0;  // the pair: axis-aligned, 0.13 rad = 3.25 sigma_theta
+    bool separated = std::abs(g.mean[0]) < kPi / 2 - 2.5 * st[0] || kind == Case::Border;
+    for (int i = 0; i < k && separated; ++i)
+      for (int j = i + 1; j < k && separated; ++j) {
+        if (kind == Case::Overlap && i == 0 && j == 1) continue;
+        const double dt = (g.mean[2 * i] - g.mean[2 * j]) / (st[i] + st[j]);
+        const double dp = wrapped(g.mean[2 * i + 1] - g.mean[2 * j + 1]) / (sp[i] + sp[j]);
+        separated = dt * dt + dp * dp >= 9.0;
+      }
+    for (int j = 0; j < k && separated; ++j)
+      if (!(kind == Case::Border && j == 0)) separated = std::abs(g.mean[2 * j]) <= kPi / 2 - 3.5 * st[j];
+    if (!separated && attempt < 10000) continue;
+    double sum = 0;
+    for (double w : g.weight) sum += w;
+    for (double& w : g.weight) w /= sum;
+    return out;
+  }
+}
+
+// The test set: `n` slices of 2 to 6 components, the special cases in turn.
+std::vector<Known> known_set(int n, std::uint64_t seed) {
+  std::vector<Known> out;
+  for (int i = 0; i < n; ++i) {
+    const int k = 2 + i % 5;
+    const Case kind = static_cast<Case>((i / 5) % 4);
+    out.push_back(random_known(k, kind, seed * 1000 + std::uint64_t(i)));
+  }
+  return out;
+}
+
+// A fiber table whose slice t has the integrand weights of known[t] (f = density / cos).
+std::string known_table(const std::string& name, const std::vector<Known>& known, std::size_t nt, std::size_t np) {
+  TableMeta m = make_grid(Domain::Fiber, known.size(), 1, nt, np, true);
+  m.source = R"({"model": "known mixtures"})";
+  std::vector<float> v;
+  for (const Known& kn : known)
+    for (std::size_t i = 0; i < nt; ++i)
+      for (std::size_t j = 0; j < np; ++j)
+        v.push_back(float(gmm_density(kn.gmm, m.theta_i[i], m.phi_i[j]) / std::cos(m.theta_i[i])));
+  const std::string path = (temp_dir() / name).string();
+  write_table(path, m, v);
+  return path;
+}
+
+FitSection settings(const std::string& stem, const std::string& search) {
+  FitSection f;
+  f.output = (temp_dir() / (stem + "_mixture.h5")).string();
+  f.report = (temp_dir() / (stem + "_fit.csv")).string();
+  f.search_report = (temp_dir() / (stem + "_search.csv")).string();
+  f.k_min = 1;
+  f.k_max = 10;
+  f.restarts = 2;
+  f.final_restarts = 2;
+  f.iterations = 60;
+  f.final_iterations = 150;
+  f.tolerance = 1e-7;
+  f.search = search;
+  return f;
+}
+
+// The fitted components matched to the true ones (the permutation with the smallest
+// sum of squared mean offsets in units of the true standard deviations).
+std::vector<int> match(const Gmm& truth, const Gmm& fit) {
+  const int k = truth.k();
+  std::vector<int> perm(k), best;
+  std::iota(perm.begin(), perm.end(), 0);
+  double best_cost = 1e300;
+  do {
+    double c = 0;
+    for (int j = 0; j < k; ++j) {
+      const int f = perm[j];
+      const double dt = (fit.mean[2 * f] - truth.mean[2 * j]) / std::sqrt(truth.cov[3 * j]);
+      const double dp = wrapped(fit.mean[2 * f + 1] - truth.mean[2 * j + 1]) / std::sqrt(truth.cov[3 * j + 2]);
+      c += dt * dt + dp * dp;
+    }
+    if (c < best_cost) {
+      best_cost = c;
+      best = perm;
+    }
+  } while (std::next_permutation(perm.begin(), perm.end()));
+  return best;
+}
+
+const char* case_name(Case c) {
+  switch (c) {
+    case Case::Overlap: return "overlap";
+    case Case::Seam: return "seam";
+    case Case::Border: return "border";
+    default: return "plain";
+  }
+}
+
+}  // namespace
+
+TEST_CASE("split and merge keep the moments of the mixture", "[search]") {
+  Gmm g;
+  g.weight = {0.3, 0.7};
+  g.mean = {0.2, 3.0, -0.4, -3.1};  // the pair straddles phi = +-pi
+  g.cov = {0.02, 0.006, 0.05, 0.01, -0.002, 0.03};
+  // Moments of the pair about a point near the seam, phi unwrapped onto one side.
+  auto moments = [](const Gmm& m) {
+    std::vector<double> r(6, 0.0);
+    for (int j = 0; j < m.k(); ++j) {
+      const double w = m.weight[j], t = m.mean[2 * j], p = 3.0 + wrapped(m.mean[2 * j + 1] - 3.0);
+      r[0] += w;
+      r[1] += w * t;
+      r[2] += w * p;
+      r[3] += w * (m.cov[3 * j] + t * t);
+      r[4] += w * (m.cov[3 * j + 1] + t * p);
+      r[5] += w * (m.cov[3 * j + 2] + p * p);
+    }
+    return r;
+  };
+  const std::vector<double> before = moments(g);
+  const Gmm merged = merge_components(g, 0, 1);
+  REQUIRE(merged.k() == 1);
+  const Gmm split = split_component(merged, 0, 1e-6);
+  REQUIRE(split.k() == 2);
+  for (const Gmm* m : {&merged, &split}) {
+    const std::vector<double> after = moments(*m);
+    for (int q = 0; q < 6; ++q) CHECK(after[q] == Approx(before[q]).margin(1e-12));
+  }
+  // The halves sit on the principal axis, one standard deviation apart.
+  const double lambda = 0.5 * (merged.cov[0] + merged.cov[2]) +
+                        std::sqrt(0.25 * std::pow(merged.cov[0] - merged.cov[2], 2) + merged.cov[1] * merged.cov[1]);
+  const double dt = split.mean[2] - split.mean[0], dp = wrapped(split.mean[3] - split.mean[1]);
+  CHECK(std::sqrt(dt * dt + dp * dp) == Approx(std::sqrt(lambda)).epsilon(1e-9));
+  // Growing splits the worst-scoring component first.
+  ComponentScores scores;
+  scores.split = {0.1, 0.5};
+  scores.axis = {0, 0};
+  const Gmm grown = grow_mixture(g, scores, 3, 1e-6);
+  REQUIRE(grown.k() == 3);
+  CHECK(grown.weight[0] == Approx(0.3));
+  CHECK(grown.weight[1] == Approx(0.35));
+}
+
+TEST_CASE("the split score finds the component that covers two lobes; the merge score the pair on one lobe",
+          "[search]") {
+  const SliceGrid grid = make_slice_grid(Domain::Fiber, 60, 120);
+  Gmm truth;
+  truth.weight = {0.25, 0.25, 0.5};
+  truth.mean = {-0.5, 1.0, -0.2, 1.0, 0.6, -1.5};
+  truth.cov = {0.004, 0, 0.02, 0.004, 0, 0.02, 0.02, 0, 0.1};
+  const std::vector<double> w = mixture_weights(grid, truth);
+  // A fit with one component over the first two lobes and two on the third.
+  Gmm fit;
+  fit.weight = {0.5, 0.25, 0.25};
+  fit.mean = {-0.35, 1.0, 0.5, -1.5, 0.7, -1.5};
+  fit.cov = {0.03, 0, 0.02, 0.02, 0, 0.1, 0.02, 0, 0.1};
+  const ComponentScores sc = score_components(grid, w, fit, 3);
+  CHECK(sc.split[0] > sc.split[1]);
+  CHECK(sc.split[0] > sc.split[2]);
+  REQUIRE(!sc.merge.empty());
+  CHECK(sc.merge[0] == std::make_pair(1, 2));
+  // The move merges the pair and splits the wide component: the truth's layout.
+  const std::vector<Gmm> moves = smem_candidates(fit, sc, 1, 1e-5);
+  REQUIRE(moves.size() == 1);
+  const Gmm& m = moves[0];
+  REQUIRE(m.k() == 3);
+  std::vector<double> thetas;
+  for (int j = 0; j < 3; ++j) thetas.push_back(m.mean[2 * j]);
+  std::sort(thetas.begin(), thetas.end());
+  CHECK(thetas[0] < -0.35);
+  CHECK(thetas[1] > -0.35);
+  CHECK(thetas[1] < 0.0);
+  CHECK(thetas[2] == Approx(0.6).margin(0.11));
+}
+
+TEST_CASE("split-and-merge fits at a fixed K are never worse than plain EM from the same start", "[search]") {
+  const std::vector<Known> known = known_set(20, 7);
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 60, 120);
+  std::vector<EmTask> tasks;
+  for (std::size_t s = 0; s < known.size(); ++s) {
+    set.weights.push_back(mixture_weights(set.grid, known[s].gmm));
+    EmTask t;
+    t.slice = s;
+    t.k = known[s].gmm.k();
+    t.settings.iterations = 60;
+    t.settings.tolerance = 1e-7;
+    t.settings.restarts = 1;
+    t.settings.seed = 3;
+    tasks.push_back(t);
+  }
+  EmEngine engine(select_devices(""));
+  const EmFitter fitter = [&](const SliceSet& ss, const std::vector<EmTask>& t) { return engine.fit(ss, t); };
+  const std::vector<EmResult> plain = fitter(set, tasks);
+  std::vector<int> accepted;
+  const std::vector<EmResult> smem = split_merge_fit(fitter, set, tasks, SmemSettings{}, &accepted);
+  REQUIRE(plain.size() == smem.size());
+  int improved = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    INFO("slice " << i << " K " << tasks[i].k << ": plain " << plain[i].loglik << ", split-and-merge " << smem[i].loglik);
+    REQUIRE(plain[i].ok);
+    REQUIRE(smem[i].ok);
+    CHECK(smem[i].loglik >= plain[i].loglik);
+    if (accepted[i] > 0) CHECK(smem[i].loglik > plain[i].loglik);
+    if (smem[i].loglik > plain[i].loglik + 1e-3) ++improved;
+  }
+  // Some of these starts are local optima that the moves escape.
+  CHECK(improved >= 1);
+  // The CPU reference takes the same explicit starts.
+  std::vector<EmTask> from_fit = {tasks[0]};
+  from_fit[0].init = smem[0].gmm;
+  const std::vector<EmResult> ref = em_fit_reference(set, from_fit);
+  REQUIRE(ref[0].ok);
+  CHECK(ref[0].loglik == Approx(smem[0].loglik).epsilon(1e-4));
+  // An explicit start with the wrong K is a configuration error.
+  from_fit[0].k = tasks[0].k + 1;
+  CHECK_THROWS_AS(em_fit_reference(set, from_fit), ConfigError);
+  CHECK_THROWS_AS(engine.fit(set, from_fit), ConfigError);
+}
+
+TEST_CASE("the search finds the true K of known mixtures and their parameters", "[search]") {
+  // Three draws of 40 slices.
+  std::vector<Known> known;
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const std::vector<Known> k = known_set(40, seed);
+    known.insert(known.end(), k.begin(), k.end());
+  }
+  const std::string table = known_table("known.h5", known, 90, 180);
+  const FitSection f = settings("known", "smem");
+  const SweepSummary sum = run_sweep(table, f, "");
+  REQUIRE(sum.slices == known.size());
+  const MixtureFile m = read_mixture_file(f.output);
+  REQUIRE(m.slices() == known.size());
+  int right = 0;
+  std::ostringstream misses;
+  for (std::size_t s = 0; s < known.size(); ++s) {
+    const Gmm& truth = known[s].gmm;
+    Gmm fit;
+    m.slice_params(s, fit.weight, fit.mean, fit.cov);
+    if (fit.k() != truth.k()) {
+      misses << " slice " << s << " (" << case_name(known[s].kind) << ") K " << fit.k() << " not " << truth.k() << ";";
+      continue;
+    }
+    ++right;
+    const std::vector<int> perm = match(truth, fit);
+    for (int j = 0; j < truth.k(); ++j) {
+      const int q = perm[j];
+      const double stt = std::sqrt(truth.cov[3 * j]), spp = std::sqrt(truth.cov[3 * j + 2]);
+      INFO("slice " << s << " (" << case_name(known[s].kind) << ") component " << j << " of " << truth.k()
+                    << ": weight " << fit.weight[q] << " vs " << truth.weight[j] << ", mean (" << fit.mean[2 * q]
+                    << ", " << fit.mean[2 * q + 1] << ") vs (" << truth.mean[2 * j] << ", " << truth.mean[2 * j + 1]
+                    << "), cov (" << fit.cov[3 * q] << ", " << fit.cov[3 * q + 1] << ", " << fit.cov[3 * q + 2]
+                    << ") vs (" << truth.cov[3 * j] << ", " << truth.cov[3 * j + 1] << ", " << truth.cov[3 * j + 2]
+                    << ")");
+      CHECK(std::abs(fit.weight[q] - truth.weight[j]) <= 0.01 + 0.05 * truth.weight[j]);
+      CHECK(std::abs(fit.mean[2 * q] - truth.mean[2 * j]) <= 0.1 * stt);
+      CHECK(std::abs(wrapped(fit.mean[2 * q + 1] - truth.mean[2 * j + 1])) <= 0.1 * spp);
+      // Covariance: relative error of each entry against the scale of its row and column.
+      CHECK(std::abs(fit.cov[3 * q] - truth.cov[3 * j]) <= 0.1 * stt * stt);
+      CHECK(std::abs(fit.cov[3 * q + 1] - truth.cov[3 * j + 1]) <= 0.1 * stt * spp);
+      CHECK(std::abs(fit.cov[3 * q + 2] - truth.cov[3 * j + 2]) <= 0.1 * spp * spp);
+    }
+  }
+  INFO("true K on " << right << " of " << known.size() << " slices; misses:" << misses.str());
+  CHECK(right >= int(std::ceil(0.95 * double(known.size()))));
+}
+
+TEST_CASE("the search method is a fit key: smem by default, restarts, nothing else", "[search]") {
+  const fs::path table = temp_dir() / "config.h5";
+  if (!fs::exists(table)) write_table(table.string(), make_grid(Domain::Fiber, 2, 1, 2, 4, true), std::vector<float>(16, 1.0f));
+  const std::string head = "table: " + table.string() + "\nfit:\n";
+  CHECK(parse_config(head, "cfg.yaml").fit->search == "smem");
+  CHECK(parse_config(head + "  search: restarts\n", "cfg.yaml").fit->search == "restarts");
+  CHECK_THROWS_AS(parse_config(head + "  search: kmeans\n", "cfg.yaml"), ConfigError);
+}
+
+// A measurement (hidden: run it by its tag): lobes c standard deviations inside the theta
+// border, fitted by both search methods; docs/fitting.md, "The theta border", shows the rows.
+TEST_CASE("measure: lobes near the theta border", "[.measure]") {
+  const std::vector<double> cs = {0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0};
+  std::vector<Known> known;
+  for (double c : cs)
+    for (int rep = 0; rep < 4; ++rep) {
+      Known kn = random_known(3, Case::Plain, 500 + std::uint64_t(rep));
+      kn.gmm.mean[0] = (rep % 2 ? 1 : -1) * (kPi / 2 - c * std::sqrt(kn.gmm.cov[0]));
+      known.push_back(kn);
+    }
+  const std::string table = known_table("border.h5", known, 90, 180);
+  const SliceGrid grid = make_slice_grid(Domain::Fiber, 90, 180);
+  for (const char* method : {"restarts", "smem"}) {
+    const FitSection f = settings(std::string("border_") + method, method);
+    run_sweep(table, f, "");
+    const MixtureFile m = read_mixture_file(f.output);
+    REQUIRE(m.slices() == known.size());
+    for (std::size_t s = 0; s < known.size(); ++s) {
+      const Gmm& truth = known[s].gmm;
+      WeightedSlice ws;
+      ws.theta = grid.theta;
+      ws.phi = grid.phi;
+      ws.w = mixture_weights(grid, truth);
+      const double truth_l1 = l1_rel_error(ws, make_slice_mixture(truth.weight, truth.mean, truth.cov));
+      Gmm fit;
+      m.slice_params(s, fit.weight, fit.mean, fit.cov);
+      std::string shape = "-";
+      if (fit.k() == truth.k()) {
+        const int q = match(truth, fit)[0];
+        const double sd = std::sqrt(truth.cov[0]);
+        std::ostringstream o;
+        o << "mean shift " << std::abs(fit.mean[2 * q] - truth.mean[0]) / sd << " sigma, sigma ratio "
+          << std::sqrt(fit.cov[3 * q] / truth.cov[0]);
+        shape = o.str();
+      }
+      std::printf("%-8s c %.1f draw %zu: K %d, l1_rel %.4f, true mixture's l1_rel %.4f, %s\n", method, cs[s / 4], s % 4,
+                  fit.k(), m.l1_rel[s], truth_l1, shape.c_str());
+      if (cs[s / 4] >= 2.0) CHECK(fit.k() == truth.k());
+    }
+  }
+}
