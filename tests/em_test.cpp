@@ -70,6 +70,18 @@ Diff compare(const Gmm& a, const Gmm& b) {
   return d;
 }
 
+// A kernel result against the reference's: the same iterations, and parameters within
+// float rounding. Measured: |dL| <= 2e-7, weights 2e-7, means 1e-6 rad, covariances 2e-5
+// relative.
+void check_matches(const EmResult& got, const EmResult& ref) {
+  CHECK(got.iterations == ref.iterations);
+  CHECK(std::abs(got.loglik - ref.loglik) < 2e-5);
+  const Diff d = compare(got.gmm, ref.gmm);
+  CHECK(d.weight < 2e-5);
+  CHECK(d.mean < 5e-5);
+  CHECK(d.cov_rel < 5e-4);
+}
+
 // For each true component, the fitted one nearest to it.
 int nearest(const Gmm& fit, double mt, double mp) {
   int best = 0;
@@ -125,13 +137,7 @@ TEST_CASE("kernels match the reference for several K, both precisions", "[em]") 
       INFO("precision " << precision_name(prec) << ", K = " << tasks[i].k);
       REQUIRE(ref[i].ok);
       REQUIRE(got[i].ok);
-      CHECK(got[i].iterations == ref[i].iterations);
-      // Measured: |dL| <= 2e-7, weights 2e-7, means 1e-6 rad, covariances 2e-5 relative.
-      CHECK(std::abs(got[i].loglik - ref[i].loglik) < 2e-5);
-      const Diff d = compare(got[i].gmm, ref[i].gmm);
-      CHECK(d.weight < 2e-5);
-      CHECK(d.mean < 5e-5);
-      CHECK(d.cov_rel < 5e-4);
+      check_matches(got[i], ref[i]);
     }
   }
 }
@@ -174,12 +180,7 @@ TEST_CASE("kernels match the reference in every K bucket the engine compiles", "
                         << ", K = " << tasks[i].k << " (bucket " << em_detail::k_bucket(tasks[i].k) << ")");
       REQUIRE(ref[i].ok);
       REQUIRE(got[i].ok);
-      CHECK(got[i].iterations == ref[i].iterations);
-      CHECK(std::abs(got[i].loglik - ref[i].loglik) < 2e-5);
-      const Diff d = compare(got[i].gmm, ref[i].gmm);
-      CHECK(d.weight < 2e-5);
-      CHECK(d.mean < 5e-5);
-      CHECK(d.cov_rel < 5e-4);
+      check_matches(got[i], ref[i]);
     }
   }
 }
@@ -198,12 +199,7 @@ TEST_CASE("the GPU layout (scalar work-items, local reductions) matches the refe
     for (std::size_t i = 0; i < tasks.size(); ++i) {
       INFO("precision " << precision_name(prec) << ", K = " << tasks[i].k);
       REQUIRE(got[i].ok);
-      CHECK(got[i].iterations == ref[i].iterations);
-      CHECK(std::abs(got[i].loglik - ref[i].loglik) < 2e-5);
-      const Diff d = compare(got[i].gmm, ref[i].gmm);
-      CHECK(d.weight < 2e-5);
-      CHECK(d.mean < 5e-5);
-      CHECK(d.cov_rel < 5e-4);
+      check_matches(got[i], ref[i]);
     }
   }
 }

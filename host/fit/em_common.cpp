@@ -108,6 +108,33 @@ void floor_covariance(double& a, double& b, double& c, double f) {
   c = m1 * vy * vy + m2 * vx * vx;
 }
 
+// Largest eigenvalue of [a b; b c] and its unit eigenvector; with minor, the smallest
+// and the eigenvector perpendicular.
+void principal_axis(double a, double b, double c, double& lambda, double& vx, double& vy, bool minor) {
+  const double disc = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  lambda = 0.5 * (a + c) + disc;
+  if (std::abs(b) > 0) {
+    vx = lambda - c;
+    vy = b;
+  } else if (a >= c) {
+    vx = 1;
+    vy = 0;
+  } else {
+    vx = 0;
+    vy = 1;
+  }
+  const double n = std::sqrt(vx * vx + vy * vy);
+  vx /= n;
+  vy /= n;
+  if (minor) {
+    lambda = std::max(0.5 * (a + c) - disc, 0.0);
+    const double t = vx;
+    vx = -vy;
+    vy = t;
+  }
+}
+
+
 int k_bucket(int k) {
   int b = 4;
   while (b < k) b *= 2;

@@ -54,4 +54,8 @@ double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, cons
 // Smallest power of two >= max(k, 4): the K_MAX a problem of k components runs under.
 int k_bucket(int k);
 
+// Largest eigenvalue of the covariance [a b; b c] and its unit eigenvector; with
+// `minor`, the smallest and the eigenvector perpendicular.
+void principal_axis(double a, double b, double c, double& lambda, double& vx, double& vy, bool minor = false);
+
 }  // namespace bsdfmix::em_detail

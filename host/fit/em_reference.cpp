@@ -32,19 +32,9 @@ bool reseed(Gmm& g, std::vector<bool>& empty, int j) {
     if (!empty[i] && (h < 0 || g.weight[i] > g.weight[h])) h = i;
   if (h < 0) return false;
   const double a = g.cov[3 * h], b = g.cov[3 * h + 1], c = g.cov[3 * h + 2];
-  const double lambda = 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b);
-  double vx, vy;
-  if (std::abs(b) > 0) {
-    vx = lambda - c;
-    vy = b;
-  } else if (a >= c) {
-    vx = 1;
-    vy = 0;
-  } else {
-    vx = 0;
-    vy = 1;
-  }
-  const double step = 0.5 * std::sqrt(lambda) / std::sqrt(vx * vx + vy * vy);
+  double lambda, vx, vy;
+  principal_axis(a, b, c, lambda, vx, vy);
+  const double step = 0.5 * std::sqrt(lambda);
   const double mt = g.mean[2 * h], mp = g.mean[2 * h + 1];
   g.mean[2 * j] = mt + step * vx;
   g.mean[2 * j + 1] = wrap_phi(mp + step * vy);

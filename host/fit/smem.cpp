@@ -18,32 +18,6 @@ namespace {
 
 double wrap_diff(double d) { return d - 2 * kPi * std::nearbyint(d / (2 * kPi)); }
 
-// Largest eigenvalue of [a b; b c] and its unit eigenvector; with minor, the smallest
-// and the eigenvector perpendicular.
-void principal_axis(double a, double b, double c, double& lambda, double& vx, double& vy, bool minor = false) {
-  const double disc = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
-  lambda = 0.5 * (a + c) + disc;
-  if (std::abs(b) > 0) {
-    vx = lambda - c;
-    vy = b;
-  } else if (a >= c) {
-    vx = 1;
-    vy = 0;
-  } else {
-    vx = 0;
-    vy = 1;
-  }
-  const double n = std::sqrt(vx * vx + vy * vy);
-  vx /= n;
-  vy /= n;
-  if (minor) {
-    lambda = std::max(0.5 * (a + c) - disc, 0.0);
-    const double t = vx;
-    vx = -vy;
-    vy = t;
-  }
-}
-
 }  // namespace
 
 ComponentScores score_components(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm,
@@ -93,7 +67,7 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
   for (int j = 0; j < k; ++j)
     for (int q = 0; q < 2; ++q) {
       double lambda;
-      principal_axis(gmm.cov[3 * j], gmm.cov[3 * j + 1], gmm.cov[3 * j + 2], lambda, ax[2 * j + q], ay[2 * j + q], q == 1);
+      em_detail::principal_axis(gmm.cov[3 * j], gmm.cov[3 * j + 1], gmm.cov[3 * j + 2], lambda, ax[2 * j + q], ay[2 * j + q], q == 1);
     }
   std::vector<int> active;
   std::vector<double> ract;
@@ -153,7 +127,7 @@ Gmm split_component(const Gmm& gmm, int j, double floor, int axis) {
   Gmm g = gmm;
   const double a = g.cov[3 * j], b = g.cov[3 * j + 1], c = g.cov[3 * j + 2];
   double lambda, vx, vy;
-  principal_axis(a, b, c, lambda, vx, vy, axis == 1);
+  em_detail::principal_axis(a, b, c, lambda, vx, vy, axis == 1);
   const double step = 0.5 * std::sqrt(lambda);
   // Each half: covariance minus step^2 v v^T (the pair keeps the parent's moments).
   double na = a - step * step * vx * vx, nb = b - step * step * vx * vy, nc = c - step * step * vy * vy;
