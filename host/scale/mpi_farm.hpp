@@ -1,6 +1,6 @@
 // The MPI task farm of `mpirun -n N bsdfmix fit|catalog` (docs/scale.md). Rank 0 plans
 // the batches exactly as a 1-process run does, hands them out dynamically (each worker
-// holds up to two at a time, so it never waits for rank 0 between batches), fits
+// holds up to three at a time, so it does not run dry while rank 0 fits), fits
 // batches itself while every worker is busy, and is the only rank that commits
 // checkpoint parts and writes outputs: crash safety and resume are those of a
 // 1-process run, and the files are bit-identical to it. Without mpirun no MPI call is
