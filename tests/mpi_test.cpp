@@ -6,7 +6,11 @@
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
+#include <unistd.h>
+#include <signal.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +19,7 @@
 #include <random>
 #include <regex>
 #include <sstream>
+#include <thread>
 
 #include "core/error.hpp"
 #include "io/mixture_file.hpp"
@@ -227,6 +232,89 @@ TEST_CASE("a stopped 2-rank fit resumes to the 1-process file", "[scale]") {
   REQUIRE(r.code == 0);
   CHECK_THAT(r.err, Catch::Contains("resuming: 4 slice(s)"));
   require_same_mixture(one, out);
+}
+
+// The job is killed by events on disk, not by a clock: right after its first committed
+// part is seen, with many batches still to fit.
+TEST_CASE("a 2-rank fit killed with SIGKILL resumes to the 1-process file", "[scale]") {
+  const fs::path d = temp_dir();
+  const std::string table = (d / "kill_table.h5").string();
+  const std::size_t n_to = 40, nt = 40, np = 80;
+  TableMeta m = make_grid(Domain::Fiber, n_to, 1, nt, np, true);
+  m.source = R"({"model": "mpi kill test"})";
+  std::vector<float> v;
+  for (std::size_t t = 0; t < n_to; ++t)
+    for (std::size_t i = 0; i < nt; ++i)
+      for (std::size_t j = 0; j < np; ++j) {
+        const double a = m.theta_i[i], b = m.phi_i[j], c = 0.03 * double(t);
+        v.push_back(float(std::exp(-((a - c) * (a - c) + (b - 1.0) * (b - 1.0)) / 0.02) +
+                          0.5 * std::exp(-((a + c) * (a + c) + (b + 2.0) * (b + 2.0)) / 0.1) + 0.01));
+      }
+  write_table(table, m, v);
+  auto config = [&](const std::string& stem) {
+    const std::string path = (d / (stem + ".yaml")).string();
+    std::ofstream(path) << "table: " << table << "\nfit:\n  output: " << (d / (stem + "_mixture.h5")).string()
+                        << "\n  report: " << (d / (stem + "_fit.csv")).string()
+                        << "\n  search_report: " << (d / (stem + "_search.csv")).string()
+                        << "\n  k_max: 6\n  batch: 2\n";
+    return path;
+  };
+  const std::string ref_cfg = config("kill_ref"), cfg = config("killed");
+  const std::string out = (d / "killed_mixture.h5").string(), parts = out + ".parts";
+  fs::remove(out);
+  fs::remove_all(parts);
+  Run r = run("", "fit -q " + ref_cfg);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+
+  const std::string cmd = mpirun(2) + std::string(BSDFMIX_BINARY) + " fit -q " + cfg + " >/dev/null 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    setsid();  // its own process group: mpirun and both ranks die together
+    execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  auto committed = [&] {
+    std::size_t n = 0;
+    std::error_code ec;
+    for (fs::directory_iterator it(parts, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      n += name.rfind("batch_", 0) == 0 && name.find(".partial-") == std::string::npos;
+    }
+    return n;
+  };
+  int status = 0;
+  bool exited = false;
+  while (!(exited = waitpid(pid, &status, WNOHANG) == pid) && committed() == 0)
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  REQUIRE_FALSE(exited);  // 20 batches: the job cannot end within a poll of its first commit
+  // The whole job at once, as a batch scheduler kills it: mpirun's group, and the ranks,
+  // which mpirun starts in sessions of their own (found by their command line).
+  kill(-pid, SIGKILL);
+  std::vector<pid_t> ranks;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos || std::stoi(name) == getpid()) continue;
+    std::string cmdline = slurp(e.path() / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.find(cfg) != std::string::npos && cmdline.find(BSDFMIX_BINARY) == 0) ranks.push_back(std::stoi(name));
+  }
+  for (pid_t r : ranks) kill(r, SIGKILL);
+  waitpid(pid, &status, 0);
+  for (pid_t r : ranks)  // gone when /proc no longer lists it (or lists a zombie)
+    while (fs::exists("/proc/" + std::to_string(r)) &&
+           slurp("/proc/" + std::to_string(r) + "/stat").find(") Z") == std::string::npos)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  CHECK_FALSE(fs::exists(out));
+  const std::size_t done = committed();
+  REQUIRE(done >= 1);
+  REQUIRE(done < n_to / 2);
+
+  r = run("", "fit " + cfg);  // resumed without mpirun: the parts are the same either way
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.out, Catch::Contains("(" + std::to_string(2 * done) + " resumed from checkpoint"));
+  require_same_mixture((d / "kill_ref_mixture.h5").string(), out);
 }
 
 TEST_CASE("without mpirun a fit makes no MPI call", "[scale]") {
