@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+#include <unordered_map>
 #include <thread>
 
 #include "core/atomic_file.hpp"
@@ -52,6 +53,13 @@ std::string num(double v, const char* f = "%.9g") {
   char buf[64];
   std::snprintf(buf, sizeof buf, f, std::isfinite(v) ? v : 0.0);
   return buf;
+}
+
+// The devices a sweep runs on, as the report's `device` column names them.
+std::string joined_names(const std::vector<Device>& devices) {
+  std::string n;
+  for (const auto& d : devices) n += (n.empty() ? "" : "+") + d.info().name;
+  return n;
 }
 
 std::string fit_settings_json(const FitSection& f) {
@@ -649,11 +657,7 @@ void set_batch_farm(BatchFarm* farm) { g_batch_farm = farm; }
 struct BatchWorker::Impl {
   Impl(const std::string& table_path, const FitSection& fit, const std::string& device_selector)
       : fit_settings(fit), reader(table_path), devices(select_devices(device_selector)),
-        names([this] {
-          std::string n;
-          for (const auto& d : devices) n += (n.empty() ? "" : "+") + d.info().name;
-          return n;
-        }()),
+        names(joined_names(devices)),
         engine(devices), fitter(reader.meta(), fit_settings, engine, names) {}
   const FitSection fit_settings;
   TableReader reader;
@@ -678,20 +682,21 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
   for (const auto* out : {&fit.output, &fit.report, &fit.search_report}) prepare_output(*out, 1 << 20);
 
   const std::vector<Device> devices = select_devices(device_selector);
-  std::string device_names;
-  for (const auto& d : devices) device_names += (device_names.empty() ? "" : "+") + d.info().name;
+  const std::string device_names = joined_names(devices);
   EmEngine engine(devices);
 
   const std::size_t batch = fit.batch > 0 ? std::size_t(fit.batch)
                                           : std::clamp<std::size_t>(plan.size() / 32, 4, 64);
   Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices));
   // A table rewritten in place (same path, size and source) is caught by its content.
+  std::unordered_map<std::size_t, const SliceRef*> planned;
+  for (const SliceRef& r : plan) planned.emplace(r.index, &r);
   checkpoint.verify([&](const std::vector<std::size_t>& indices) {
     Hash64 content;
     for (std::size_t index : indices) {
-      const auto at = std::find_if(plan.begin(), plan.end(), [&](const SliceRef& r) { return r.index == index; });
-      if (at == plan.end()) return std::string("not planned");
-      const auto f = reader.read_slice(at->t_o, at->p_o);
+      const auto at = planned.find(index);
+      if (at == planned.end()) return std::string("not planned");
+      const auto f = reader.read_slice(at->second->t_o, at->second->p_o);
       content.update(f.data(), f.size() * sizeof(float));
     }
     return content.hex();
