@@ -13,7 +13,8 @@
 //
 // Defines: HEMISPHERE (0: fiber domain, theta in [-pi/2, pi/2], J = cos theta;
 // 1: hemisphere, theta in [0, pi/2], J = sin theta); ESTIMATOR (integrate_chunks only:
-// 0 us_tab, 1 us_gmm, 2 is_tab, 3 is_gmm, 4 mis_tab, 5 cdf_tab).
+// 0 us_tab, 1 us_gmm, 2 is_tab, 3 is_gmm, 4 mis_tab, 5 cdf_tab, 6 light, 7 mis_light_cdf,
+// 8 mis_light_gmm, 9 product, 10 mis_product).
 
 #ifndef HEMISPHERE
 #define HEMISPHERE 0
@@ -278,7 +279,13 @@ __kernel void eval_mixture(__global const float* q, __global const VF* pd, __glo
 // ---- the estimators -------------------------------------------------------------------
 
 // Table slice geometry: [0] theta of the first cell's lower edge, [1] dtheta, [2] n_theta,
-// [3] phi of the first cell's lower edge, [4] dphi, [5] n_phi, [6] uniform fraction (mis).
+// [3] phi of the first cell's lower edge, [4] dphi, [5] n_phi, [6] uniform fraction (mis),
+// [7] light fraction (mis_light_*), [8] product and [9] light fractions (mis_product),
+// [10] 1: the power heuristic, 0: the balance heuristic.
+#define T_LIGHT 7
+#define T_PROD 8
+#define T_PROD_LIGHT 9
+#define T_POWER 10
 #define T_TH0 0
 #define T_DTH 1
 #define T_NTH 2
@@ -390,10 +397,164 @@ int cdf_find(__global const float* cdf, const int n, const float u) {
   return min(lo, n - 1);
 }
 
+// ---- light sampling (host/sampling/light_sampler.hpp; LightSampler::pack) ---------------
+// [0] p_const, [1] p_grad, [2] p_env, [3] lobe count, [4] G (the gradient's integral over
+// t), [5] its share below the horizon, [6] map width, [7] height, [8..15] p_lobe,
+// [16..23] lobe peak densities, [24..71] lobe bases (t1, t2: 6 floats per lobe),
+// [72..77] the up axis's basis; from [128]: the map's marginal [H + 1], conditionals
+// [H][W + 1] and pixel densities [H][W].
+#define LS_HEADER 128
+
+float3 world_dir(const float z, const float az_cos, const float az_sin, const float3 n, const float3 t1,
+                 const float3 t2) {
+  const float r = sqrt(fmax(0.0f, 1.0f - z * z));
+  return z * n + r * (az_cos * t1 + az_sin * t2);
+}
+
+// t in [0, 1] with density proportional to a + (b - a) t (LightSampler's linear_draw).
+float linear_draw(const float a, const float b, const float u) {
+  const float r = sqrt(fmax(mad(u, b * b - a * a, a * a), 0.0f));
+  return a + r > 0.0f ? clamp(u * (a + b) / (a + r), 0.0f, 1.0f) : u;
+}
+
+// A world direction from the lighting's terms: u.x picks the term, u.yzw the point.
+float3 light_draw(__global const float* ls, __global const float* sc, const float4 u) {
+  float acc = ls[0];
+  const int nl = (int)ls[3];
+  if (u.x < acc || (ls[1] == 0.0f && ls[2] == 0.0f && nl == 0)) {
+    const float z = 1.0f - 2.0f * u.z;
+    const float2 cs = sincos_turn(u.w);
+    return world_dir(z, cs.y, cs.x, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f, 0.0f, 0.0f), (float3)(0.0f, 1.0f, 0.0f));
+  }
+  acc += ls[1];
+  if (u.x < acc) {
+    const float t = u.y < ls[5] ? -linear_draw(sc[SC_GRAD + 4], sc[SC_GRAD + 5], u.z)
+                                : linear_draw(sc[SC_GRAD + 4], sc[SC_GRAD + 3], u.z);
+    const float2 cs = sincos_turn(u.w);
+    return world_dir(t, cs.y, cs.x, (float3)(sc[SC_GRAD], sc[SC_GRAD + 1], sc[SC_GRAD + 2]),
+                     (float3)(ls[72], ls[73], ls[74]), (float3)(ls[75], ls[76], ls[77]));
+  }
+  acc += ls[2];
+  if (u.x < acc) {
+    const int W = (int)ls[6], H = (int)ls[7];
+    __global const float* marg = ls + LS_HEADER;
+    const int y = cdf_find(marg, H, u.y);
+    __global const float* c = marg + (H + 1) + y * (W + 1);
+    const int x = cdf_find(c, W, u.z);
+    const float fx = clamp((u.z - c[x]) / fmax(c[x + 1] - c[x], 1e-30f), 0.0f, 1.0f);
+    const float za = cospi((float)y / (float)H), zb = cospi((float)(y + 1) / (float)H);
+    const float z = mad(u.w, zb - za, za);
+    const float az = -S_PI + 2.0f * S_PI * ((float)x + fx) / (float)W;
+    return world_dir(z, cos(az), sin(az), (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f, 0.0f, 0.0f),
+                     (float3)(0.0f, 1.0f, 0.0f));
+  }
+  int k = 0;
+  for (acc += ls[8]; k + 1 < nl && u.x >= acc; acc += ls[8 + (++k)]) {
+  }
+  __global const float* lb = sc + SC_LOBES + 5 * k;
+  const float kappa = lb[3], v = 1.0f - u.y;  // (0, 1]
+  const float omc = fmin(2.0f, -log(v + (1.0f - v) * exp(-2.0f * kappa)) / kappa);
+  const float st = sqrt(fmax(0.0f, omc * (2.0f - omc)));
+  const float2 cs = sincos_turn(u.z);
+  const float3 t1 = (float3)(ls[24 + 6 * k], ls[25 + 6 * k], ls[26 + 6 * k]);
+  const float3 t2 = (float3)(ls[27 + 6 * k], ls[28 + 6 * k], ls[29 + 6 * k]);
+  return (1.0f - omc) * (float3)(lb[0], lb[1], lb[2]) + st * (cs.y * t1 + cs.x * t2);
+}
+
+// The density per steradian of light_draw at the world direction w.
+float light_pdf(__global const float* ls, __global const float* sc, const float3 w) {
+  float p = ls[0] * (1.0f / (4.0f * S_PI));
+  if (ls[1] > 0.0f) {
+    const float t = dot(w, (float3)(sc[SC_GRAD], sc[SC_GRAD + 1], sc[SC_GRAD + 2]));
+    const float g = t >= 0.0f ? sc[SC_GRAD + 4] + (sc[SC_GRAD + 3] - sc[SC_GRAD + 4]) * t
+                              : sc[SC_GRAD + 4] + (sc[SC_GRAD + 4] - sc[SC_GRAD + 5]) * t;
+    p += ls[1] * g / (2.0f * S_PI * ls[4]);
+  }
+  if (ls[2] > 0.0f) {
+    const int W = (int)ls[6], H = (int)ls[7];
+    const int x = clamp((int)floor((atan2(w.y, w.x) + S_PI) / (2.0f * S_PI) * (float)W), 0, W - 1);
+    const int y = clamp((int)floor(acos(clamp(w.z, -1.0f, 1.0f)) / S_PI * (float)H), 0, H - 1);
+    p += ls[2] * ls[LS_HEADER + (H + 1) + H * (W + 1) + y * W + x];
+  }
+  const int nl = (int)ls[3];
+  for (int k = 0; k < nl; ++k) {
+    __global const float* lb = sc + SC_LOBES + 5 * k;
+    const float3 d = w - (float3)(lb[0], lb[1], lb[2]);
+    p += ls[8 + k] * ls[16 + k] * exp(-0.5f * lb[3] * dot(d, d));
+  }
+  return p;
+}
+
+// World direction to the table's (theta, phi).
+float2 to_slice(__global const float* sc, const float3 w) {
+  const float3 a = (float3)(sc[0], sc[1], sc[2]), e1 = (float3)(sc[3], sc[4], sc[5]), e2 = (float3)(sc[6], sc[7], sc[8]);
+  const float c = clamp(dot(w, a), -1.0f, 1.0f);
+#if HEMISPHERE
+  const float theta = acos(c);
+#else
+  const float theta = asin(c);
+#endif
+  return (float2)(theta, wrap_phi(atan2(dot(w, e2), dot(w, e1))));
+}
+
+// ---- the table CDF as a technique ------------------------------------------------------
+
+// Draws (theta, phi world) by the table CDF (cdf_tab's draw); .z = 0 when the cell is empty.
+float3 cdf_draw(__global const float* geo, __global const float* marg, __global const float* cond, const float rotate,
+                const float4 u) {
+  const int nth = (int)geo[T_NTH], nph = (int)geo[T_NPH];
+  const int i = cdf_find(marg, nth, u.x);
+  __global const float* row = cond + i * (nph + 1);
+  const int jc = cdf_find(row, nph, u.y);
+  const float p_cell = (marg[i + 1] - marg[i]) * (row[jc + 1] - row[jc]);
+  const float a = fmax(geo[T_TH0] + geo[T_DTH] * (float)i, THETA_LO);
+  const float b = fmin(geo[T_TH0] + geo[T_DTH] * (float)(i + 1), THETA_HI);
+#if HEMISPHERE
+  const float sa = sin(a) * sin(a), sb = sin(b) * sin(b);
+  const float theta = asin(sqrt(clamp(sa + u.z * (sb - sa), 0.0f, 1.0f)));
+#else
+  const float sa = sin(a), sb = sin(b);
+  const float theta = asin(clamp(sa + u.z * (sb - sa), -1.0f, 1.0f));
+#endif
+  const float phi = wrap_phi(geo[T_PH0] + geo[T_DPH] * ((float)jc + u.w) + rotate);
+  return (float3)(theta, phi, p_cell > 0.0f ? 1.0f : 0.0f);
+}
+
+// Its density per steradian at (theta, phi local): P_cell c(theta) / integral of c J over the cell.
+float cdf_pdf(__global const float* geo, __global const float* marg, __global const float* cond, const float theta,
+              const float phi_local) {
+  const int nth = (int)geo[T_NTH], nph = (int)geo[T_NPH];
+  const int i = (int)floor((theta - geo[T_TH0]) / geo[T_DTH]);
+  if (i < 0 || i >= nth || !theta_inside(theta)) return 0.0f;
+  int j = (int)floor((phi_local - geo[T_PH0]) / geo[T_DPH]);
+  j = (j % nph + nph) % nph;
+  __global const float* row = cond + i * (nph + 1);
+  const float p_cell = (marg[i + 1] - marg[i]) * (row[j + 1] - row[j]);
+  const float a = fmax(geo[T_TH0] + geo[T_DTH] * (float)i, THETA_LO);
+  const float b = fmin(geo[T_TH0] + geo[T_DTH] * (float)(i + 1), THETA_HI);
+#if HEMISPHERE
+  const float w = 0.5f * (sin(b) * sin(b) - sin(a) * sin(a)) * geo[T_DPH];
+#else
+  const float w = (sin(b) - sin(a)) * geo[T_DPH];
+#endif
+  return w > 0.0f ? p_cell * cos_factor(theta) / w : 0.0f;
+}
+
+// One-sample MIS weight (the host's mis_weight): balance 1 / sum c p; power c_s p_s / sum (c p)^2.
+float mis_weight(const float3 c, const float3 pdf, const int chosen, const float power) {
+  const float3 cp = c * pdf;
+  const float s1 = cp.x + cp.y + cp.z;
+  if (!(s1 > 0.0f)) return 0.0f;
+  if (power == 0.0f) return 1.0f / s1;
+  const float sel = chosen == 0 ? cp.x : chosen == 1 ? cp.y : cp.z;
+  return sel / dot(cp, cp);
+}
+
 // One estimate of L_o with uniforms u.
 float estimate(__global const float* q, __global const float16* comps, __global const VF* pd, __global const float* geo,
                __global const float* f, __global const float* marg, __global const float* cond,
-               __global const float* sc, __global const float* env, const float4 u) {
+               __global const float* sc, __global const float* env, __global const float* q2,
+               __global const float16* comps2, __global const VF* pd2, __global const float* ls, const float4 u) {
   const float rotate = q[Q_ROTATE];
 #if ESTIMATOR == 0 || ESTIMATOR == 1
   const float2 d = uniform_draw(u.z, u.w);
@@ -440,28 +601,82 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   const float pdf = alpha * UNIFORM_PDF + (1.0f - alpha) * pm;
   if (!(pdf > 0.0f)) return 0.0f;
   return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
-#else
+#elif ESTIMATOR == 5
   // piecewise-constant 2D CDF over the cells, exact within a cell: theta drawn with
   // density proportional to c(theta) J(theta), phi uniform
-  const int nth = (int)geo[T_NTH], nph = (int)geo[T_NPH];
-  const int i = cdf_find(marg, nth, u.x);
-  __global const float* row = cond + i * (nph + 1);
-  const int jc = cdf_find(row, nph, u.y);
-  const float p_cell = (marg[i + 1] - marg[i]) * (row[jc + 1] - row[jc]);
-  if (!(p_cell > 0.0f)) return 0.0f;
-  const float a = fmax(geo[T_TH0] + geo[T_DTH] * (float)i, THETA_LO);
-  const float b = fmin(geo[T_TH0] + geo[T_DTH] * (float)(i + 1), THETA_HI);
-#if HEMISPHERE
-  const float sa = sin(a) * sin(a), sb = sin(b) * sin(b);
-  const float theta = asin(sqrt(clamp(sa + u.z * (sb - sa), 0.0f, 1.0f)));
-  const float area = 0.5f * (sb - sa) * geo[T_DPH];  // integral of cos J over the cell
+  const float3 d = cdf_draw(geo, marg, cond, rotate, u);
+  if (d.z == 0.0f) return 0.0f;
+  const float pdf = cdf_pdf(geo, marg, cond, d.x, wrap_phi(d.y - rotate));
+  if (!(pdf > 0.0f)) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * table_f(geo, f, d.x, wrap_phi(d.y - rotate)) * cos_factor(d.x) / pdf;
+#elif ESTIMATOR == 6
+  const float2 d = to_slice(sc, light_draw(ls, sc, u));
+  if (!theta_inside(d.x)) return 0.0f;
+  const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
+  if (fv == 0.0f) return 0.0f;
+  const float pdf = light_pdf(ls, sc, to_world(sc, d.x, d.y));
+  if (!(pdf > 0.0f)) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+#elif ESTIMATOR == 9
+  const float2 d = mixture_draw(q2, comps2, u);
+  if (!theta_inside(d.x)) return 0.0f;
+  const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
+  if (fv == 0.0f) return 0.0f;
+  const float pdf = mixture_pdf_omega(q2, pd2, d.x, d.y);
+  if (!(pdf > 0.0f)) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
 #else
-  const float sa = sin(a), sb = sin(b);
-  const float theta = asin(clamp(sa + u.z * (sb - sa), -1.0f, 1.0f));
-  const float area = (sb - sa) * geo[T_DPH];
+  // one-sample MIS over two or three techniques, picked by u.x with the fractions c; the
+  // remainder of u.x is the technique's own u.x
+#if ESTIMATOR == 7
+  const float3 c = (float3)(geo[T_LIGHT], 1.0f - geo[T_LIGHT], 0.0f);  // light, table CDF
+#elif ESTIMATOR == 8
+  const float3 c = (float3)(geo[T_LIGHT], (1.0f - geo[T_LIGHT]) * (1.0f - geo[T_ALPHA]),
+                            (1.0f - geo[T_LIGHT]) * geo[T_ALPHA]);  // light, mixture, uniform
+#else
+  const float3 c = (float3)(geo[T_PROD], geo[T_PROD_LIGHT], 1.0f - geo[T_PROD] - geo[T_PROD_LIGHT]);  // product, light, uniform
 #endif
-  const float phi = wrap_phi(geo[T_PH0] + geo[T_DPH] * ((float)jc + u.w) + rotate);
-  return radiance(sc, env, theta, phi) * f[i * nph + jc] * area / p_cell;
+  const int k = (u.x >= c.x) + (c.z > 0.0f && u.x >= c.x + c.y);
+  const float lo = k == 0 ? 0.0f : k == 1 ? c.x : c.x + c.y;
+  const float ck = k == 0 ? c.x : k == 1 ? c.y : c.z;
+  const float4 v = (float4)(clamp((u.x - lo) / ck, 0.0f, 0.99999994f), u.y, u.z, u.w);
+#if ESTIMATOR == 10
+  const int light_k = 1;
+#else
+  const int light_k = 0;
+#endif
+  float2 d;
+  if (k == light_k) {
+    d = to_slice(sc, light_draw(ls, sc, v));
+  } else if (k == 2) {
+    d = uniform_draw(u.z, u.w);
+  } else {
+#if ESTIMATOR == 7
+    const float3 dc = cdf_draw(geo, marg, cond, rotate, v);
+    if (dc.z == 0.0f) return 0.0f;
+    d = dc.xy;
+#elif ESTIMATOR == 8
+    d = mixture_draw(q, comps, v);
+#else
+    d = mixture_draw(q2, comps2, v);
+#endif
+  }
+  if (!theta_inside(d.x)) return 0.0f;
+  const float pl = wrap_phi(d.y - rotate);
+  const float fv = table_f(geo, f, d.x, pl);
+  if (fv == 0.0f) return 0.0f;
+  const float pli = light_pdf(ls, sc, to_world(sc, d.x, d.y));
+#if ESTIMATOR == 7
+  const float3 pdf = (float3)(pli, cdf_pdf(geo, marg, cond, d.x, pl), 0.0f);
+#elif ESTIMATOR == 8
+  const float j = jacobian(d.x);
+  const float pm = j > 0.0f ? mixture_sums(q, pd, d.x, pl).x / j : 0.0f;
+  const float3 pdf = (float3)(pli, pm, UNIFORM_PDF);
+#else
+  const float3 pdf = (float3)(mixture_pdf_omega(q2, pd2, d.x, d.y), pli, UNIFORM_PDF);
+#endif
+  const float w = mis_weight(c, pdf, k, geo[T_POWER]);
+  return w > 0.0f ? radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) * w : 0.0f;
 #endif
 }
 
@@ -471,7 +686,9 @@ float estimate(__global const float* q, __global const float16* comps, __global 
 __kernel void integrate_chunks(__global const float* q, __global const float16* comps, __global const VF* pd,
                                __global const float* geo,
                                __global const float* f, __global const float* marg, __global const float* cond,
-                               __global const float* sc, __global const float* env, const uint key0,
+                               __global const float* sc, __global const float* env, __global const float* q2,
+                               __global const float16* comps2, __global const VF* pd2, __global const float* ls,
+                               const uint key0,
                                const uint key1, const uint stream, const uint runs, const uint chunks,
                                const uint chunk, const uint levels, __global float* sums,
                                __global float* prefix) {
@@ -486,7 +703,7 @@ __kernel void integrate_chunks(__global const float* q, __global const float16* 
     const ulong n = (ulong)c * chunk + k;
     const uint4 bits = philox4x32((uint4)((uint)n, (uint)(n >> 32), stream, r), key);
     const float4 u = convert_float4(bits >> 8) * (1.0f / 16777216.0f);
-    const float e = estimate(q, comps, pd, geo, f, marg, cond, sc, env, u);
+    const float e = estimate(q, comps, pd, geo, f, marg, cond, sc, env, q2, comps2, pd2, ls, u);
     const float y = e - comp;
     const float t = s + y;
     comp = (t - s) - y;

@@ -26,7 +26,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-ESTIMATORS = ["us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab"]
+ESTIMATORS = ["us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab",
+              "light", "mis_light_cdf", "mis_light_gmm", "product", "mis_product"]
 STYLE = {
     "us_tab": dict(color="#7f7f7f", marker="o", ls="-"),
     "us_gmm": dict(color="#bcbd22", marker="v", ls="--"),
@@ -34,14 +35,24 @@ STYLE = {
     "is_gmm": dict(color="#ff9896", marker="D", ls="--"),
     "mis_tab": dict(color="#1f77b4", marker="^", ls="-", lw=2.6),
     "cdf_tab": dict(color="#2ca02c", marker="P", ls=":"),
+    "light": dict(color="#e6ab02", marker="*", ls="-."),
+    "mis_light_cdf": dict(color="#8c564b", marker="X", ls="-"),
+    "mis_light_gmm": dict(color="#e377c2", marker="h", ls="--"),
+    "product": dict(color="#17becf", marker="<", ls=":"),
+    "mis_product": dict(color="#9467bd", marker=">", ls="-", lw=2.6),
 }
 LABEL = {
     "us_tab": "us_tab (uniform, table)",
     "us_gmm": "us_gmm (uniform, stand-in)",
     "is_tab": "is_tab (mixture, table)",
     "is_gmm": "is_gmm (mixture, stand-in)",
-    "mis_tab": "mis_tab (mixture + 10% uniform): default",
+    "mis_tab": "mis_tab (mixture + 10% uniform): BSDF-only default",
     "cdf_tab": "cdf_tab (table CDF, memory-hungry)",
+    "light": "light (light sampling alone)",
+    "mis_light_cdf": "mis_light_cdf (light + table CDF): renderer baseline",
+    "mis_light_gmm": "mis_light_gmm (light + mixture)",
+    "product": "product (BSDF x lighting mixture alone)",
+    "mis_product": "mis_product (product + light + uniform): default with lighting",
 }
 
 

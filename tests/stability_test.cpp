@@ -79,7 +79,15 @@ void check_finite_unbiased(const Case& c, const char* what) {
   Progress::set_enabled(false);
   const TableReader table(c.table);
   const mix::MixtureSet set = to_mixture_set(read_mixture_file(c.mixture));
-  const Problem p = make_problem(table, set, 0.0, 0.0, default_lighting(Domain::Fiber, 1.0), 0.1);
+  // a broad lighting mixture (one Gaussian) for the product estimators
+  mix::SliceMixture light;
+  mix::Gaussian g;
+  g.weight = 1;
+  g.s_tt = 4;
+  g.s_pp = 16;
+  light.components = {g};
+  light.prepare();
+  const Problem p = make_problem(table, set, 0.0, 0.0, default_lighting(Domain::Fiber, 1.0), MisOptions{}, &light);
   const double ref = reference_integral(p);
   REQUIRE(std::isfinite(ref));
   REQUIRE(ref > 0);
@@ -160,11 +168,15 @@ TEST_CASE("convergence study: a zero slice is skipped, the others studied, no Na
   spec.samples_max = 256;
   spec.csv = (temp_dir() / "zero_slice.csv").string();
   spec.tail_csv = (temp_dir() / "zero_slice_tail.csv").string();
+  spec.light_tail_csv = (temp_dir() / "zero_slice_light_tail.csv").string();
+  spec.light_cache_dir = (temp_dir() / "light_cache").string();
+  spec.light_fit.k_max = 4;
   const std::vector<ConvergenceRow> rows = run_study(spec);
   REQUIRE(rows.size() == std::size_t(kEstimators) * 9);  // one direction x N = 1..256
   for (const auto& r : rows) CHECK(r.theta_o == Approx(kPi / 3));
   CHECK_FALSE(has_nonfinite(slurp(spec.csv)));
   CHECK_FALSE(has_nonfinite(slurp(spec.tail_csv)));
+  CHECK(slurp(spec.light_tail_csv).find("mis_product") != std::string::npos);
   // every direction zero: one error naming the table
   spec.directions = {{-kPi / 3, 0.0}};
   CHECK_THROWS_WITH(run_study(spec), Catch::Contains(c.table) && Catch::Contains("zero"));

@@ -60,6 +60,13 @@ struct ConvergeSection {
   double uniform_fraction = 0.1;
   std::string tail_csv;  // "" = beside csv: <csv stem>_tail.csv
   bool cpu = false;      // the CPU reference instead of the device kernels
+  // Sampling with the lighting (docs/sampling.md): MIS fractions and heuristic, the
+  // product's pruning, where the lighting mixtures are cached, the lighting tail CSV.
+  double light_fraction = 0.5, product_fraction = 0.8, product_light = 0.1;
+  int product_components = 32;
+  bool power_heuristic = false;
+  std::string light_mixture_dir;  // "" = <csv dir>/light_mixtures
+  std::string light_tail_csv;     // "" = beside csv: <csv stem>_light_tail.csv
 };
 
 struct ChartsSection {

@@ -1,5 +1,6 @@
 // The `converge` section: the Monte Carlo convergence study.
 #include "config/config.hpp"
+#include "sampling/estimator_names.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -65,14 +66,27 @@ ConvergeSection parse_converge(const ConfigNode& n) {
       c.estimators.push_back(e.Scalar());
     }
   } else {
-    n.fail("estimators", "expected a list of estimator names (us_tab, us_gmm, is_tab, is_gmm, mis_tab, cdf_tab)");
+    n.fail("estimators", "expected a list of estimator names (" + estimator_list() + ")");
   }
-  for (const auto& e : c.estimators)
-    if (e != "us_tab" && e != "us_gmm" && e != "is_tab" && e != "is_gmm" && e != "mis_tab" && e != "cdf_tab")
-      n.fail("estimators", "unknown estimator '" + e + "' (expected us_tab, us_gmm, is_tab, is_gmm, mis_tab or cdf_tab)");
+  for (const auto& e : c.estimators) {
+    if (!known_estimator(e)) n.fail("estimators", "unknown estimator '" + e + "' (expected " + estimator_list() + ")");
+  }
   c.uniform_fraction = n.number("uniform_fraction", 0.0, 1.0);
   if (c.uniform_fraction >= 1.0) n.fail("uniform_fraction", "must be below 1 (1 is pure uniform sampling: us_tab)");
   if (n.has("tail_csv")) c.tail_csv = n.str("tail_csv");
+  c.light_fraction = n.number("light_fraction", 0.0, 1.0);
+  if (c.light_fraction >= 1.0) n.fail("light_fraction", "must be below 1 (1 is light sampling alone: the `light` estimator)");
+  c.product_fraction = n.number("product_fraction", 0.0, 1.0);
+  if (c.product_fraction <= 0.0) n.fail("product_fraction", "must be above 0 (0 leaves no product samples)");
+  c.product_light = n.number("product_light", 0.0, 1.0);
+  if (c.product_fraction + c.product_light > 1.0)
+    n.fail("product_light", "product_fraction + product_light must be at most 1 (uniform sampling takes the rest)");
+  c.product_components = static_cast<int>(n.integer("product_components", 1, 1024));
+  const std::string h = n.str("mis_heuristic");
+  if (h != "balance" && h != "power") n.fail("mis_heuristic", "expected balance or power, not '" + h + "'");
+  c.power_heuristic = h == "power";
+  if (n.has("light_mixture_dir")) c.light_mixture_dir = n.str("light_mixture_dir");
+  if (n.has("light_tail_csv")) c.light_tail_csv = n.str("light_tail_csv");
   c.cpu = n.boolean("cpu");
   return c;
 }

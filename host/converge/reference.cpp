@@ -129,7 +129,7 @@ TailDiagnostic tail_diagnostic(const Problem& p) {
   const int n = sub_points(std::max(t.dth, t.dph), smallest_sigma(p), 3, 12);
   std::vector<double> x, w;
   gauss_legendre(n, x, w);
-  const double a = p.uniform_fraction;
+  const double a = p.mis.uniform_fraction;
   double I = 0;
   for (std::size_t i = 0; i < t.n_theta; ++i)
     for (std::size_t j = 0; j < t.n_phi; ++j) I += double(t.f[i * t.n_phi + j]) * t.cell_weight(i);
@@ -170,6 +170,65 @@ TailDiagnostic tail_diagnostic(const Problem& p) {
   r.relvar_is = s_is - 1;
   r.relvar_mis = s_mis - 1;
   r.relvar_cdf = 0;
+  return r;
+}
+
+}  // namespace bsdfmix
+
+namespace bsdfmix {
+
+LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators) {
+  LightTail r;
+  const TableSlice& t = p.table;
+  const std::size_t ne = estimators.size();
+  r.relvar.assign(ne, 0.0);
+  r.max_weight.assign(ne, 0.0);
+  r.missed.assign(ne, 0.0);
+  const int n = sub_points(std::max(t.dth, t.dph), p.light.finest_feature(), 3, 8);
+  std::vector<double> x, w;
+  gauss_legendre(n, x, w);
+  // Per cell: W = integral of L f c d(omega), P_e = integral of estimator e's density.
+  std::vector<double> W(t.n_theta * t.n_phi, 0.0), P(t.n_theta * t.n_phi * ne, 0.0);
+  double I = 0;
+  for (std::size_t i = 0; i < t.n_theta; ++i) {
+    const double ta = t.theta_edge(i), tb = t.theta_edge(i + 1);
+    if (!(tb > ta)) continue;
+    for (std::size_t j = 0; j < t.n_phi; ++j) {
+      const double fc = t.f[i * t.n_phi + j];
+      if (!(fc > 0)) continue;
+      const double p0 = t.ph0 + t.dph * double(j) + t.rotate;
+      double wc = 0;
+      double* pc = &P[(i * t.n_phi + j) * ne];
+      for (int kt = 0; kt < n; ++kt) {
+        const double th = 0.5 * (ta + tb) + 0.5 * (tb - ta) * x[std::size_t(kt)];
+        const double jac = jacobian(t.domain, th), cf = cos_factor(t.domain, th);
+        for (int kp = 0; kp < n; ++kp) {
+          const double ph = wrap_phi(p0 + 0.5 * t.dph * (1 + x[std::size_t(kp)]));
+          const double dw = 0.25 * (tb - ta) * t.dph * w[std::size_t(kt)] * w[std::size_t(kp)] * jac;  // d(omega)
+          wc += dw * fc * cf * p.light.radiance(th, ph);
+          for (std::size_t e = 0; e < ne; ++e) pc[e] += dw * estimator_pdf(p, estimators[e], th, ph);
+        }
+      }
+      W[i * t.n_phi + j] = wc;
+      I += wc;
+    }
+  }
+  r.reference = I;
+  if (!(I > 0)) return r;
+  for (std::size_t c = 0; c < W.size(); ++c) {
+    const double wc = W[c] / I;
+    if (!(wc > 0)) continue;
+    for (std::size_t e = 0; e < ne; ++e) {
+      const double pc = P[c * ne + e];
+      if (pc > 0) {
+        r.relvar[e] += wc * wc / pc;
+        r.max_weight[e] = std::max(r.max_weight[e], wc / pc);
+      } else {
+        r.missed[e] += wc;
+      }
+    }
+  }
+  for (auto& v : r.relvar) v -= 1;
   return r;
 }
 

@@ -34,4 +34,15 @@ struct TailDiagnostic {
 };
 TailDiagnostic tail_diagnostic(const Problem& p);
 
+// The same diagnostic under the scene's lighting, for any estimators: per table cell c,
+// W_c = the integral of L f c d(omega) over the cell (sub-cell Gauss-Legendre) and P_e,c
+// = the integral of estimator e's density (estimator_pdf) over it. relvar_e = sum_c
+// (W_c / I)^2 / P_e,c - 1, max_weight_e = max_c (W_c / I) / P_e,c, missed_e = the share of
+// the integral in cells e never samples (left out of the other two).
+struct LightTail {
+  double reference = 0;
+  std::vector<double> relvar, max_weight, missed;  // per estimator
+};
+LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators);
+
 }  // namespace bsdfmix

@@ -5,10 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <sstream>
 
+#include "converge/light_mixture.hpp"
 #include "converge/reference.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -77,6 +79,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     throw ConfigError("converge: samples_max must be a power of two");
   prepare_output(spec.csv);
   prepare_output(spec.tail_csv);
+  if (!spec.light_tail_csv.empty()) prepare_output(spec.light_tail_csv);
   const TableReader table(spec.table);
   const MixtureFile mf = read_mixture_file(spec.mixture);
   if (mf.domain != table.meta().domain)
@@ -91,8 +94,29 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
            " scenes x " + std::to_string(spec.estimators.size()) + " estimators, " + std::to_string(spec.runs) +
            " runs of up to " + std::to_string(spec.samples_max) + " samples (seed " + std::to_string(spec.seed) + ")");
 
+  // The lighting mixtures, one per scene, for the product estimators.
+  const bool product = std::any_of(spec.estimators.begin(), spec.estimators.end(), uses_product);
+  std::vector<LightMixture> light_mix(spec.scenes.size());
+  if (product)
+    for (std::size_t s = 0; s < spec.scenes.size(); ++s) {
+      Lighting l = spec.scenes[s];
+      l.domain = table.meta().domain;
+      const std::string cache = spec.light_cache_dir.empty()
+                                    ? (std::filesystem::path(spec.csv).parent_path() / "light_mixtures").string()
+                                    : spec.light_cache_dir;
+      light_mix[s] = lighting_mixture(l, table.meta(), spec.light_fit, cache, spec.device);
+      const LightMixture& m = light_mix[s];
+      log_line("converge: lighting '" + l.name + "': K " + std::to_string(m.k) + ", L1 " + short_num(m.l1_rel) +
+               (m.cached ? ", read from " + m.path + " (its fit took " + fixed(m.fit_seconds, 1) + " s)"
+                          : ", fitted in " + fixed(m.fit_seconds, 1) + " s (" + m.path + ")"));
+    }
+  std::vector<Estimator> table_estimators;  // the light tail's columns
+  for (const Estimator e : spec.estimators)
+    if (uses_table(e)) table_estimators.push_back(e);
+
   std::vector<ConvergenceRow> rows;
   std::string tail = std::string(kTailHeader) + "\n";
+  std::string light_tail_text = std::string(kLightTailHeader) + "\n";
   const int timing_rounds = spec.cpu ? 0 : std::max(0, spec.timing_rounds);
   const std::size_t per_scene = spec.estimators.size() * std::size_t(1 + timing_rounds);
   Progress progress("converge " + spec.table_label, spec.directions.size() * spec.scenes.size() * per_scene,
@@ -111,7 +135,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     }
     // The tail diagnostic, scene-independent (L_i = 1).
     Problem p0 = make_problem(table, set, theta_o, phi_o, default_lighting(table.meta().domain, 1.0),
-                              spec.uniform_fraction);
+                              spec.mis.uniform_fraction);
     const TailDiagnostic td = tail_diagnostic(p0);
     const auto& b = p0.query.blend;
     int main = 0;  // the slice with the largest blend weight
@@ -144,12 +168,35 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
                " is_tab has more variance than uniform sampling (the Gaussians' tails fall faster than f): "
                "use mis_tab, the robust default");
 
-    for (const Lighting& light : spec.scenes) {
-      const Problem p = make_problem(table, set, theta_o, phi_o, light, spec.uniform_fraction);
+    for (std::size_t si = 0; si < spec.scenes.size(); ++si) {
+      const Lighting& light = spec.scenes[si];
+      const Problem p = make_problem(table, set, theta_o, phi_o, light, spec.mis,
+                                     product ? &light_mix[si].mixture : nullptr);
       const double ref = reference_integral(p);
       if (!(ref > 0) || !std::isfinite(ref))
         throw InputError("converge: the reference integral at theta_o " + num(theta_o) + " in scene '" + light.name +
                          "' is " + num(ref) + " (the lighting or the table slice is zero)");
+      if (!spec.light_tail_csv.empty()) {
+        const LightTail lt = light_tail(p, table_estimators);
+        std::string tail_msg = "converge: theta_o " + fixed(theta_o, 4) + " " + light.name +
+                          ": predicted variance per sample, largest f/pdf over the integral:";
+        for (std::size_t e = 0; e < table_estimators.size(); ++e) {
+          light_tail_text += spec.table_label + "," + num(theta_o) + "," + num(phi_o) + "," + light.name + "," +
+                             estimator_name(table_estimators[e]) + "," + num(lt.relvar[e]) + "," +
+                             num(lt.max_weight[e]) + "," + num(lt.missed[e]) + "," +
+                             (product ? std::to_string(light_mix[si].k) + "," + num(light_mix[si].l1_rel) + "," +
+                                            num(light_mix[si].fit_seconds) + "," +
+                                            std::to_string(p.product.components.size()) + "," + num(p.product_kept)
+                                      : std::string(",,,,")) +
+                             "\n";
+          tail_msg += std::string(e ? ";" : "") + " " + estimator_name(table_estimators[e]) + " " + short_num(lt.relvar[e]) +
+                 ", " + short_num(lt.max_weight[e]);
+        }
+        if (product)
+          tail_msg += "; product of K " + std::to_string(p.product.components.size()) + " keeps " +
+                 short_num(p.product_kept) + " of its mass";
+        log_line(tail_msg);
+      }
       // One launch per estimator (the convergence rows), then `timing_rounds` more timed
       // launches of the same shape, interleaved over the estimators so that a change in
       // the machine's load hits every estimator alike: ns_per_sample is the fastest.
@@ -215,7 +262,9 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
   for (const auto& r : rows) text += format_row(r) + "\n";
   write_text_atomic(spec.csv, text);
   write_text_atomic(spec.tail_csv, tail);
-  log_line("converge: wrote " + spec.csv + " (" + std::to_string(rows.size()) + " rows) and " + spec.tail_csv);
+  if (!spec.light_tail_csv.empty()) write_text_atomic(spec.light_tail_csv, light_tail_text);
+  log_line("converge: wrote " + spec.csv + " (" + std::to_string(rows.size()) + " rows), " + spec.tail_csv +
+           (spec.light_tail_csv.empty() ? "" : " and " + spec.light_tail_csv));
   return rows;
 }
 

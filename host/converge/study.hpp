@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "config/config.hpp"
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
@@ -22,13 +23,17 @@ struct StudySpec {
   int runs = 64;
   std::uint64_t samples_max = 65536;  // a power of two
   std::uint64_t seed = 1;
-  double uniform_fraction = 0.1;
+  MisOptions mis;      // the MIS estimators' fractions and heuristic, the product's pruning
+  // product and mis_product: the lighting mixtures are fitted with these settings and
+  // cached in light_cache_dir (converge/light_mixture.hpp)
+  FitSection light_fit;
+  std::string light_cache_dir;
   std::string device;  // selector
   bool cpu = false;    // the CPU reference instead of the device kernels
   // Timed launches per estimator after the first, interleaved over the estimators (the
   // same launch shape): ns_per_sample is the fastest of them.
   int timing_rounds = 2;
-  std::string csv, tail_csv;
+  std::string csv, tail_csv, light_tail_csv;
 };
 
 struct ConvergenceRow {
@@ -44,6 +49,9 @@ constexpr const char* kConvergenceHeader =
 constexpr const char* kTailHeader =
     "table,theta_o,phi_o,k,l1_rel,reference,stand_in,stand_in_error,relvar_us,relvar_is,relvar_mis,"
     "max_weight_is,max_weight_mis,table_bytes,mixture_bytes,missed_is";
+
+constexpr const char* kLightTailHeader =
+    "table,theta_o,phi_o,scene,estimator,relvar,max_weight,missed,k_light,l1_light,light_fit_seconds,k_product,product_kept";
 
 // Rows of one (direction, scene, estimator) from its run sums.
 std::vector<ConvergenceRow> convergence_rows(const RunSums& sums, double reference, double ns_per_sample);

@@ -15,6 +15,17 @@ std::string converge_tail_path(const ConvergeSection& c) {
   return (p.parent_path() / (p.stem().string() + "_tail.csv")).string();
 }
 
+std::string converge_light_tail_path(const ConvergeSection& c) {
+  if (!c.light_tail_csv.empty()) return c.light_tail_csv;
+  std::filesystem::path p(c.csv);
+  return (p.parent_path() / (p.stem().string() + "_light_tail.csv")).string();
+}
+
+std::string converge_light_mixture_dir(const ConvergeSection& c) {
+  if (!c.light_mixture_dir.empty()) return c.light_mixture_dir;
+  return (std::filesystem::path(c.csv).parent_path() / "light_mixtures").string();
+}
+
 std::string converge_mixture_path(const Config& config) {
   if (!config.converge->mixture.empty()) return config.converge->mixture;
   if (config.fit) return config.fit->output;

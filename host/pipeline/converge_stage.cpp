@@ -44,11 +44,22 @@ void stage_converge(const Config& config, const std::string& device_selector) {
     log_line("converge: samples_max " + std::to_string(c.samples_max) + " rounded down to " +
              std::to_string(spec.samples_max) + " (N doubles)");
   spec.seed = c.seed;
-  spec.uniform_fraction = c.uniform_fraction;
+  spec.mis.uniform_fraction = c.uniform_fraction;
+  spec.mis.light_fraction = c.light_fraction;
+  spec.mis.product_fraction = c.product_fraction;
+  spec.mis.product_light = c.product_light;
+  spec.mis.power = c.power_heuristic;
+  spec.mis.product.max_components = std::size_t(c.product_components);
+  if (config.fit) spec.light_fit = *config.fit;
+  else spec.light_fit.k_max = 16;
+  spec.light_cache_dir = converge_light_mixture_dir(c);
   spec.device = device_selector;
   spec.cpu = c.cpu;
   spec.csv = c.csv;
   spec.tail_csv = converge_tail_path(c);
+  // The lighting tail CSV comes with the estimators that sample by the lighting.
+  for (const Estimator e : spec.estimators)
+    if (int(e) >= kClassicEstimators) spec.light_tail_csv = converge_light_tail_path(c);
   run_study(spec);
 }
 

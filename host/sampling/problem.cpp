@@ -7,28 +7,21 @@
 
 namespace bsdfmix {
 
-std::uint32_t estimator_stream(int estimator) { return 0x65737430u + std::uint32_t(estimator); }  // "est0".."est5"
+std::uint32_t estimator_stream(int estimator) { return 0x65737430u + std::uint32_t(estimator); }  // "est0".."est:"
 
 const char* estimator_name(Estimator e) {
-  switch (e) {
-    case Estimator::UsTab: return "us_tab";
-    case Estimator::UsGmm: return "us_gmm";
-    case Estimator::IsTab: return "is_tab";
-    case Estimator::IsGmm: return "is_gmm";
-    case Estimator::MisTab: return "mis_tab";
-    case Estimator::CdfTab: return "cdf_tab";
-  }
-  return "?";
+  const int i = int(e);
+  return i >= 0 && i < kEstimatorCount ? kEstimatorNames[i] : "?";
 }
 
 Estimator parse_estimator(const std::string& name, const std::string& where) {
   for (int i = 0; i < kEstimators; ++i)
     if (name == estimator_name(Estimator(i))) return Estimator(i);
-  throw ConfigError(where + ": unknown estimator '" + name +
-                    "' (expected us_tab, us_gmm, is_tab, is_gmm, mis_tab or cdf_tab)");
+  throw ConfigError(where + ": unknown estimator '" + name + "' (expected " + estimator_list() + ")");
 }
 
 bool uses_table(Estimator e) { return e != Estimator::UsGmm && e != Estimator::IsGmm; }
+bool uses_product(Estimator e) { return e == Estimator::Product || e == Estimator::MisProduct; }
 
 static int block_images(double sigma_c) {
   // Offsets from the conditional mean of the images beyond the nearest (|u0| <= pi), nearest
@@ -118,6 +111,20 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
   while (step * 2 <= max_n) step *= 2;
   qm.q[18] = float(step);
   return qm;
+}
+
+QueryMixture make_query(const mix::SliceMixture& mixture, Domain domain) {
+  mix::MixtureSet one;
+  one.domain = domain == Domain::Fiber ? mix::Domain::Fiber : mix::Domain::Hemisphere;
+  one.azimuthal = true;
+  one.grid_theta_o = {0.0};
+  one.grid_phi_o = {0.0};
+  one.slices = {mixture};
+  one.slices[0].theta_o = 0;
+  one.slices[0].phi_o = 0;
+  one.slices[0].scale = 1;
+  one.prepare();
+  return make_query(one, 0.0, 0.0);
 }
 
 // ---- the table slice --------------------------------------------------------------------
@@ -215,12 +222,24 @@ CellCdf build_cdf(const TableSlice& t) {
 }
 
 std::vector<float> Problem::geometry() const {
-  return {float(table.th0), float(table.dth), float(table.n_theta), float(table.ph0),
-          float(table.dph), float(table.n_phi), float(uniform_fraction), 0.f};
+  return {float(table.th0),   float(table.dth),           float(table.n_theta),        float(table.ph0),
+          float(table.dph),   float(table.n_phi),         float(mis.uniform_fraction), float(mis.light_fraction),
+          float(mis.product_fraction), float(mis.product_light), mis.power ? 1.f : 0.f, 0.f,
+          0.f, 0.f, 0.f, 0.f};
 }
 
 Problem make_problem(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o,
                      const Lighting& light, double uniform_fraction) {
+  MisOptions mis;
+  mis.uniform_fraction = uniform_fraction;
+  return make_problem(table, set, theta_o, phi_o, light, mis, nullptr);
+}
+
+Problem make_problem(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o,
+                     const Lighting& light, const MisOptions& mis, const mix::SliceMixture* light_mixture) {
+  if (!(mis.uniform_fraction >= 0 && mis.uniform_fraction < 1) || !(mis.light_fraction >= 0 && mis.light_fraction < 1) ||
+      !(mis.product_fraction > 0 && mis.product_light >= 0 && mis.product_fraction + mis.product_light <= 1))
+    throw ConfigError("converge: the MIS fractions must lie in [0, 1) and the product's add up to at most 1");
   Problem p;
   p.set = &set;
   p.theta_o = theta_o;
@@ -230,7 +249,13 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
   p.cdf = build_cdf(p.table);
   p.light = light;
   p.light.domain = p.table.domain;
-  p.uniform_fraction = uniform_fraction;
+  p.light_sampler = make_light_sampler(p.light);
+  p.mis = mis;
+  if (light_mixture) {
+    p.product = set.product_with(theta_o, phi_o, *light_mixture, mis.product, nullptr, &p.product_kept);
+    p.product_query = make_query(p.product, p.table.domain);
+    p.has_product = true;
+  }
   return p;
 }
 

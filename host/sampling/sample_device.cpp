@@ -131,10 +131,14 @@ class IntegrateLaunch {
     queue_ = device.make_queue();
     const cl::Context& ctx = device.context();
     items_ = std::size_t(chunks_) * std::size_t(runs);
-    // kernel argument order: q, comps, pdf, geo, f, marg, cond, sc, env
+    if (uses_product(e) && !p.has_product)
+      throw ConfigError(std::string("integrate: ") + estimator_name(e) + " needs the lighting's mixture");
+    // kernel argument order: q, comps, pdf, geo, f, marg, cond, sc, env, q2, comps2, pdf2, ls
     bufs_ = {upload(device, qm.q),          upload(device, qm.comps),         upload(device, qm.pdf),
              upload(device, p.geometry()),  upload(device, f_dev),            upload(device, p.cdf.marginal),
-             upload(device, p.cdf.conditional), upload(device, p.light.pack()), upload(device, p.light.env)};
+             upload(device, p.cdf.conditional), upload(device, p.light.pack()), upload(device, p.light.env),
+             upload(device, p.product_query.q), upload(device, p.product_query.comps),
+             upload(device, p.product_query.pdf), upload(device, p.light_sampler.pack())};
     sums_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, items_ * sizeof(float));
     prefix_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, std::max<std::size_t>(1, std::size_t(runs) * levels_) * sizeof(float));
     kernel_ = cl::Kernel(program, "integrate_chunks");

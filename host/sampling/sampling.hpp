@@ -14,6 +14,8 @@
 #include "core/domain.hpp"
 #include "device/device.hpp"
 #include "io/table.hpp"
+#include "sampling/estimator_names.hpp"
+#include "sampling/light_sampler.hpp"
 #include "sampling/lighting.hpp"
 
 namespace bsdfmix {
@@ -41,6 +43,8 @@ struct QueryMixture {
 // f_unit divides the stand-in's values (component [9], scale x density) before they are
 // rounded to float: the estimator launches pass the power of two they scale f by.
 QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit = 1.0);
+// One slice mixture on its own (a product mixture), phi in the world frame.
+QueryMixture make_query(const mix::SliceMixture& mixture, Domain domain);
 
 // ---- sampling --------------------------------------------------------------------------
 
@@ -58,8 +62,15 @@ std::vector<std::pair<double, double>> eval_device(const Device& device, const m
 
 // ---- estimators ------------------------------------------------------------------------
 
-enum class Estimator { UsTab = 0, UsGmm = 1, IsTab = 2, IsGmm = 3, MisTab = 4, CdfTab = 5 };
-constexpr int kEstimators = 6;
+enum class Estimator {
+  UsTab = 0, UsGmm = 1, IsTab = 2, IsGmm = 3, MisTab = 4, CdfTab = 5,
+  Light = 6, MisLightCdf = 7, MisLightGmm = 8, Product = 9, MisProduct = 10
+};
+constexpr int kEstimators = 11;
+static_assert(kEstimators == kEstimatorCount, "estimator names");
+constexpr int kClassicEstimators = 6;  // us_tab .. cdf_tab: the ones that ignore the lighting
+// The estimators that sample by the lighting mixture's product (they need one fitted).
+bool uses_product(Estimator e);
 const char* estimator_name(Estimator e);
 // Throws ConfigError naming `where` for an unknown name.
 Estimator parse_estimator(const std::string& name, const std::string& where);
@@ -90,6 +101,17 @@ struct CellCdf {
 };
 CellCdf build_cdf(const TableSlice& t);
 
+// How the MIS estimators combine their techniques (docs/sampling.md, "Sampling with the
+// lighting"): one-sample MIS, each technique picked with its fraction.
+struct MisOptions {
+  double uniform_fraction = 0.1;  // mis_tab, and the BSDF side of mis_light_gmm: uniform's share
+  double light_fraction = 0.5;    // mis_light_cdf, mis_light_gmm: light sampling's share
+  double product_fraction = 0.8;  // mis_product: the product's share ...
+  double product_light = 0.1;     // ... light sampling's; uniform takes the rest
+  bool power = false;             // the power heuristic (beta 2) instead of the balance heuristic
+  mix::ProductOptions product;    // pruning of the product's component pairs
+};
+
 struct Problem {
   const mix::MixtureSet* set = nullptr;
   double theta_o = 0, phi_o = 0;
@@ -97,12 +119,27 @@ struct Problem {
   TableSlice table;
   CellCdf cdf;
   Lighting light;
-  double uniform_fraction = 0.1;  // mis_tab: defensive share of uniform samples
+  LightSampler light_sampler;
+  // The blended BSDF mixture times the lighting mixture (when one is given), and the
+  // share of the product's mass its pruned pairs keep.
+  bool has_product = false;
+  mix::SliceMixture product;
+  QueryMixture product_query;
+  double product_kept = 1;
+  MisOptions mis;
   std::vector<float> geometry() const;
 };
 
 Problem make_problem(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o,
                      const Lighting& light, double uniform_fraction);
+// `light_mixture`: the lighting's mixture over the table's (theta, phi) frame; needed by
+// product and mis_product (nullptr: those estimators are refused).
+Problem make_problem(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o,
+                     const Lighting& light, const MisOptions& mis, const mix::SliceMixture* light_mixture);
+
+// The density per steradian with which estimator `e` draws (theta, phi) (world phi): the
+// MIS estimators' combined density (balance), 0 outside the domain.
+double estimator_pdf(const Problem& p, Estimator e, double theta, double phi);
 
 // The uniforms of sample n of run r: counter {n lo, n hi, stream, r}.
 void run_uniforms(std::uint64_t seed, std::uint32_t stream, std::uint32_t run, std::uint64_t n, double u[4]);

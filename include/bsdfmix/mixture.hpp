@@ -80,6 +80,19 @@ struct Gaussian {
   }
 };
 
+struct Sample {
+  double theta = 0, phi = 0;  // radians; phi wrapped into [-pi, pi)
+  double pdf_omega = 0;       // density per steradian of what was sampled
+  bool valid = false;         // false when theta left the domain: zero contribution
+};
+
+// Unit normal pair from two uniforms (Box-Muller), u1 in [0, 1).
+inline void normal_pair(double u1, double u2, double& z0, double& z1) {
+  const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
+  z0 = r * std::cos(2 * kPi * u2);
+  z1 = r * std::sin(2 * kPi * u2);
+}
+
 // The mixture of one omega_o slice.
 struct SliceMixture {
   double theta_o = 0, phi_o = 0;
@@ -111,13 +124,107 @@ struct SliceMixture {
     const auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
     return std::min(static_cast<std::size_t>(it - cdf.begin()), components.size() - 1);
   }
+
+  // Density per steradian of what sample() returns, at (theta, phi) of the domain.
+  double pdf_omega(Domain d, double theta, double phi) const {
+    if (theta < theta_lo(d) || theta > theta_hi(d)) return 0;
+    const double j = jacobian(d, theta);
+    return j > 0 ? pdf_param(theta, wrap_phi(phi)) / j : 0.0;
+  }
+
+  // A sample of this mixture alone: u1 picks the component, (u2, u3) the point. Invalid
+  // when theta leaves the domain.
+  Sample sample(Domain d, double u1, double u2, double u3) const {
+    const Gaussian& g = components[pick(u1)];
+    double z0, z1;
+    normal_pair(u2, u3, z0, z1);
+    Sample out;
+    out.theta = g.mu_t + g.l_tt * z0;
+    out.phi = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
+    out.valid = out.theta >= theta_lo(d) && out.theta <= theta_hi(d);
+    out.pdf_omega = out.valid ? pdf_omega(d, out.theta, out.phi) : 0.0;
+    if (!(out.pdf_omega > 0)) out.valid = false;
+    return out;
+  }
 };
 
-struct Sample {
-  double theta = 0, phi = 0;  // radians; phi wrapped into [-pi, pi)
-  double pdf_omega = 0;       // density per steradian of what was sampled
-  bool valid = false;         // false when theta left the domain: zero contribution
+// How product() prunes: the heaviest component pairs are kept until they hold `keep` of
+// the product's mass, and at most `max_components` of them.
+struct ProductOptions {
+  double keep = 0.999;
+  std::size_t max_components = 32;
 };
+
+// The product of two periodic mixtures over (theta, phi): `a` shifted by `rotate_a` in
+// phi, times `b`, as a mixture (prepared: weights normalized). For components i of a
+// and j of b and a phi image offset d, the product of the two normal densities is
+//   N(x; m_i, S_i) N(x; m_j, S_j) = c N(x; m, S),  m_i = mu_i + (0, rotate_a + 2 pi d),
+//   S = (S_i^-1 + S_j^-1)^-1,  m = S (S_i^-1 m_i + S_j^-1 m_j),  c = N(m_i; m_j, S_i + S_j),
+// and summing over the images makes the product of the two periodic densities exactly
+// the mixture of the periodic components N(m, S) with weights w_i w_j c over (i, j, d).
+// Pairs are pruned heaviest first (ProductOptions); the result is a true density of what
+// its sample() returns, whatever was pruned. `mass`, when given, receives the integral of
+// the product over theta in R and one phi period before pruning, and `kept` the share of
+// it the result keeps. Throws std::invalid_argument when the product is zero.
+inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceMixture& b,
+                            const ProductOptions& o = {}, double* mass = nullptr, double* kept = nullptr) {
+  struct Term {
+    double w;
+    Gaussian g;
+  };
+  std::vector<Term> terms;
+  double total = 0;
+  for (const Gaussian& x : a.components)
+    for (const Gaussian& y : b.components) {
+      const double st = x.s_tt + y.s_tt, sp = x.s_pp + y.s_pp, sx = x.s_tp + y.s_tp;
+      const double det = st * sp - sx * sx;
+      if (!(det > 0)) continue;
+      const double dt = x.mu_t - y.mu_t, dp0 = wrap_phi(x.mu_p + rotate_a - y.mu_p);
+      const double sig = std::sqrt(sp);
+      const int reach = static_cast<int>(std::ceil(9.0 * sig / (2 * kPi))) + 1;
+      // the product's covariance: the inverse of the summed precisions
+      const double pdet = (x.i_tt + y.i_tt) * (x.i_pp + y.i_pp) - (x.i_tp + y.i_tp) * (x.i_tp + y.i_tp);
+      if (!(pdet > 0)) continue;
+      Gaussian g;
+      g.s_tt = (x.i_pp + y.i_pp) / pdet;
+      g.s_tp = -(x.i_tp + y.i_tp) / pdet;
+      g.s_pp = (x.i_tt + y.i_tt) / pdet;
+      for (int d = -reach; d <= reach; ++d) {
+        const double dp = dp0 + 2 * kPi * d;
+        if (std::abs(dp) > 9.0 * sig) continue;
+        const double q = (sp * dt * dt - 2 * sx * dt * dp + st * dp * dp) / det;
+        const double c = std::exp(-0.5 * q) / (2 * kPi * std::sqrt(det));
+        const double w = x.weight * y.weight * c;
+        if (!(w > 0)) continue;
+        // m_i = (x.mu_t, y.mu_p + dp): the shifted image of x's mean nearest b's component
+        const double at = x.mu_t, ap = y.mu_p + dp;
+        const double ht = x.i_tt * at + x.i_tp * ap + y.i_tt * y.mu_t + y.i_tp * y.mu_p;
+        const double hp = x.i_tp * at + x.i_pp * ap + y.i_tp * y.mu_t + y.i_pp * y.mu_p;
+        Gaussian r = g;
+        r.mu_t = r.s_tt * ht + r.s_tp * hp;
+        r.mu_p = wrap_phi(r.s_tp * ht + r.s_pp * hp);
+        r.weight = w;
+        terms.push_back({w, r});
+        total += w;
+      }
+    }
+  if (!(total > 0)) throw std::invalid_argument("bsdfmix::mix::product: the two mixtures do not overlap");
+  std::sort(terms.begin(), terms.end(), [](const Term& p, const Term& q) { return p.w > q.w; });
+  SliceMixture out;
+  double acc = 0;
+  for (const Term& t : terms) {
+    if (out.components.size() >= std::max<std::size_t>(o.max_components, 1)) break;
+    if (!out.components.empty() && acc >= o.keep * total) break;
+    out.components.push_back(t.g);
+    acc += t.w;
+  }
+  out.scale = total;
+  if (mass) *mass = total;
+  if (kept) *kept = acc / total;
+  out.prepare();
+  return out;
+}
+
 
 // Counter-based random numbers: Philox4x32-10 (Salmon et al. 2011, the Random123
 // generator), so that sample i of a stream is the same on every device and for any
@@ -157,13 +264,6 @@ inline void uniforms(std::uint64_t seed, std::uint32_t stream, std::uint64_t ind
   const std::uint32_t key[2] = {std::uint32_t(seed), std::uint32_t(seed >> 32)};
   const PhiloxBlock r = philox4x32_10(ctr, key);
   for (int i = 0; i < 4; ++i) u[i] = to_uniform(r.v[i]);
-}
-
-// Unit normal pair from two uniforms (Box-Muller), u1 in [0, 1).
-inline void normal_pair(double u1, double u2, double& z0, double& z1) {
-  const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
-  z0 = r * std::cos(2 * kPi * u2);
-  z1 = r * std::sin(2 * kPi * u2);
 }
 
 // All fitted slices of a mixture file, on the table's omega_o grid.
@@ -277,6 +377,36 @@ class MixtureSet {
     out.pdf_omega = out.valid ? pdf_omega(theta_o, phi_o, out.theta, out.phi) : 0.0;
     if (!(out.pdf_omega > 0)) out.valid = false;
     return out;
+  }
+
+  // The blended mixture of omega_o (thesis eq. 3.7) as one slice mixture in the world
+  // phi frame: every component of the blended slices, weighted by its slice's blend
+  // weight, its mean rotated by phi_o under azimuthal symmetry. scale is the blended scale.
+  SliceMixture blended(double theta_o, double phi_o) const {
+    const Blend b = blend(theta_o, phi_o);
+    SliceMixture out;
+    out.theta_o = theta_o;
+    out.phi_o = phi_o;
+    for (int k = 0; k < b.count; ++k) {
+      const SliceMixture& s = slices[b.slice[k]];
+      out.scale += b.weight[k] * s.scale;
+      for (Gaussian g : s.components) {
+        g.weight *= b.weight[k];
+        g.mu_p = wrap_phi(g.mu_p + b.rotate);
+        out.components.push_back(g);
+      }
+    }
+    out.prepare();
+    return out;
+  }
+
+  // Product sampling of omega_o: the blended mixture (fitted to f J) times a mixture of the
+  // lighting over the same (theta, phi) frame (fitted to L alone), so the result follows
+  // f L J, the integrand over (theta, phi). Sample it with SliceMixture::sample, weight by
+  // its pdf_omega. See product() for the pruning and the outputs.
+  SliceMixture product_with(double theta_o, double phi_o, const SliceMixture& lighting, const ProductOptions& o = {},
+                            double* mass = nullptr, double* kept = nullptr) const {
+    return product(blended(theta_o, phi_o), 0.0, lighting, o, mass, kept);
   }
 
   // Sample `index` of a reproducible stream: sample() fed with uniforms(seed, stream, index).

@@ -1,0 +1,109 @@
+// The lighting's mixture: cell weights, the pseudo-table the sweep fits, the cache.
+#include "converge/light_mixture.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/atomic_file.hpp"
+#include "core/error.hpp"
+#include "core/hash.hpp"
+#include "core/progress.hpp"
+#include "io/mixture_file.hpp"
+#include "sweep/sweep.hpp"
+
+namespace bsdfmix {
+
+std::vector<double> lighting_cell_weights(const Lighting& light, const TableMeta& grid) {
+  const std::size_t nt = grid.theta_i.size(), np = grid.phi_i.size();
+  const double dth = axis_step(grid.theta_i), dph = axis_step(grid.phi_i);
+  const int n = light.is_constant()
+                    ? 1
+                    : std::clamp(int(std::ceil(3.0 * std::max(dth, dph) / std::max(light.finest_feature(), 1e-9))), 2, 12);
+  std::vector<double> w(nt * np, 0.0);
+  for (std::size_t i = 0; i < nt; ++i)
+    for (std::size_t j = 0; j < np; ++j) {
+      double acc = 0;
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+          const double th = grid.theta_i[i] + dth * ((a + 0.5) / n - 0.5);
+          const double ph = grid.phi_i[j] + dph * ((b + 0.5) / n - 0.5);
+          acc += light.radiance(th, ph);
+        }
+      w[i * np + j] = acc / (n * n) * dth * dph;
+    }
+  return w;
+}
+
+LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSection& fit,
+                              const std::string& cache_dir, const std::string& device_selector) {
+  // The cache key: everything the fit depends on.
+  Hash64 h;
+  const std::vector<float> packed = light.pack();
+  h.update(packed.data(), packed.size() * sizeof(float));
+  h.update(light.env.data(), light.env.size() * sizeof(float));
+  h.update(std::uint64_t(light.domain == Domain::Fiber ? 1 : 2));
+  h.update(grid.theta_i.data(), grid.theta_i.size() * sizeof(double));
+  h.update(grid.phi_i.data(), grid.phi_i.size() * sizeof(double));
+  const std::string settings = std::to_string(fit.k_min) + "," + std::to_string(fit.k_max) + "," +
+                               std::to_string(fit.seed) + "," + std::to_string(fit.restarts) + "," +
+                               std::to_string(fit.final_restarts) + "," + std::to_string(fit.iterations) + "," +
+                               std::to_string(fit.final_iterations) + "," + std::to_string(fit.tolerance) + "," +
+                               std::to_string(fit.k_penalty) + "," + fit.search + "," + BSDFMIX_VERSION;
+  h.update(settings.data(), settings.size());
+  std::string name = light.name;
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  const std::string stem = (std::filesystem::path(cache_dir) / ("light_" + name + "_" + h.hex())).string();
+
+  LightMixture out;
+  out.path = stem + ".h5";
+  if (!std::filesystem::exists(out.path)) {
+    std::filesystem::create_directories(cache_dir);
+    // The sweep fits weights f c J x cell area: a pseudo-table f = w / (c J area) gives it
+    // exactly the lighting's cell integrals.
+    TableMeta meta = grid;
+    meta.azimuthal = true;
+    meta.theta_o = {grid.theta_o.empty() ? 0.0 : grid.theta_o.front()};
+    meta.phi_o = {0.0};
+    meta.rgb = false;
+    meta.source = "{\"lighting\": \"" + name + "\", \"weights\": \"L_i dtheta dphi / (c J dtheta dphi)\"}";
+    const std::vector<double> w = lighting_cell_weights(light, meta);
+    const std::size_t np = meta.phi_i.size();
+    const double area = axis_step(meta.theta_i) * axis_step(meta.phi_i);
+    std::vector<float> f(w.size());
+    for (std::size_t i = 0; i < meta.theta_i.size(); ++i) {
+      double g = jacobian(meta.domain, meta.theta_i[i]) * area;
+      if (meta.domain == Domain::Hemisphere) g *= std::cos(meta.theta_i[i]);
+      for (std::size_t j = 0; j < np; ++j) f[i * np + j] = g > 0 ? float(w[i * np + j] / g) : 0.f;
+    }
+    const std::string table = stem + ".table.h5";
+    write_table(table, meta, f);
+    FitSection lf = fit;
+    lf.output = out.path;
+    lf.report = stem + "_fit.csv";
+    lf.search_report = stem + "_search.csv";
+    lf.theta_o.clear();
+    lf.phi_o.clear();
+    log_line("converge: fitting the lighting of scene '" + light.name + "' (" + out.path + ")");
+    const auto t0 = std::chrono::steady_clock::now();
+    run_sweep(table, lf, device_selector);
+    out.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    write_text_atomic(stem + "_seconds.txt", std::to_string(out.fit_seconds) + "\n");
+  } else {
+    out.cached = true;
+    std::ifstream in(stem + "_seconds.txt");  // how long the fit took when it was made
+    if (!(in >> out.fit_seconds)) out.fit_seconds = 0;
+  }
+  const MixtureFile mf = read_mixture_file(out.path);
+  if (mf.slices() != 1) throw InputError(out.path + ": a lighting mixture holds one slice, not " + std::to_string(mf.slices()));
+  const mix::MixtureSet set = to_mixture_set(mf);
+  out.mixture = set.slices.front();
+  out.k = mf.k.front();
+  out.l1_rel = mf.l1_rel.front();
+  return out;
+}
+
+}  // namespace bsdfmix

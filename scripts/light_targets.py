@@ -1,0 +1,183 @@
+#!/usr/bin/python3
+"""Targets of sampling with the lighting (docs/sampling.md, "Sampling with the lighting").
+
+For every (table, theta_o, phi_o, scene) of the convergence CSVs, one row:
+  K, K light, K prod   the BSDF mixture's components (tail CSV), the lighting mixture's and
+                       the product's after pruning (light tail CSV), and the share of the
+                       product's mass the pruned pairs keep
+  X fewer N            how many times fewer samples estimator X needs than us_tab's N (1024)
+                       to reach us_tab's rel_rmse there: N / N_X, N_X = N_max (rel_rmse_X at
+                       N_max / rel_rmse_us at N)^2 (the error falls as 1 / sqrt(N)); for
+                       mis_product, mis_light_cdf (light + table CDF: the renderer baseline)
+                       and mis_light_gmm (light + the BSDF mixture)
+  vs baseline          mis_light_cdf's variance over mis_product's at N_max: how many times
+                       fewer samples mis_product needs than the baseline
+  less time            mis_product fewer N x ns_us / ns_mis_product
+  cost                 ns_per_sample over us_tab's (one launch shape for every estimator)
+  max f/pdf            the light tail CSV's largest f/pdf over the integral of mis_product
+  fit s, break-even    the lighting mixture's fit time, and after how many integrals (shading
+                       points) at us_tab's N = 1024 error the time mis_product saves over
+                       mis_light_cdf pays for it
+
+Targets: mis_product fewer N >= 20, vs baseline >= 2.5, cost <= 3, max f/pdf <= 10.
+Each failed target is marked with '!'.
+
+  scripts/light_targets.py out/converge_light_polyester/polyester_convergence.csv ... [--n 1024] [--markdown]
+The tail CSVs of X.csv are X_tail.csv and X_light_tail.csv.
+"""
+
+import argparse
+import csv
+import math
+import os
+import sys
+
+NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
+
+
+def fail(msg):
+    print("light_targets: error: " + msg, file=sys.stderr)
+    sys.exit(1)
+
+
+def read(path, needed):
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        fail("cannot read %s: %s" % (path, e))
+    if not rows:
+        fail("%s: no rows" % path)
+    missing = [c for c in needed if c not in rows[0]]
+    if missing:
+        fail("%s: missing columns %s" % (path, ", ".join(missing)))
+    return rows
+
+
+def key(r):
+    return (r["table"], round(float(r["theta_o"]), 6), round(float(r["phi_o"]), 6))
+
+
+def fmt(x, digits=3):
+    if x is None:
+        return "-"
+    if isinstance(x, str):
+        return x
+    if isinstance(x, int):
+        return str(x)
+    if not math.isfinite(x):
+        return "inf" if x > 0 else "nan"
+    if x != 0 and (abs(x) >= 1e5 or abs(x) < 1e-2):
+        return "%.1e" % x
+    if abs(x) >= 100:
+        return "%.0f" % x
+    return ("%." + str(digits) + "g") % x
+
+
+def targets(csvs, n_target):
+    out = []
+    for path in csvs:
+        stem = os.path.splitext(path)[0]
+        rows = read(path, NEEDED)
+        tail = {key(t): t for t in read(stem + "_tail.csv", ["table", "theta_o", "phi_o", "k"])}
+        light = {}
+        for t in read(stem + "_light_tail.csv", ["table", "theta_o", "phi_o", "scene", "estimator", "max_weight",
+                                                 "k_light", "light_fit_seconds", "k_product", "product_kept"]):
+            light[key(t) + (t["scene"], t["estimator"])] = t
+        groups = {}
+        for r in rows:
+            groups.setdefault(key(r) + (r["scene"],), {}).setdefault(r["estimator"], {})[int(r["samples"])] = r
+        for g in sorted(groups):
+            est = groups[g]
+            if "us_tab" not in est or "mis_product" not in est:
+                continue
+            if n_target not in est["us_tab"]:
+                fail("%s: us_tab has no row at N = %d" % (path, n_target))
+            r_us = float(est["us_tab"][n_target]["rel_rmse"])
+            ns_us = float(est["us_tab"][max(est["us_tab"])]["ns_per_sample"])
+
+            def at_max(e, col):
+                return float(est[e][max(est[e])][col]) if e in est else None
+
+            def fewer(e):
+                r = at_max(e, "rel_rmse")
+                if r is None:
+                    return None
+                n_e = max(est[e]) * (r / r_us) ** 2
+                return n_target / n_e if n_e > 0 else math.inf
+
+            def cost(e):
+                ns = at_max(e, "ns_per_sample")
+                return ns / ns_us if ns is not None else None
+
+            def var(e):
+                r = at_max(e, "rel_rmse")
+                return r * r * max(est[e]) if r is not None else None
+
+            lt = light.get(g + ("mis_product",), {})
+            f_mp, f_mlc = fewer("mis_product"), fewer("mis_light_cdf")
+            v_mp, v_mlc = var("mis_product"), var("mis_light_cdf")
+            ns_mp, ns_mlc = at_max("mis_product", "ns_per_sample"), at_max("mis_light_cdf", "ns_per_sample")
+            fit_s = float(lt["light_fit_seconds"]) if lt and lt["light_fit_seconds"] else None
+            break_even = None
+            if fit_s is not None and f_mp and f_mlc and ns_mlc:
+                saved = n_target / f_mlc * ns_mlc - n_target / f_mp * ns_mp  # ns per integral
+                break_even = fit_s * 1e9 / saved if saved > 0 else math.inf
+            out.append(dict(
+                table=g[0], theta_o=g[1], phi_o=g[2], scene=g[3],
+                k=int(tail[g[:3]]["k"]) if g[:3] in tail else None,
+                k_light=int(lt["k_light"]) if lt else None,
+                k_product=int(lt["k_product"]) if lt else None,
+                kept=float(lt["product_kept"]) if lt else None,
+                mp_fewer=f_mp, mp_vs_base=v_mlc / v_mp if v_mp and v_mlc is not None else None,
+                mp_time=f_mp / cost("mis_product") if f_mp is not None else None,
+                mlc_fewer=f_mlc, mlg_fewer=fewer("mis_light_gmm"), mis_fewer=fewer("mis_tab"),
+                cost_mp=cost("mis_product"), cost_mlc=cost("mis_light_cdf"), cost_mlg=cost("mis_light_gmm"),
+                max_weight=float(lt["max_weight"]) if lt else None,
+                fit_s=fit_s, break_even=break_even,
+            ))
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("csv", nargs="+", help="convergence CSV(s) with the lighting estimators")
+    ap.add_argument("--n", type=int, default=1024, help="us_tab's sample count to match (1024)")
+    ap.add_argument("--markdown", action="store_true", help="a Markdown table (default: CSV)")
+    a = ap.parse_args()
+    rows = targets(a.csv, a.n)
+    if not rows:
+        fail("no (direction, scene) with both us_tab and mis_product in " + ", ".join(a.csv))
+    cols = [
+        ("table", "table", None), ("theta_o (deg)", "theta_o", None), ("scene", "scene", None), ("K", "k", None),
+        ("K light", "k_light", None), ("K prod", "k_product", None), ("kept", "kept", None),
+        ("mis_product fewer N", "mp_fewer", lambda x: x >= 20), ("vs baseline", "mp_vs_base", lambda x: x >= 2.5),
+        ("less time", "mp_time", None), ("mis_light_cdf fewer N", "mlc_fewer", None),
+        ("mis_light_gmm fewer N", "mlg_fewer", None), ("mis_tab fewer N", "mis_fewer", None),
+        ("cost mis_product", "cost_mp", lambda x: x <= 3), ("cost mis_light_cdf", "cost_mlc", None),
+        ("cost mis_light_gmm", "cost_mlg", None), ("max f/pdf", "max_weight", lambda x: x <= 10),
+        ("fit s", "fit_s", None), ("break-even", "break_even", None),
+    ]
+
+    def cell(r, name, ok):
+        x = r[name]
+        if name == "theta_o":
+            return "%.0f" % math.degrees(x)
+        if ok is None or x is None:
+            return fmt(x)
+        return fmt(x) if ok(x) else fmt(x) + " !"
+
+    if a.markdown:
+        print("| " + " | ".join(c[0] for c in cols) + " |")
+        print("|" + "---|" * len(cols))
+        for r in rows:
+            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
+    else:
+        w = csv.writer(sys.stdout)
+        w.writerow([c[1] for c in cols])
+        for r in rows:
+            w.writerow([r[n] for _, n, _ in cols])
+
+
+if __name__ == "__main__":
+    main()
