@@ -401,7 +401,7 @@ int cdf_find(__global const float* cdf, const int n, const float u) {
 // [0] p_const, [1] p_grad, [2] p_env, [3] lobe count, [4] G (the gradient's integral over
 // t), [5] its share below the horizon, [6] map width, [7] height, [8..15] p_lobe,
 // [16..23] lobe peak densities, [24..71] lobe bases (t1, t2: 6 floats per lobe),
-// [72..77] the up axis's basis; from [128]: the map's marginal [H + 1], conditionals
+// [72..77] the up axis's basis, [78] the last term present; from [128]: the map's marginal [H + 1], conditionals
 // [H][W + 1] and pixel densities [H][W].
 #define LS_HEADER 128
 
@@ -419,23 +419,30 @@ float linear_draw(const float a, const float b, const float u) {
 
 // A world direction from the lighting's terms: u.x picks the term, u.yzw the point.
 float3 light_draw(__global const float* ls, __global const float* sc, const float4 u) {
-  float acc = ls[0];
+  // the term: the first whose cumulative probability passes u.x (0 constant, 1 gradient,
+  // 2 map, 3 + k lobe k); a u.x past the rounded sum goes to the last term present ([78])
   const int nl = (int)ls[3];
-  if (u.x < acc || (ls[1] == 0.0f && ls[2] == 0.0f && nl == 0)) {
+  int term = -1;
+  float acc = 0.0f;
+  for (int k = 0; k < 3 + nl && term < 0; ++k) {
+    const float p = k < 3 ? ls[k] : ls[8 + k - 3];
+    acc += p;
+    if (u.x < acc && p > 0.0f) term = k;
+  }
+  if (term < 0) term = (int)ls[78];
+  if (term == 0) {
     const float z = 1.0f - 2.0f * u.z;
     const float2 cs = sincos_turn(u.w);
     return world_dir(z, cs.y, cs.x, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f, 0.0f, 0.0f), (float3)(0.0f, 1.0f, 0.0f));
   }
-  acc += ls[1];
-  if (u.x < acc) {
+  if (term == 1) {
     const float t = u.y < ls[5] ? -linear_draw(sc[SC_GRAD + 4], sc[SC_GRAD + 5], u.z)
                                 : linear_draw(sc[SC_GRAD + 4], sc[SC_GRAD + 3], u.z);
     const float2 cs = sincos_turn(u.w);
     return world_dir(t, cs.y, cs.x, (float3)(sc[SC_GRAD], sc[SC_GRAD + 1], sc[SC_GRAD + 2]),
                      (float3)(ls[72], ls[73], ls[74]), (float3)(ls[75], ls[76], ls[77]));
   }
-  acc += ls[2];
-  if (u.x < acc) {
+  if (term == 2) {
     const int W = (int)ls[6], H = (int)ls[7];
     __global const float* marg = ls + LS_HEADER;
     const int y = cdf_find(marg, H, u.y);
@@ -448,9 +455,7 @@ float3 light_draw(__global const float* ls, __global const float* sc, const floa
     return world_dir(z, cos(az), sin(az), (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f, 0.0f, 0.0f),
                      (float3)(0.0f, 1.0f, 0.0f));
   }
-  int k = 0;
-  for (acc += ls[8]; k + 1 < nl && u.x >= acc; acc += ls[8 + (++k)]) {
-  }
+  const int k = term - 3;
   __global const float* lb = sc + SC_LOBES + 5 * k;
   const float kappa = lb[3], v = 1.0f - u.y;  // (0, 1]
   const float omc = fmin(2.0f, -log(v + (1.0f - v) * exp(-2.0f * kappa)) / kappa);

@@ -54,6 +54,10 @@ TEST_CASE("a bare section takes every default", "[config]") {
   REQUIRE(c.converge);
   CHECK(c.converge->samples_max == 65536);
   CHECK(c.converge->runs == 64);
+  CHECK(c.converge->product_auto);
+  CHECK(c.converge->product_light == 0.1);
+  CHECK(c.converge->light_fraction == 0.5);
+  CHECK_FALSE(c.converge->power_heuristic);
 }
 
 TEST_CASE("unknown keys are rejected with their full path", "[config]") {
@@ -73,6 +77,15 @@ TEST_CASE("wrong types and impossible values are named", "[config]") {
   CHECK_THAT(config_error(t + "converge:\n  theta_o: [0.1, zero]\n"), Catch::Contains("expected a number or a list of numbers, got 'zero'"));
   CHECK_THAT(config_error(t + "fit: 3\n"), Catch::Contains("cfg.yaml: fit (line 2): expected a mapping"));
   CHECK_THAT(config_error(t + "generate:\n  symmetry: maybe\n"), Catch::Contains("generate.symmetry (line 3): expected true or false"));
+  // sampling with the lighting
+  CHECK_THAT(config_error(t + "converge:\n  estimators: [mis_product, mis_prod]\n"),
+             Catch::Contains("converge.estimators (line 3): unknown estimator 'mis_prod'") && Catch::Contains("mis_light_cdf"));
+  CHECK_THAT(config_error(t + "converge:\n  mis_heuristic: cutoff\n"),
+             Catch::Contains("converge.mis_heuristic (line 3): expected balance or power, not 'cutoff'"));
+  CHECK_THAT(config_error(t + "converge:\n  product_fraction: 0.8\n  product_light: 0.3\n"),
+             Catch::Contains("converge.product_light (line 4): product_fraction + product_light must be at most 1"));
+  CHECK_THAT(config_error(t + "converge:\n  light_fraction: 1\n"), Catch::Contains("converge.light_fraction (line 3): must be below 1"));
+  CHECK_THAT(config_error(t + "converge:\n  product_components: 0\n"), Catch::Contains("converge.product_components (line 3): 0 is out of range"));
 }
 
 TEST_CASE("missing files and missing keys are named", "[config]") {

@@ -299,11 +299,11 @@ TEST_CASE("a 2-rank fit killed with SIGKILL resumes to the 1-process file", "[sc
     std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
     if (cmdline.find(cfg) != std::string::npos && cmdline.find(BSDFMIX_BINARY) == 0) ranks.push_back(std::stoi(name));
   }
-  for (pid_t r : ranks) kill(r, SIGKILL);
+  for (pid_t rank : ranks) kill(rank, SIGKILL);
   waitpid(pid, &status, 0);
-  for (pid_t r : ranks)  // gone when /proc no longer lists it (or lists a zombie)
-    while (fs::exists("/proc/" + std::to_string(r)) &&
-           slurp("/proc/" + std::to_string(r) + "/stat").find(") Z") == std::string::npos)
+  for (pid_t rank : ranks)  // gone when /proc no longer lists it (or lists a zombie)
+    while (fs::exists("/proc/" + std::to_string(rank)) &&
+           slurp("/proc/" + std::to_string(rank) + "/stat").find(") Z") == std::string::npos)
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
   CHECK_FALSE(fs::exists(out));
   const std::size_t done = committed();

@@ -42,7 +42,7 @@ YAML::Node merged(const YAML::Node& defaults, const YAML::Node& user) {
   return out;
 }
 
-const char* kSections[] = {"generate", "import", "fit", "converge", "charts"};
+const char* kSections[] = {"generate", "import", "fit", "converge", "charts", "render"};
 
 }  // namespace
 
@@ -77,6 +77,7 @@ Config parse_config(const std::string& text, const std::string& name) {
   if (user["fit"]) c.fit = parse_fit(section("fit"));
   if (user["converge"]) c.converge = parse_converge(section("converge"));
   if (user["charts"]) c.charts = parse_charts(section("charts"));
+  if (user["render"]) c.render = RenderSection{name, merged(defaults["render"], user["render"]), defaults["render"]};
   if (c.generate && c.import)
     throw ConfigError(name + ": generate and import both make the table; keep one");
   if (!c.generate && !c.import && !exists_quiet(c.table))

@@ -63,10 +63,19 @@ struct ConvergeSection {
   // Sampling with the lighting (docs/sampling.md): MIS fractions and heuristic, the
   // product's pruning, where the lighting mixtures are cached, the lighting tail CSV.
   double light_fraction = 0.5, product_fraction = 0.8, product_light = 0.1;
+  bool product_auto = true;  // product_fraction: auto (converge/reference.hpp, tune_product_fractions)
   int product_components = 32;
   bool power_heuristic = false;
   std::string light_mixture_dir;  // "" = <csv dir>/light_mixtures
   std::string light_tail_csv;     // "" = beside csv: <csv stem>_light_tail.csv
+};
+
+// The `render` section, parsed by the renderer (host/render/render_settings.hpp): the
+// user's mapping with the defaults merged under its top-level keys, and the defaults
+// themselves (for the nested mappings).
+struct RenderSection {
+  std::string file;
+  YAML::Node node, defaults;
 };
 
 struct ChartsSection {
@@ -82,6 +91,7 @@ struct Config {
   std::optional<FitSection> fit;
   std::optional<ConvergeSection> converge;
   std::optional<ChartsSection> charts;
+  std::optional<RenderSection> render;
 };
 
 // Reads, merges with the defaults and validates a config file; throws ConfigError.

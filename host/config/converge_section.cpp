@@ -76,11 +76,15 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   if (n.has("tail_csv")) c.tail_csv = n.str("tail_csv");
   c.light_fraction = n.number("light_fraction", 0.0, 1.0);
   if (c.light_fraction >= 1.0) n.fail("light_fraction", "must be below 1 (1 is light sampling alone: the `light` estimator)");
-  c.product_fraction = n.number("product_fraction", 0.0, 1.0);
-  if (c.product_fraction <= 0.0) n.fail("product_fraction", "must be above 0 (0 leaves no product samples)");
-  c.product_light = n.number("product_light", 0.0, 1.0);
-  if (c.product_fraction + c.product_light > 1.0)
-    n.fail("product_light", "product_fraction + product_light must be at most 1 (uniform sampling takes the rest)");
+  c.product_auto = n.has("product_fraction") && n.raw("product_fraction").IsScalar() &&
+                   n.raw("product_fraction").Scalar() == "auto";
+  if (!c.product_auto) {
+    c.product_fraction = n.number("product_fraction", 0.0, 1.0);
+    if (c.product_fraction <= 0.0) n.fail("product_fraction", "must be above 0 (0 leaves no product samples), or auto");
+    c.product_light = n.number("product_light", 0.0, 1.0);
+    if (c.product_fraction + c.product_light > 1.0)
+      n.fail("product_light", "product_fraction + product_light must be at most 1 (uniform sampling takes the rest)");
+  }
   c.product_components = static_cast<int>(n.integer("product_components", 1, 1024));
   const std::string h = n.str("mis_heuristic");
   if (h != "balance" && h != "power") n.fail("mis_heuristic", "expected balance or power, not '" + h + "'");

@@ -233,3 +233,79 @@ LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators)
 }
 
 }  // namespace bsdfmix
+
+namespace bsdfmix {
+
+ProductTuning tune_product_fractions(const Problem& p, double max_weight_bound) {
+  const TableSlice& t = p.table;
+  const int n = sub_points(std::max(t.dth, t.dph), p.light.finest_feature(), 3, 8);
+  std::vector<double> x, w;
+  gauss_legendre(n, x, w);
+  // Per cell with f > 0: the integrand's share W and each technique's probability.
+  struct Cell {
+    double W, prod, light, uni;
+  };
+  std::vector<Cell> cells;
+  double I = 0;
+  for (std::size_t i = 0; i < t.n_theta; ++i) {
+    const double ta = t.theta_edge(i), tb = t.theta_edge(i + 1);
+    if (!(tb > ta)) continue;
+    for (std::size_t j = 0; j < t.n_phi; ++j) {
+      const double fc = t.f[i * t.n_phi + j];
+      if (!(fc > 0)) continue;
+      const double p0 = t.ph0 + t.dph * double(j) + t.rotate;
+      Cell c{0, 0, 0, 0};
+      for (int kt = 0; kt < n; ++kt) {
+        const double th = 0.5 * (ta + tb) + 0.5 * (tb - ta) * x[std::size_t(kt)];
+        const double jac = jacobian(t.domain, th), cf = cos_factor(t.domain, th);
+        for (int kp = 0; kp < n; ++kp) {
+          const double ph = wrap_phi(p0 + 0.5 * t.dph * (1 + x[std::size_t(kp)]));
+          const double dw = 0.25 * (tb - ta) * t.dph * w[std::size_t(kt)] * w[std::size_t(kp)] * jac;
+          c.W += dw * fc * cf * p.light.radiance(th, ph);
+          c.prod += dw * estimator_pdf(p, Estimator::Product, th, ph);
+          c.light += dw * estimator_pdf(p, Estimator::Light, th, ph);
+          c.uni += dw * estimator_pdf(p, Estimator::UsTab, th, ph);
+        }
+      }
+      I += c.W;
+      cells.push_back(c);
+    }
+  }
+  ProductTuning best;
+  best.product_fraction = p.mis.product_fraction;
+  best.product_light = p.mis.product_light;
+  if (!(I > 0) || !p.has_product) return best;
+  // The balance heuristic's density is linear in the fractions: every candidate is
+  // scored from the same cell probabilities.
+  bool found = false;
+  for (const double cp : {0.5, 0.65, 0.8, 0.9, 0.95, 0.98})
+    for (const double share : {0.25, 0.5, 0.75}) {
+      const double cl = (1 - cp) * share, cu = (1 - cp) * (1 - share);
+      double relvar = -1, maxw = 0;
+      for (const Cell& c : cells) {
+        const double W = c.W / I, P = cp * c.prod + cl * c.light + cu * c.uni;
+        if (!(W > 0)) continue;
+        if (!(P > 0)) {
+          relvar = maxw = std::numeric_limits<double>::infinity();
+          break;
+        }
+        relvar += W * W / P;
+        maxw = std::max(maxw, W / P);
+      }
+      const bool ok = maxw <= max_weight_bound;
+      // within the bound, the lowest variance; if no candidate is, the smallest weight
+      const bool better = !found || (ok && (!best.bounded || relvar < best.relvar)) ||
+                          (!ok && !best.bounded && maxw < best.max_weight);
+      if (better) {
+        best.product_fraction = cp;
+        best.product_light = cl;
+        best.relvar = relvar;
+        best.max_weight = maxw;
+        best.bounded = ok;
+        found = true;
+      }
+    }
+  return best;
+}
+
+}  // namespace bsdfmix

@@ -45,4 +45,17 @@ struct LightTail {
 };
 LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators);
 
+// mis_product's fractions chosen from the same cell probabilities: among product shares
+// 0.5 .. 0.98 (the rest split between light and uniform sampling), the one of least
+// predicted relative variance whose largest weight f/pdf over the integral stays within
+// `max_weight_bound` (if none does, the one with the smallest largest weight). The choice
+// depends on the problem only, never on the samples, so the estimator stays unbiased.
+struct ProductTuning {
+  double product_fraction = 0.8, product_light = 0.1;
+  double relvar = 0, max_weight = 0;  // predicted, of the choice
+  bool bounded = false;               // max_weight <= the bound
+};
+ProductTuning tune_product_fractions(const Problem& p, double max_weight_bound = 10.0);
+
 }  // namespace bsdfmix
+

@@ -170,8 +170,16 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
 
     for (std::size_t si = 0; si < spec.scenes.size(); ++si) {
       const Lighting& light = spec.scenes[si];
-      const Problem p = make_problem(table, set, theta_o, phi_o, light, spec.mis,
-                                     product ? &light_mix[si].mixture : nullptr);
+      Problem p = make_problem(table, set, theta_o, phi_o, light, spec.mis, product ? &light_mix[si].mixture : nullptr);
+      if (product && spec.product_auto) {
+        const ProductTuning tu = tune_product_fractions(p);
+        p.mis.product_fraction = tu.product_fraction;
+        p.mis.product_light = tu.product_light;
+        log_line("converge: theta_o " + fixed(theta_o, 4) + " " + light.name + ": mis_product fractions product " +
+                 short_num(tu.product_fraction) + ", light " + short_num(tu.product_light) + ", uniform " +
+                 short_num(1 - tu.product_fraction - tu.product_light) + " (predicted variance per sample " +
+                 short_num(tu.relvar) + ", largest f/pdf " + short_num(tu.max_weight) + ")");
+      }
       const double ref = reference_integral(p);
       if (!(ref > 0) || !std::isfinite(ref))
         throw InputError("converge: the reference integral at theta_o " + num(theta_o) + " in scene '" + light.name +
@@ -186,8 +194,9 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
                              num(lt.max_weight[e]) + "," + num(lt.missed[e]) + "," +
                              (product ? std::to_string(light_mix[si].k) + "," + num(light_mix[si].l1_rel) + "," +
                                             num(light_mix[si].fit_seconds) + "," +
-                                            std::to_string(p.product.components.size()) + "," + num(p.product_kept)
-                                      : std::string(",,,,")) +
+                                            std::to_string(p.product.components.size()) + "," + num(p.product_kept) +
+                                            "," + num(p.mis.product_fraction) + "," + num(p.mis.product_light)
+                                      : std::string(",,,,,,")) +
                              "\n";
           tail_msg += std::string(e ? ";" : "") + " " + estimator_name(table_estimators[e]) + " " + short_num(lt.relvar[e]) +
                  ", " + short_num(lt.max_weight[e]);

@@ -24,6 +24,7 @@ struct StudySpec {
   std::uint64_t samples_max = 65536;  // a power of two
   std::uint64_t seed = 1;
   MisOptions mis;      // the MIS estimators' fractions and heuristic, the product's pruning
+  bool product_auto = false;  // mis_product's fractions by tune_product_fractions, per direction and scene
   // product and mis_product: the lighting mixtures are fitted with these settings and
   // cached in light_cache_dir (converge/light_mixture.hpp)
   FitSection light_fit;
@@ -51,7 +52,7 @@ constexpr const char* kTailHeader =
     "max_weight_is,max_weight_mis,table_bytes,mixture_bytes,missed_is";
 
 constexpr const char* kLightTailHeader =
-    "table,theta_o,phi_o,scene,estimator,relvar,max_weight,missed,k_light,l1_light,light_fit_seconds,k_product,product_kept";
+    "table,theta_o,phi_o,scene,estimator,relvar,max_weight,missed,k_light,l1_light,light_fit_seconds,k_product,product_kept,product_fraction,product_light";
 
 // Rows of one (direction, scene, estimator) from its run sums.
 std::vector<ConvergenceRow> convergence_rows(const RunSums& sums, double reference, double ns_per_sample);

@@ -49,6 +49,7 @@ void stage_converge(const Config& config, const std::string& device_selector) {
   spec.mis.product_fraction = c.product_fraction;
   spec.mis.product_light = c.product_light;
   spec.mis.power = c.power_heuristic;
+  spec.product_auto = c.product_auto;
   spec.mis.product.max_components = std::size_t(c.product_components);
   if (config.fit) spec.light_fit = *config.fit;
   else spec.light_fit.k_max = 16;

@@ -142,13 +142,27 @@ LightSampler make_light_sampler(const Lighting& l) {
 
 Vec3 LightSampler::sample(double u0, double u1, double u2, double u3) const {
   const Lighting& l = light;
-  double acc = p_const;
-  if (u0 < acc || (p_grad == 0 && p_env == 0 && p_lobe.empty())) {  // the uniform sphere
+  // The term: the first whose cumulative probability passes u0; rounding can leave the
+  // sum a little below 1, and a u0 past it goes to the last term present.
+  const std::size_t terms = 3 + p_lobe.size();
+  auto prob = [&](std::size_t k) { return k == 0 ? p_const : k == 1 ? p_grad : k == 2 ? p_env : p_lobe[k - 3]; };
+  std::size_t term = terms;
+  double acc = 0;
+  for (std::size_t k = 0; k < terms && term == terms; ++k) {
+    acc += prob(k);
+    if (u0 < acc && prob(k) > 0) term = k;
+  }
+  if (term == terms)
+    for (std::size_t k = terms; k-- > 0;)
+      if (prob(k) > 0) {
+        term = k;
+        break;
+      }
+  if (term == 0 || term == terms) {  // the uniform sphere
     const double z = 1 - 2 * u2, r = std::sqrt(std::max(0.0, 1 - z * z));
     return {r * std::cos(2 * kPi * u3), r * std::sin(2 * kPi * u3), z};
   }
-  acc += p_grad;
-  if (u0 < acc) {  // t = dot(w, up) by the gradient's piecewise linear density
+  if (term == 1) {  // t = dot(w, up) by the gradient's piecewise linear density
     double t;
     if (u1 < grad_neg) t = -linear_draw(l.horizon, l.ground, u2);
     else t = linear_draw(l.horizon, l.zenith, u2);
@@ -157,8 +171,7 @@ Vec3 LightSampler::sample(double u0, double u1, double u2, double u3) const {
     for (int i = 0; i < 3; ++i) w[i] = t * l.up[i] + r * (c * up_t1[i] + s * up_t2[i]);
     return w;
   }
-  acc += p_env;
-  if (u0 < acc) {  // a pixel by the 2D distribution, then uniform in solid angle inside it
+  if (term == 2) {  // a pixel by the 2D distribution, then uniform in solid angle inside it
     const std::size_t W = std::size_t(env_w), H = std::size_t(env_h);
     const std::size_t y = find(env_marginal.data(), H, u1);
     const double* c = &env_conditional[y * (W + 1)];
@@ -170,9 +183,7 @@ Vec3 LightSampler::sample(double u0, double u1, double u2, double u3) const {
     return {r * std::cos(az), r * std::sin(az), z};
   }
   // a lobe: 1 - cos by the exact inverse of the von Mises-Fisher distribution
-  std::size_t k = 0;
-  for (acc += p_lobe[0]; k + 1 < p_lobe.size() && u0 >= acc; acc += p_lobe[++k]) {
-  }
+  const std::size_t k = term - 3;
   const LightLobe& lb = l.lobes[k];
   const double u = 1 - u1;  // (0, 1]
   const double omc = std::min(2.0, -std::log(u + (1 - u) * std::exp(-2 * lb.kappa)) / lb.kappa);
@@ -224,6 +235,10 @@ std::vector<float> LightSampler::pack() const {
     p[72 + i] = float(up_t1[i]);
     p[75 + i] = float(up_t2[i]);
   }
+  int last = 0;
+  for (std::size_t k = 0; k < 3 + p_lobe.size(); ++k)
+    if ((k == 0 ? p_const : k == 1 ? p_grad : k == 2 ? p_env : p_lobe[k - 3]) > 0) last = int(k);
+  p[78] = float(last);
   for (const double v : env_marginal) p.push_back(float(v));
   for (const double v : env_conditional) p.push_back(float(v));
   for (const double v : env_density) p.push_back(float(v));
