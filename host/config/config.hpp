@@ -64,7 +64,7 @@ struct ConvergeSection {
   // product's pruning, where the lighting mixtures are cached, the lighting tail CSV.
   double light_fraction = 0.5, product_fraction = 0.8, product_light = 0.1;
   bool product_auto = true;  // product_fraction: auto (converge/reference.hpp, tune_product_fractions)
-  int product_components = 32;
+  int product_components = 128;
   bool power_heuristic = false;
   std::string light_mixture_dir;  // "" = <csv dir>/light_mixtures
   std::string light_tail_csv;     // "" = beside csv: <csv stem>_light_tail.csv

@@ -152,7 +152,7 @@ struct SliceMixture {
 // the product's mass, and at most `max_components` of them.
 struct ProductOptions {
   double keep = 0.999;
-  std::size_t max_components = 32;
+  std::size_t max_components = 128;
 };
 
 // The product of two periodic mixtures over (theta, phi): `a` shifted by `rotate_a` in

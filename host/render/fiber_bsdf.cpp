@@ -1,0 +1,237 @@
+// The renderer's fiber BCSDF: the table in memory, its CDFs, the stand-in and the samplers.
+#include "render/fiber_bsdf.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+namespace {
+
+double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+V3 cross(const V3& a, const V3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+V3 normalized(const V3& v) {
+  const double l = std::sqrt(dot(v, v));
+  return {v[0] / l, v[1] / l, v[2] / l};
+}
+
+std::size_t find(const float* cdf, std::size_t n, double u) {
+  std::size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const std::size_t mid = (lo + hi) / 2;
+    if (double(cdf[mid + 1]) > u) hi = mid;
+    else lo = mid + 1;
+  }
+  return std::min(lo, n - 1);
+}
+
+constexpr double kUniformPdf = 1 / (4 * kPi);
+
+}  // namespace
+
+FiberFrame::FiberFrame(const V3& tangent, const V3& wo) {
+  t = normalized(tangent);
+  const double s = std::clamp(dot(wo, t), -1.0, 1.0);
+  theta_o = std::asin(s);
+  V3 p{wo[0] - s * t[0], wo[1] - s * t[1], wo[2] - s * t[2]};
+  if (dot(p, p) < 1e-20) p = std::abs(t[0]) < 0.9 ? cross(t, {1, 0, 0}) : cross(t, {0, 1, 0});
+  n = normalized(p);
+  b = cross(t, n);
+}
+
+void FiberFrame::to_local(const V3& w, double& theta, double& phi) const {
+  theta = std::asin(std::clamp(dot(w, t), -1.0, 1.0));
+  phi = std::atan2(dot(w, b), dot(w, n));
+  phi = wrap_phi(phi);
+}
+
+V3 FiberFrame::to_world(double theta, double phi) const {
+  const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
+  V3 w;
+  for (int i = 0; i < 3; ++i) w[i] = st * t[i] + ct * (cp * n[i] + sp * b[i]);
+  return w;
+}
+
+FiberBsdf::FiberBsdf(const std::string& table_path) {
+  const TableReader table(table_path);
+  meta_ = table.meta();
+  if (meta_.domain != Domain::Fiber || !meta_.azimuthal)
+    throw InputError(table_path + ": the renderer needs a fiber table with azimuthal symmetry");
+  const std::size_t cells = meta_.cells_per_slice(), no = meta_.theta_o.size();
+  f_.resize(no * cells);
+  for (std::size_t s = 0; s < no; ++s) {
+    const std::vector<float> v = table.read_slice(s, 0);
+    std::copy(v.begin(), v.end(), f_.begin() + std::ptrdiff_t(s * cells));
+  }
+  dth_ = axis_step(meta_.theta_i);
+  dph_ = axis_step(meta_.phi_i);
+  th0_ = meta_.theta_i.front() - dth_ / 2;
+  ph0_ = meta_.phi_i.front() - dph_ / 2;
+  dto_ = no > 1 ? axis_step(meta_.theta_o) : 1.0;
+  to0_ = meta_.theta_o.front();
+  // The table CDF of every slice (cdf_tab's, host/sampling/problem.cpp build_cdf).
+  for (std::size_t s = 0; s < no; ++s) {
+    TableSlice t;
+    t.domain = Domain::Fiber;
+    t.n_theta = meta_.theta_i.size();
+    t.n_phi = meta_.phi_i.size();
+    t.th0 = th0_;
+    t.dth = dth_;
+    t.ph0 = ph0_;
+    t.dph = dph_;
+    t.f.assign(f_.begin() + std::ptrdiff_t(s * cells), f_.begin() + std::ptrdiff_t((s + 1) * cells));
+    if (s == 0)
+      for (std::size_t i = 0; i < t.n_theta; ++i) cell_w_.push_back(t.cell_weight(i));
+    bool any = false;
+    for (float x : t.f) any = any || x > 0;
+    cdf_.push_back(any ? build_cdf(t) : CellCdf{});
+  }
+  fitted_.assign(no, -1);
+}
+
+void FiberBsdf::set_mixture(const mix::MixtureSet& set) {
+  if (set.domain != mix::Domain::Fiber) throw InputError("render: the mixture file is not of a fiber table");
+  set_ = set;
+  has_set_ = !set_.slices.empty();
+  fitted_.assign(meta_.theta_o.size(), -1);
+  for (std::size_t k = 0; k < set_.slices.size(); ++k) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < meta_.theta_o.size(); ++i)
+      if (std::abs(meta_.theta_o[i] - set_.slices[k].theta_o) < std::abs(meta_.theta_o[best] - set_.slices[k].theta_o))
+        best = i;
+    fitted_[best] = int(k);
+  }
+}
+
+void FiberBsdf::bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const {
+  const std::size_t n = meta_.theta_o.size();
+  const double u = (theta_o - to0_) / dto_;
+  if (n == 1 || u <= 0) {
+    i0 = i1 = 0;
+    w = 0;
+  } else if (u >= double(n - 1)) {
+    i0 = i1 = n - 1;
+    w = 0;
+  } else {
+    i0 = std::size_t(u);
+    i1 = i0 + 1;
+    w = u - double(i0);
+  }
+}
+
+double FiberBsdf::cell_f(std::size_t slice, double theta, double phi) const {
+  const double fi = std::floor((theta - th0_) / dth_);
+  const std::size_t nt = meta_.theta_i.size(), np = meta_.phi_i.size();
+  if (!(fi >= 0) || fi >= double(nt)) return 0;
+  long j = long(std::floor((phi - ph0_) / dph_)) % long(np);
+  if (j < 0) j += long(np);
+  return f_[slice * nt * np + std::size_t(fi) * np + std::size_t(j)];
+}
+
+bool FiberBsdf::bracketed(double theta_o) const {
+  std::size_t i0, i1;
+  double w;
+  bracket(theta_o, i0, i1, w);
+  return (w < 1 && fitted_[i0] >= 0) || (w > 0 && fitted_[i1] >= 0);
+}
+
+int FiberBsdf::nearest_fitted(double theta_o) const {
+  int best = -1;
+  double d = 1e300;
+  for (std::size_t i = 0; i < fitted_.size(); ++i)
+    if (fitted_[i] >= 0 && std::abs(meta_.theta_o[i] - theta_o) < d) {
+      d = std::abs(meta_.theta_o[i] - theta_o);
+      best = fitted_[i];
+    }
+  return best;
+}
+
+double FiberBsdf::f(FiberF which, double theta_o, double theta, double phi) const {
+  if (which == FiberF::Table) {
+    std::size_t i0, i1;
+    double w;
+    bracket(theta_o, i0, i1, w);
+    const double a = cell_f(i0, theta, phi);
+    return w > 0 ? (1 - w) * a + w * cell_f(i1, theta, phi) : a;
+  }
+  if (!has_set_) throw InputError("render: the stand-in needs the mixtures");
+  if (bracketed(theta_o)) return set_.eval_f(theta_o, 0.0, theta, phi);
+  const mix::SliceMixture& s = set_.slices[std::size_t(nearest_fitted(theta_o))];
+  const double j = std::cos(theta);
+  return j > 0 ? s.scale * s.pdf_param(theta, phi) / j : 0.0;
+}
+
+mix::Sample FiberBsdf::mixture_sample(double theta_o, const double u[4]) const {
+  if (bracketed(theta_o)) return set_.sample(theta_o, 0.0, u[0], u[1], u[2], u[3]);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].sample(mix::Domain::Fiber, u[1], u[2], u[3]);
+}
+
+double FiberBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
+  if (bracketed(theta_o)) return set_.pdf_omega(theta_o, 0.0, theta, phi);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(mix::Domain::Fiber, theta, phi);
+}
+
+void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double& theta, double& phi,
+                       double& pdf_out) const {
+  pdf_out = 0;
+  if (s == FiberSampler::Uniform || (s == FiberSampler::Mixture && u[0] < uniform_fraction)) {
+    theta = std::asin(std::clamp(2 * u[2] - 1, -1.0, 1.0));
+    phi = 2 * kPi * u[3] - kPi;
+  } else if (s == FiberSampler::Mixture) {
+    if (!has_set_) throw InputError("render: mixture sampling needs the mixtures");
+    const double v[4] = {(u[0] - uniform_fraction) / (1 - uniform_fraction), u[1], u[2], u[3]};
+    const mix::Sample m = mixture_sample(theta_o, v);
+    if (!m.valid) return;
+    theta = m.theta;
+    phi = m.phi;
+  } else {
+    // the table CDF of one of the two slices around theta_o, picked by its weight
+    std::size_t i0, i1;
+    double w;
+    bracket(theta_o, i0, i1, w);
+    const std::size_t sl = (w > 0 && u[0] >= 1 - w) ? i1 : i0;
+    const CellCdf& c = cdf_[sl];
+    if (c.marginal.empty()) return;
+    const std::size_t nt = meta_.theta_i.size(), np = meta_.phi_i.size();
+    const std::size_t i = find(c.marginal.data(), nt, u[1]);
+    const float* row = &c.conditional[i * (np + 1)];
+    const std::size_t j = find(row, np, u[2]);
+    const double a = std::max(th0_ + dth_ * double(i), -kPi / 2), b = std::min(th0_ + dth_ * double(i + 1), kPi / 2);
+    // u[3] places the point: its two halves for theta (sin uniform) and phi
+    const double v = u[3] * 4096.0, vt = std::floor(v) / 4096.0, vp = v - std::floor(v);
+    theta = std::asin(std::clamp(std::sin(a) + vt * (std::sin(b) - std::sin(a)), -1.0, 1.0));
+    phi = wrap_phi(ph0_ + dph_ * (double(j) + vp));
+  }
+  pdf_out = pdf(s, theta_o, theta, phi);
+}
+
+double FiberBsdf::pdf(FiberSampler s, double theta_o, double theta, double phi) const {
+  if (!(theta >= -kPi / 2 && theta <= kPi / 2)) return 0;
+  if (s == FiberSampler::Uniform) return kUniformPdf;
+  if (s == FiberSampler::Mixture)
+    return uniform_fraction * kUniformPdf + (1 - uniform_fraction) * mixture_pdf(theta_o, theta, phi);
+  std::size_t i0, i1;
+  double w;
+  bracket(theta_o, i0, i1, w);
+  const double fi = std::floor((theta - th0_) / dth_);
+  const std::size_t nt = meta_.theta_i.size(), np = meta_.phi_i.size();
+  if (!(fi >= 0) || fi >= double(nt)) return 0;
+  const std::size_t i = std::size_t(fi);
+  long j = long(std::floor((phi - ph0_) / dph_)) % long(np);
+  if (j < 0) j += long(np);
+  auto cell_p = [&](std::size_t sl) {
+    const CellCdf& c = cdf_[sl];
+    if (c.marginal.empty()) return 0.0;
+    const float* row = &c.conditional[i * (np + 1)];
+    return double(c.marginal[i + 1] - c.marginal[i]) * double(row[j + 1] - row[j]) / cell_w_[i];
+  };
+  return w > 0 ? (1 - w) * cell_p(i0) + w * cell_p(i1) : cell_p(i0);
+}
+
+}  // namespace render
+}  // namespace bsdfmix

@@ -1,0 +1,79 @@
+// The fiber's BCSDF at a hit, as the renderer uses it (docs/render.md, "Light transport"):
+// f from the table (the 4D table in memory, linear between theta_o slices, the nearest
+// cell in (theta_i, phi)) or from the mixture stand-in (thesis eqs. 3.8-3.11), and the
+// directions drawn by the same samplers as the convergence study: uniform, the mixture
+// with a defensive uniform share (the header's MixtureSet::sample and pdf_omega, exactly
+// what the study's CPU reference calls), and the table CDF. Angles in the fiber frame:
+// sin(theta) = dot(w, tangent), phi from the plane of omega_o (so phi_o = 0, and the
+// tables' phi = phi_i - phi_o is phi itself). L_o = integral L_i f d(omega).
+#pragma once
+
+#include <bsdfmix/mixture.hpp>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "io/table.hpp"
+#include "render/cloth.hpp"
+#include "sampling/sampling.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+enum class FiberF { Table, StandIn };
+enum class FiberSampler { Uniform, Mixture, TableCdf };
+
+class FiberBsdf {
+ public:
+  // Reads every slice of the (azimuthal, fiber) table; `set` may be empty (no mixture
+  // samplers, no stand-in) until set_mixture.
+  explicit FiberBsdf(const std::string& table_path);
+  void set_mixture(const mix::MixtureSet& set);
+
+  const TableMeta& meta() const { return meta_; }
+  std::size_t table_bytes() const { return f_.size() * sizeof(float); }
+
+  // f(theta_o; theta, phi) of the table (linear in theta_o) or of the stand-in.
+  double f(FiberF which, double theta_o, double theta, double phi) const;
+
+  // A direction (theta, phi) from uniforms u[0..3] and its density per steradian;
+  // pdf 0: no sample. The mixture sampler is the mixture with `uniform_fraction` of
+  // uniform samples (balance heuristic), as mis_tab.
+  void sample(FiberSampler s, double theta_o, const double u[4], double& theta, double& phi, double& pdf) const;
+  double pdf(FiberSampler s, double theta_o, double theta, double phi) const;
+  double uniform_fraction = 0.1;
+
+  // The mixture's own sampler and density at theta_o: the header's MixtureSet::sample
+  // and pdf_omega at (theta_o, 0) when a fitted slice brackets theta_o, else the nearest
+  // fitted slice's mixture.
+  mix::Sample mixture_sample(double theta_o, const double u[4]) const;
+  double mixture_pdf(double theta_o, double theta, double phi) const;
+
+ private:
+  void bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const;
+  int nearest_fitted(double theta_o) const;
+  bool bracketed(double theta_o) const;
+  double cell_f(std::size_t slice, double theta, double phi) const;
+
+  TableMeta meta_;
+  std::vector<float> f_;          // [theta_o][theta_i][phi_i]
+  std::vector<CellCdf> cdf_;      // per theta_o slice
+  std::vector<double> cell_w_;    // per theta_i row: integral of J over a cell
+  double th0_ = 0, dth_ = 0, ph0_ = 0, dph_ = 0, to0_ = 0, dto_ = 0;
+  mix::MixtureSet set_;
+  bool has_set_ = false;
+  std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
+};
+
+// Fiber frame at a hit: tangent t and the plane of omega_o (phi = 0 along n).
+struct FiberFrame {
+  V3 t, n, b;
+  double theta_o = 0;
+  FiberFrame(const V3& tangent, const V3& wo);
+  void to_local(const V3& w, double& theta, double& phi) const;
+  V3 to_world(double theta, double phi) const;
+};
+
+}  // namespace render
+}  // namespace bsdfmix

@@ -1,0 +1,238 @@
+// The path tracer: camera rays, fiber and ground vertices, next-event estimation, MIS.
+#include "render/integrator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+namespace bsdfmix {
+namespace render {
+
+namespace {
+
+double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+V3 cross(const V3& a, const V3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+V3 normalized(const V3& v) {
+  const double l = std::sqrt(dot(v, v));
+  return {v[0] / l, v[1] / l, v[2] / l};
+}
+V3 neg(const V3& v) { return {-v[0], -v[1], -v[2]}; }
+
+constexpr std::uint32_t kRenderStream = 0x72656e64u;  // "rend"
+
+// Uniforms number `dim` of pixel p's sample s (four at a time).
+struct Rng {
+  std::uint64_t seed;
+  std::uint32_t pixel, sample;
+  void draw(std::uint32_t dim, double u[4]) const {
+    const std::uint32_t ctr[4] = {pixel, sample, dim, kRenderStream};
+    const std::uint32_t key[2] = {std::uint32_t(seed), std::uint32_t(seed >> 32)};
+    const mix::PhiloxBlock r = mix::philox4x32_10(ctr, key);
+    for (int i = 0; i < 4; ++i) u[i] = mix::to_uniform(r.v[i]);
+  }
+};
+
+FiberSampler sampler_of(PathEstimator e) {
+  switch (e) {
+    case PathEstimator::Uniform: return FiberSampler::Uniform;
+    case PathEstimator::MisTab:
+    case PathEstimator::MisLightGmm: return FiberSampler::Mixture;
+    case PathEstimator::CdfTab:
+    case PathEstimator::MisLightCdf: return FiberSampler::TableCdf;
+  }
+  return FiberSampler::Uniform;
+}
+
+double power_weight(double a, double b) { return a * a / (a * a + b * b); }
+
+int thread_count(int asked) {
+  if (asked > 0) return asked;
+  const unsigned n = std::thread::hardware_concurrency();
+  return n > 0 ? int(n) : 1;
+}
+
+// One path: the radiance arriving at the camera along `ray`. `theta_out`, when given,
+// receives theta_o of every fiber vertex (the pre-pass).
+double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, const Rng& rng, std::uint64_t& rays,
+                  std::vector<double>* theta_out) {
+  const FiberSampler fs = sampler_of(est);
+  const bool nee = uses_light_sampling(est);
+  double L = 0, beta = 1, prev_pdf = 0;
+  bool prev_nee = false;
+  for (int depth = 0; depth < v.max_depth; ++depth) {
+    const Hit hit = v.tracer->intersect(ray);
+    ++rays;
+    if (hit.kind == HitKind::None) {
+      const double Le = v.lighting->radiance_world(ray.dir);
+      if (!prev_nee) L += beta * Le;
+      else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, v.light->pdf(ray.dir));
+      break;
+    }
+    const V3 wo = neg(ray.dir);
+    double u[4];
+    const std::uint32_t dim = std::uint32_t(depth) * 4;
+    // The vertex: value(w) = f c (fiber: f; ground: albedo / pi cos+), sample, pdf.
+    const bool fiber = hit.kind == HitKind::Fiber;
+    FiberFrame frame = fiber ? FiberFrame(hit.tangent, wo) : FiberFrame({1, 0, 0}, {0, 0, 1});
+    V3 gn = hit.normal, g1{1, 0, 0}, g2{0, 1, 0};
+    if (!fiber) {
+      g1 = normalized(std::abs(gn[0]) < 0.9 ? cross(gn, {1, 0, 0}) : cross(gn, {0, 1, 0}));
+      g2 = cross(gn, g1);
+    }
+    if (fiber && theta_out) theta_out->push_back(frame.theta_o);
+    auto value = [&](const V3& w) {
+      if (fiber) {
+        double th, ph;
+        frame.to_local(w, th, ph);
+        return v.bsdf->f(which, frame.theta_o, th, ph);
+      }
+      const double c = dot(w, gn);
+      return c > 0 ? v.ground_albedo / kPi * c : 0.0;
+    };
+    auto pdf_of = [&](const V3& w) {
+      if (fiber) {
+        double th, ph;
+        frame.to_local(w, th, ph);
+        return v.bsdf->pdf(fs, frame.theta_o, th, ph);
+      }
+      const double c = dot(w, gn);
+      return c > 0 ? c / kPi : 0.0;
+    };
+    Ray next;
+    next.org = hit.position;
+    if (fiber) {
+      next.from_fiber = hit.fiber;
+      next.skip = 4 * v.fiber_radius;
+    } else {
+      next.tnear = 1e-6;
+    }
+    // next-event estimation
+    if (nee) {
+      rng.draw(dim + 1, u);
+      const V3 wl = v.light->sample(u[0], u[1], u[2], u[3]);
+      const double pl = v.light->pdf(wl);
+      const double fv = pl > 0 ? value(wl) : 0.0;
+      if (fv > 0) {
+        Ray shadow = next;
+        shadow.dir = wl;
+        ++rays;
+        if (!v.tracer->occluded(shadow))
+          L += beta * fv * v.lighting->radiance_world(wl) * power_weight(pl, pdf_of(wl)) / pl;
+      }
+    }
+    // the next direction
+    rng.draw(dim + 2, u);
+    V3 wi;
+    double pdf = 0;
+    if (fiber) {
+      double th, ph;
+      v.bsdf->sample(fs, frame.theta_o, u, th, ph, pdf);
+      if (!(pdf > 0)) break;
+      wi = frame.to_world(th, ph);
+    } else {
+      const double r = std::sqrt(u[2]), a = 2 * kPi * u[3];
+      const double x = r * std::cos(a), y = r * std::sin(a), z = std::sqrt(std::max(0.0, 1 - u[2]));
+      for (int i = 0; i < 3; ++i) wi[i] = x * g1[i] + y * g2[i] + z * gn[i];
+      pdf = z / kPi;
+      if (!(pdf > 0)) break;
+    }
+    const double fv = value(wi);
+    if (!(fv > 0)) break;
+    beta *= fv / pdf;
+    if (depth + 1 >= v.rr_depth) {
+      rng.draw(dim + 3, u);
+      const double q = std::min(0.95, beta);
+      if (u[0] >= q) break;
+      beta /= q;
+    }
+    prev_pdf = pdf;
+    prev_nee = nee;
+    next.dir = wi;
+    ray = next;
+  }
+  return L;
+}
+
+}  // namespace
+
+Ray camera_ray(const Camera& c, int width, int height, double x, double y) {
+  const V3 f = normalized({c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]});
+  const V3 r = normalized(cross(f, c.up));
+  const V3 up = cross(r, f);
+  const double t = std::tan(0.5 * c.fov_deg * kPi / 180), aspect = double(width) / double(height);
+  const double sx = (2 * x / width - 1) * t * aspect, sy = (1 - 2 * y / height) * t;
+  Ray ray;
+  ray.org = c.position;
+  ray.dir = normalized({f[0] + sx * r[0] + sy * up[0], f[1] + sx * r[1] + sy * up[1], f[2] + sx * r[2] + sy * up[2]});
+  return ray;
+}
+
+RenderStats render_passes(const SceneView& v, PathEstimator est, FiberF which, int first, int max_passes,
+                          std::vector<double>& sum, const std::function<bool(int, double)>& pass_done) {
+  const std::size_t pixels = std::size_t(v.width) * std::size_t(v.height);
+  sum.resize(pixels, 0.0);
+  RenderStats st;
+  const auto t0 = std::chrono::steady_clock::now();
+  const int nt = thread_count(v.threads);
+  for (int pass = first; pass < first + max_passes; ++pass) {
+    std::atomic<int> next_row{0};
+    std::atomic<std::uint64_t> rays{0};
+    auto work = [&]() {
+      std::uint64_t local = 0;
+      for (int y = next_row++; y < v.height; y = next_row++)
+        for (int x = 0; x < v.width; ++x) {
+          const std::uint32_t p = std::uint32_t(y * v.width + x);
+          const Rng rng{v.seed, p, std::uint32_t(pass)};
+          double u[4];
+          rng.draw(0, u);
+          const Ray ray = camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]);
+          sum[p] += trace_path(v, est, which, ray, rng, local, nullptr);
+        }
+      rays += local;
+    };
+    std::vector<std::thread> pool;
+    for (int i = 1; i < nt; ++i) pool.emplace_back(work);
+    work();
+    for (auto& t : pool) t.join();
+    st.rays += rays;
+    st.spp = pass - first + 1;
+    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (pass_done && !pass_done(st.spp, st.seconds)) break;
+  }
+  return st;
+}
+
+std::vector<double> collect_theta_o(const SceneView& v, int spp) {
+  std::vector<double> out;
+  std::mutex m;
+  const int nt = thread_count(v.threads);
+  std::atomic<int> next_row{0};
+  auto work = [&]() {
+    std::vector<double> local;
+    std::uint64_t rays = 0;
+    for (int y = next_row++; y < v.height; y = next_row++)
+      for (int x = 0; x < v.width; ++x)
+        for (int s = 0; s < spp; ++s) {
+          const Rng rng{v.seed ^ 0x9e3779b97f4a7c15ull, std::uint32_t(y * v.width + x), std::uint32_t(s)};
+          double u[4];
+          rng.draw(0, u);
+          trace_path(v, PathEstimator::Uniform, FiberF::Table, camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]),
+                     rng, rays, &local);
+        }
+    std::lock_guard<std::mutex> lock(m);
+    out.insert(out.end(), local.begin(), local.end());
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < nt; ++i) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace render
+}  // namespace bsdfmix

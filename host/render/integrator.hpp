@@ -1,0 +1,56 @@
+// The path tracer (docs/render.md, "Light transport"): unidirectional, bounded depth,
+// Russian roulette; at a fiber the BCSDF of render/fiber_bsdf.hpp, at the ground a diffuse
+// BRDF; the lighting an environment (sun, sky, map). Estimators that sample the light add
+// next-event estimation combined with the BSDF sample by MIS (power heuristic, beta 2: the
+// two-sample model pbrt uses for direct lighting). Reproducible for a seed: pixel p's
+// sample s draws its uniforms from Philox counter {p, s, dimension, 0} under the seed,
+// whatever the threads.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+
+#include "render/fiber_bsdf.hpp"
+#include "render/image_io.hpp"
+#include "render/render_settings.hpp"
+#include "render/tracer.hpp"
+#include "sampling/light_sampler.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+struct SceneView {
+  const Tracer* tracer = nullptr;
+  const FiberBsdf* bsdf = nullptr;
+  const Lighting* lighting = nullptr;
+  const LightSampler* light = nullptr;
+  Camera camera;
+  double ground_albedo = 0.4;
+  double fiber_radius = 0.004;
+  int width = 64, height = 64, max_depth = 24, rr_depth = 3;
+  int threads = 0;  // 0: every core
+  std::uint64_t seed = 1;
+};
+
+struct RenderStats {
+  int spp = 0;
+  double seconds = 0;
+  std::uint64_t rays = 0;
+};
+
+// Passes of one sample per pixel, from pass `first` on, accumulated into `sum` (one
+// double per pixel). `pass_done` is called after every pass with (passes done so far,
+// seconds so far) and returns false to stop. Returns the passes done and the rays traced.
+RenderStats render_passes(const SceneView& view, PathEstimator estimator, FiberF f, int first, int max_passes,
+                          std::vector<double>& sum, const std::function<bool(int, double)>& pass_done);
+
+// Theta_o (radians) of every fiber hit of a small render with uniform sampling and the
+// table as f: what the scene needs of the table.
+std::vector<double> collect_theta_o(const SceneView& view, int spp);
+
+// The primary ray of pixel (x, y) at sub-pixel offset (ux, uy).
+Ray camera_ray(const Camera& c, int width, int height, double x, double y);
+
+}  // namespace render
+}  // namespace bsdfmix

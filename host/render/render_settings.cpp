@@ -1,0 +1,126 @@
+// Parsing the `render` section.
+#include "render/render_settings.hpp"
+
+#include <cmath>
+#include <set>
+
+#include "config/node.hpp"
+#include "converge/scene.hpp"
+#include "core/error.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+namespace {
+
+const char* kNames[] = {"uniform", "mis_tab", "cdf_tab", "mis_light_cdf", "mis_light_gmm"};
+
+PathEstimator parse_estimator_name(const ConfigNode& n, const std::string& key, const std::string& name) {
+  for (int i = 0; i < 5; ++i)
+    if (name == kNames[i]) return PathEstimator(i);
+  n.fail(key, "unknown estimator '" + name + "' (expected uniform, mis_tab, cdf_tab, mis_light_cdf or mis_light_gmm)");
+}
+
+// A nested mapping with its defaults merged under it and unknown keys rejected.
+ConfigNode nested(const RenderSection& s, const ConfigNode& parent, const std::string& key) {
+  YAML::Node user = parent.raw(key);
+  const YAML::Node def = s.defaults[key];
+  if (user && !user.IsNull() && !user.IsMap()) parent.fail(key, "expected a mapping");
+  YAML::Node out = YAML::Clone(def);
+  std::set<std::string> known;
+  for (const auto& kv : def) known.insert(kv.first.Scalar());
+  if (user && user.IsMap()) {
+    ConfigNode(parent.file(), parent.path() + "." + key, user).reject_unknown(known);
+    for (const auto& kv : user) out[kv.first.Scalar()] = kv.second;
+  }
+  return ConfigNode(parent.file(), parent.path() + "." + key, out);
+}
+
+V3 vec3(const ConfigNode& n, const std::string& key) {
+  const std::vector<double> v = n.numbers(key);
+  if (v.size() != 3) n.fail(key, "expected three numbers [x, y, z]");
+  for (double x : v)
+    if (!std::isfinite(x)) n.fail(key, "expected finite numbers");
+  return {v[0], v[1], v[2]};
+}
+
+}  // namespace
+
+const char* path_estimator_name(PathEstimator e) { return kNames[int(e)]; }
+
+bool uses_light_sampling(PathEstimator e) { return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm; }
+
+RenderSettings parse_render(const RenderSection& section) {
+  const ConfigNode n(section.file, "render", section.node);
+  RenderSettings r;
+  r.file = section.file;
+  r.output = n.str("output");
+  r.width = int(n.integer("width", 1, 16384));
+  r.height = int(n.integer("height", 1, 16384));
+  r.spp = int(n.integer("spp", 1, 1 << 20));
+  r.seconds = n.number("seconds", 0, 1e7);
+  r.reference_spp = int(n.integer("reference_spp", 1, 1 << 24));
+  r.reference_estimator = parse_estimator_name(n, "reference_estimator", n.str("reference_estimator"));
+  const YAML::Node est = n.raw("estimators");
+  if (!est.IsSequence() || est.size() == 0) n.fail("estimators", "expected a list of estimator names");
+  for (const auto& e : est) {
+    if (!e.IsScalar()) n.fail("estimators", "expected a list of estimator names");
+    r.estimators.push_back(parse_estimator_name(n, "estimators", e.Scalar()));
+  }
+  r.stand_in = n.boolean("stand_in");
+  r.stand_in_spp = int(n.integer("stand_in_spp", 1, 1 << 20));
+  r.max_depth = int(n.integer("max_depth", 1, 1000));
+  r.rr_depth = int(n.integer("rr_depth", 1, 1000));
+  r.seed = std::uint64_t(n.integer("seed", 0, INT64_MAX));
+  r.threads = int(n.integer("threads", 0, 4096));
+  r.prepass = int(n.integer("prepass", 4, 4096));
+  r.prepass_depth = int(n.integer("prepass_depth", 1, 1000));
+
+  // the lighting, in world space
+  r.lighting = default_lighting(Domain::Hemisphere, 1.0);
+  r.lighting.name = "constant";
+  if (n.has("scene")) {
+    const YAML::Node sc = n.raw("scene");
+    if (sc.IsScalar()) {
+      const std::string path = sc.Scalar();
+      if (!exists_quiet(path)) n.fail("scene", "file '" + path + "' not found");
+      r.lighting = parse_scene(YAML::LoadFile(path), path, "", Domain::Hemisphere);
+    } else if (sc.IsMap()) {
+      r.lighting = parse_scene(sc, section.file, "render.scene", Domain::Hemisphere);
+    } else {
+      n.fail("scene", "expected a scene file or an inline scene mapping");
+    }
+  }
+
+  const ConfigNode cam = nested(section, n, "camera");
+  r.camera.position = vec3(cam, "position");
+  r.camera.look_at = vec3(cam, "look_at");
+  r.camera.up = vec3(cam, "up");
+  r.camera.fov_deg = cam.number("fov_deg", 1, 170);
+
+  const ConfigNode cl = nested(section, n, "cloth");
+  ClothParams& c = r.cloth;
+  c.weave = cl.str("weave");
+  c.size = cl.number("size", 1e-9, 1e9);
+  c.yarn_spacing = cl.number("yarn_spacing", 1e-9, 1e9);
+  c.yarn_radius = cl.number("yarn_radius", 1e-9, 1e9);
+  c.plies = int(cl.integer("plies", 1, 64));
+  c.ply_twist = cl.number("ply_twist", -1e6, 1e6);
+  c.fibers_per_ply = int(cl.integer("fibers_per_ply", 1, 10000));
+  c.fiber_twist = cl.number("fiber_twist", -1e6, 1e6);
+  c.fiber_radius = cl.number("fiber_radius", 1e-12, 1e9);
+  c.jitter = cl.number("jitter", 0, 1);
+  c.segments_per_spacing = int(cl.integer("segments_per_spacing", 1, 1000));
+  c.seed = std::uint64_t(cl.integer("seed", 0, INT64_MAX));
+  c.drape = cl.str("drape");
+  c.drape_radius = cl.number("drape_radius", 1e-9, 1e9);
+
+  const ConfigNode g = nested(section, n, "ground");
+  r.ground.enabled = g.boolean("enabled");
+  r.ground.z = g.number("z", -1e9, 1e9);
+  r.ground_albedo = g.number("albedo", 0, 1);
+  return r;
+}
+
+}  // namespace render
+}  // namespace bsdfmix

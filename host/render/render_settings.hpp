@@ -1,0 +1,49 @@
+// The `render` section of a config (docs/render.md, "Config"): image, sampling, lighting,
+// camera, cloth and ground, parsed with the config's one-line errors.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "config/config.hpp"
+#include "render/cloth.hpp"
+#include "render/tracer.hpp"
+#include "sampling/lighting.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+// How a path's next direction at a fiber is drawn (docs/render.md, "Estimators").
+enum class PathEstimator { Uniform, MisTab, CdfTab, MisLightCdf, MisLightGmm };
+const char* path_estimator_name(PathEstimator e);
+bool uses_light_sampling(PathEstimator e);
+
+struct Camera {
+  V3 position{0, -1.3, 1.1}, look_at{0, 0, 0}, up{0, 0, 1};
+  double fov_deg = 40;  // vertical
+};
+
+struct RenderSettings {
+  std::string file;  // the config
+  std::string output;
+  int width = 256, height = 256, spp = 64, reference_spp = 1024, stand_in_spp = 256;
+  double seconds = 0;
+  PathEstimator reference_estimator = PathEstimator::MisLightGmm;
+  std::vector<PathEstimator> estimators;
+  bool stand_in = true;
+  int max_depth = 24, rr_depth = 3;
+  std::uint64_t seed = 1;
+  int threads = 0;
+  int prepass = 48, prepass_depth = 1;
+  Lighting lighting;  // world space (frame unused)
+  Camera camera;
+  ClothParams cloth;
+  GroundPlane ground;
+  double ground_albedo = 0.4;
+};
+
+RenderSettings parse_render(const RenderSection& section);
+
+}  // namespace render
+}  // namespace bsdfmix

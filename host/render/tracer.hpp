@@ -1,0 +1,58 @@
+// Ray tracing of the cloth's fibers (and an optional ground plane) with Embree 3
+// (docs/render.md, "Geometry"): fibers as ray-facing flat linear curves (RTC_GEOMETRY_TYPE_
+// FLAT_LINEAR_CURVE), the ground as two triangles. Thread-safe after construction.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "render/cloth.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+struct Ray {
+  V3 org{0, 0, 0}, dir{0, 0, 1};  // dir unit
+  double tnear = 0, tfar = 1e30;
+  // The fiber the ray leaves (-1: none): hits on that fiber closer than `skip` are
+  // ignored, so a ray leaving a fiber's ribbon does not hit the same ribbon again.
+  std::int64_t from_fiber = -1;
+  double skip = 0;
+};
+
+enum class HitKind { None, Fiber, Ground };
+
+struct Hit {
+  HitKind kind = HitKind::None;
+  double t = 0;
+  V3 position{0, 0, 0};
+  V3 tangent{0, 0, 0};  // fibers: unit curve tangent at the hit
+  V3 normal{0, 0, 0};   // ground: unit normal facing the ray's origin
+  std::int64_t fiber = -1;
+};
+
+enum class CurveType { FlatLinear, RoundLinear, FlatBSpline, RoundBSpline };
+
+struct GroundPlane {
+  bool enabled = false;
+  double z = 0;        // the plane z = const, normal +z
+  double half = 10;    // a square of this half size about the origin
+};
+
+class Tracer {
+ public:
+  Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type = CurveType::FlatLinear);
+  ~Tracer();
+  Tracer(const Tracer&) = delete;
+  Tracer& operator=(const Tracer&) = delete;
+
+  Hit intersect(const Ray& ray) const;
+  bool occluded(const Ray& ray) const;  // anything between tnear and tfar
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace render
+}  // namespace bsdfmix

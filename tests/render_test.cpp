@@ -1,0 +1,414 @@
+// The path tracer of `bsdfmix render` (host/render/): a white furnace (lossless fibers
+// under a constant environment render 1), every path estimator unbiased (image means over
+// independent seeds agree), the table lookup against the fiber generator, the renderer's
+// samplers against the study's (the header's MixtureSet::sample and pdf_omega) and their
+// pdfs' mass, the stand-in render against the table render, reproducibility for a seed
+// whatever the thread count, and bad render configs rejected with one line.
+// labels: render
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "config/config.hpp"
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "io/mixture_file.hpp"
+#include "render/integrator.hpp"
+#include "sweep/sweep.hpp"
+#include "tables/fiber_generator.hpp"
+
+using namespace bsdfmix;
+using namespace bsdfmix::render;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / "bsdfmix_render_test";
+  fs::create_directories(d);
+  return d;
+}
+
+// A small fiber table of a preset, tabulated on the CPU (18 theta_o x 30 x 60 cells).
+std::string small_table(const std::string& preset) {
+  const std::string path = (temp_dir() / (preset + "_table.h5")).string();
+  if (fs::exists(path)) return path;
+  FiberGenerateOptions opt;
+  opt.preset = preset;
+  opt.n_theta_o = 18;
+  opt.n_theta_i = 30;
+  opt.n_phi_i = 60;
+  opt.h_nodes = 64;
+  TableMeta meta = fiber_table_meta(opt);
+  meta.source = fiber_source_json(opt);
+  const FiberModel model = fiber_model_for(opt);
+  std::vector<float> values;
+  for (std::size_t t = 0; t < meta.theta_o.size(); ++t) {
+    const std::vector<double> s = tabulate_fiber_slice_cpu(model, meta, t, 0);
+    for (double v : s) values.push_back(float(v));
+  }
+  write_table(path, meta, values);
+  return path;
+}
+
+// The table's mixtures, fitted by the sweep (K <= 8), cached in the temp directory.
+mix::MixtureSet fitted_mixture(const std::string& table) {
+  const std::string out = table + ".mixture.h5";
+  if (!fs::exists(out)) {
+    FitSection fit;
+    fit.output = out;
+    fit.report = table + ".fit.csv";
+    fit.search_report = table + ".search.csv";
+    fit.k_max = 8;
+    fit.restarts = 1;
+    fit.final_restarts = 1;
+    run_sweep(table, fit, "");
+  }
+  return to_mixture_set(read_mixture_file(out));
+}
+
+// A mixture per theta_o slice: one broad Gaussian and one around the specular cone
+// (theta_i = -theta_o): any mixture serves the samplers, whose pdf is exact.
+mix::MixtureSet broad_mixture(const TableMeta& meta) {
+  mix::MixtureSet set;
+  set.domain = mix::Domain::Fiber;
+  set.azimuthal = true;
+  set.grid_theta_o = meta.theta_o;
+  set.grid_phi_o = meta.phi_o;
+  for (double to : meta.theta_o) {
+    mix::SliceMixture s;
+    s.theta_o = to;
+    s.scale = 1;
+    mix::Gaussian a, b;
+    a.weight = 0.6;
+    a.mu_t = -to;
+    a.s_tt = 0.05;
+    a.s_pp = 2.0;
+    b.weight = 0.4;
+    b.s_tt = 0.6;
+    b.s_pp = 6.0;
+    s.components = {a, b};
+    set.slices.push_back(s);
+  }
+  set.prepare();
+  return set;
+}
+
+struct Scene {
+  Cloth cloth;
+  std::unique_ptr<Tracer> tracer;
+  Lighting lighting;
+  LightSampler light;
+  SceneView view;
+};
+
+std::unique_ptr<Scene> make_scene(const FiberBsdf& bsdf, const Lighting& lighting, bool ground, int size) {
+  auto s = std::make_unique<Scene>();
+  ClothParams p;
+  p.yarn_spacing = 0.1;
+  p.yarn_radius = 0.04;
+  p.fibers_per_ply = 6;
+  p.fiber_radius = 0.006;
+  s->cloth = make_cloth(p, "test cloth");
+  GroundPlane g;
+  g.enabled = ground;
+  g.z = -0.06;
+  g.half = 4;
+  s->tracer = std::make_unique<Tracer>(s->cloth, g);
+  s->lighting = lighting;
+  s->light = make_light_sampler(lighting);
+  SceneView& v = s->view;
+  v.tracer = s->tracer.get();
+  v.bsdf = &bsdf;
+  v.lighting = &s->lighting;
+  v.light = &s->light;
+  v.camera.position = {0, -0.35, 0.5};
+  v.camera.look_at = {0, 0, 0};
+  v.camera.fov_deg = 30;
+  v.fiber_radius = p.fiber_radius;
+  v.width = v.height = size;
+  v.max_depth = 200;
+  v.rr_depth = 3;
+  v.threads = 2;
+  return s;
+}
+
+Lighting sky() {
+  Lighting l = default_lighting(Domain::Hemisphere, 0.1);
+  l.name = "sky";
+  LightLobe sun;
+  sun.direction = {0.35, 0.25, std::sqrt(1 - 0.35 * 0.35 - 0.25 * 0.25)};
+  sun.kappa = std::log(2.0) / (1 - std::cos(6 * kPi / 180));
+  sun.radiance = 30;
+  l.lobes.push_back(sun);
+  l.gradient = true;
+  l.zenith = 1;
+  l.horizon = 0.5;
+  l.ground = 0.1;
+  return l;
+}
+
+const PathEstimator kAll[] = {PathEstimator::Uniform, PathEstimator::MisTab, PathEstimator::CdfTab,
+                              PathEstimator::MisLightCdf, PathEstimator::MisLightGmm};
+
+double image_mean(const std::vector<double>& sum, int spp) {
+  double m = 0;
+  for (double v : sum) m += v;
+  return m / double(sum.size()) / spp;
+}
+
+}  // namespace
+
+TEST_CASE("white furnace: lossless fibers under a constant environment render 1", "[render]") {
+  Progress::set_enabled(false);
+  const std::string table = small_table("lossless");
+  FiberBsdf bsdf(table);
+  bsdf.set_mixture(fitted_mixture(table));
+  // the table's own albedo per theta_o slice (the model's is 1): the furnace's tolerance
+  double worst = 0;
+  for (std::size_t t = 0; t < bsdf.meta().theta_o.size(); ++t) {
+    double a = 0;
+    const auto& m = bsdf.meta();
+    const double dth = axis_step(m.theta_i), dph = axis_step(m.phi_i);
+    for (double th : m.theta_i)
+      for (double ph : m.phi_i)
+        a += bsdf.f(FiberF::Table, m.theta_o[t], th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
+    worst = std::max(worst, std::abs(a - 1));
+  }
+  std::printf("render_test: furnace: the table's albedo is within %.4f of 1\n", worst);
+  REQUIRE(worst < 0.02);
+  auto s = make_scene(bsdf, default_lighting(Domain::Hemisphere, 1.0), false, 16);
+  const int spp = 64;
+  // Uniform sampling is left out of the full furnace: its path weight is a product of
+  // f / pdf up to about 60 per bounce over tens of bounces, so heavy-tailed that a finite
+  // render's mean sits far below 1 (0.42 +- 0.05 measured). It is checked below on paths
+  // of two bounces against cdf_tab, which estimates the same value.
+  for (const PathEstimator e : kAll) {
+    if (e == PathEstimator::Uniform) continue;
+    std::vector<double> sum;
+    render_passes(s->view, e, FiberF::Table, 0, spp, sum, nullptr);
+    // every pixel estimates the same value: the standard error from their spread
+    const double mean = image_mean(sum, spp);
+    double var = 0;
+    for (double v : sum) var += (v / spp - mean) * (v / spp - mean) / double(sum.size() - 1);
+    const double se = std::sqrt(var / double(sum.size()));
+    std::printf("render_test: furnace %-13s: image mean %.4f +- %.4f\n", path_estimator_name(e), mean, se);
+    // a path keeps bouncing: allow the table's albedo error a few times over
+    CHECK(std::abs(mean - 1) <= 4 * se + 4 * worst + 0.005);
+  }
+  SceneView v = s->view;
+  v.max_depth = 3;
+  double m[2], se[2];
+  int k = 0;
+  for (const PathEstimator e : {PathEstimator::Uniform, PathEstimator::CdfTab}) {
+    std::vector<double> sum;
+    render_passes(v, e, FiberF::Table, 0, 256, sum, nullptr);
+    m[k] = image_mean(sum, 256);
+    double var = 0;
+    for (double x : sum) var += (x / 256 - m[k]) * (x / 256 - m[k]) / double(sum.size() - 1);
+    se[k] = std::sqrt(var / double(sum.size()));
+    ++k;
+  }
+  std::printf("render_test: furnace, two bounces: uniform %.4f +- %.4f, cdf_tab %.4f +- %.4f\n", m[0], se[0], m[1], se[1]);
+  CHECK(std::abs(m[0] - m[1]) <= 4 * std::sqrt(se[0] * se[0] + se[1] * se[1]));
+}
+
+TEST_CASE("every path estimator is unbiased: image means over independent seeds agree", "[render]") {
+  Progress::set_enabled(false);
+  FiberBsdf bsdf(small_table("silk"));
+  bsdf.set_mixture(broad_mixture(bsdf.meta()));
+  auto s = make_scene(bsdf, sky(), true, 8);
+  s->view.max_depth = 24;
+  const int runs = 24, spp = 8;
+  std::vector<double> means, ses;
+  for (const PathEstimator e : kAll) {
+    std::vector<double> per_run;
+    for (int r = 0; r < runs; ++r) {
+      SceneView v = s->view;
+      v.seed = 1000 + std::uint64_t(r);
+      std::vector<double> sum;
+      render_passes(v, e, FiberF::Table, 0, spp, sum, nullptr);
+      per_run.push_back(image_mean(sum, spp));
+    }
+    double m = 0, var = 0;
+    for (double x : per_run) m += x / runs;
+    for (double x : per_run) var += (x - m) * (x - m) / (runs - 1);
+    means.push_back(m);
+    ses.push_back(std::sqrt(var / runs));
+    std::printf("render_test: unbiased %-13s: image mean %.5f +- %.5f\n", path_estimator_name(e), m, ses.back());
+  }
+  // against the lowest-noise estimator
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < means.size(); ++i)
+    if (ses[i] < ses[best]) best = i;
+  for (std::size_t i = 0; i < means.size(); ++i) {
+    const double z = (means[i] - means[best]) / std::sqrt(ses[i] * ses[i] + ses[best] * ses[best] + 1e-30);
+    INFO(path_estimator_name(kAll[i]) << " z " << z);
+    CHECK(std::abs(z) < 4.5);
+  }
+}
+
+TEST_CASE("the table lookup returns the generator's cells, linear between theta_o slices", "[render]") {
+  const std::string path = small_table("cotton");
+  FiberBsdf bsdf(path);
+  const TableMeta& m = bsdf.meta();
+  FiberGenerateOptions opt;
+  opt.preset = "cotton";
+  opt.n_theta_o = 18;
+  opt.n_theta_i = 30;
+  opt.n_phi_i = 60;
+  opt.h_nodes = 64;
+  const FiberModel model = fiber_model_for(opt);
+  double worst = 0;
+  for (std::size_t t : {std::size_t(2), std::size_t(9), std::size_t(15)}) {
+    const std::vector<double> ref = tabulate_fiber_slice_cpu(model, m, t, 0);
+    const std::vector<double> next = tabulate_fiber_slice_cpu(model, m, t + 1, 0);
+    for (std::size_t i = 0; i < m.theta_i.size(); i += 3)
+      for (std::size_t j = 0; j < m.phi_i.size(); j += 5) {
+        const double a = bsdf.f(FiberF::Table, m.theta_o[t], m.theta_i[i], m.phi_i[j]);
+        const double r = ref[i * m.phi_i.size() + j];
+        worst = std::max(worst, std::abs(a - r) / std::max(r, 1e-30));
+        const double mid = bsdf.f(FiberF::Table, 0.5 * (m.theta_o[t] + m.theta_o[t + 1]), m.theta_i[i], m.phi_i[j]);
+        CHECK(mid == Approx(0.5 * (float(r) + float(next[i * m.phi_i.size() + j]))).epsilon(1e-6));
+      }
+  }
+  std::printf("render_test: table lookup against the generator: worst relative difference %.2e\n", worst);
+  CHECK(worst < 1e-6);
+}
+
+TEST_CASE("the renderer samples as the study does: the header's sampler and pdf", "[render]") {
+  FiberBsdf bsdf(small_table("silk"));
+  const mix::MixtureSet set = broad_mixture(bsdf.meta());
+  bsdf.set_mixture(set);
+  for (const double to : {-0.9, -0.2, 0.37, 1.1}) {
+    for (int i = 0; i < 500; ++i) {
+      double u[4];
+      mix::uniforms(7, 11, std::uint64_t(i), u);
+      const mix::Sample a = bsdf.mixture_sample(to, u);
+      const mix::Sample b = set.sample(to, 0.0, u[0], u[1], u[2], u[3]);
+      REQUIRE(a.theta == b.theta);
+      REQUIRE(a.phi == b.phi);
+      if (a.valid) CHECK(bsdf.mixture_pdf(to, a.theta, a.phi) == set.pdf_omega(to, 0.0, a.theta, a.phi));
+    }
+  }
+  // every sampler's pdf is a density: its integral over the sphere is 1 (mixture: 1 - P(invalid))
+  for (const FiberSampler fs : {FiberSampler::Uniform, FiberSampler::TableCdf, FiberSampler::Mixture}) {
+    const int nt = 240, np = 480;
+    double mass = 0;
+    for (int i = 0; i < nt; ++i)
+      for (int j = 0; j < np; ++j) {
+        const double th = -kPi / 2 + kPi * (i + 0.5) / nt, ph = -kPi + 2 * kPi * (j + 0.5) / np;
+        mass += bsdf.pdf(fs, 0.37, th, ph) * std::cos(th) * (kPi / nt) * (2 * kPi / np);
+      }
+    // Monte Carlo: the share of samples with a valid direction
+    int valid = 0;
+    for (int i = 0; i < 20000; ++i) {
+      double u[4], th, ph, pdf;
+      mix::uniforms(3, 5, std::uint64_t(i), u);
+      bsdf.sample(fs, 0.37, u, th, ph, pdf);
+      valid += pdf > 0;
+    }
+    std::printf("render_test: sampler %d: pdf mass %.5f, valid samples %.5f\n", int(fs), mass, valid / 20000.0);
+    CHECK(mass == Approx(valid / 20000.0).margin(0.01));
+  }
+}
+
+TEST_CASE("the stand-in render stays within its integral error of the table render", "[render]") {
+  Progress::set_enabled(false);
+  // The furnace scene: with the table, every pixel is about 1 (lossless fibers, L = 1).
+  // With the fitted mixtures as f, a fiber bounce keeps the stand-in's integral instead
+  // of the table's: the render's mean may move by that integral error, compounded over
+  // the bounces, and no more. With every scale 10 % too small it must fall measurably.
+  const std::string table = small_table("lossless");
+  FiberBsdf bsdf(table);
+  const mix::MixtureSet set = fitted_mixture(table);
+  const TableMeta& m = bsdf.meta();
+  double err = 0;  // the largest stand-in integral error over the slices (L = 1)
+  for (const auto& sl : set.slices) {
+    double table_int = 0, mass = 0;
+    const double dth = axis_step(m.theta_i), dph = axis_step(m.phi_i);
+    for (double th : m.theta_i)
+      for (double ph : m.phi_i)
+        table_int += bsdf.f(FiberF::Table, sl.theta_o, th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
+    for (const auto& g : sl.components) {
+      const double sd = std::sqrt(2 * g.s_tt);
+      mass += g.weight * 0.5 * (std::erf((kPi / 2 - g.mu_t) / sd) - std::erf((-kPi / 2 - g.mu_t) / sd));
+    }
+    err = std::max(err, std::abs(sl.scale * mass / table_int - 1));
+  }
+  auto s = make_scene(bsdf, default_lighting(Domain::Hemisphere, 1.0), false, 10);
+  double mean_table = 0;
+  for (const double factor : {1.0, 0.9}) {
+    mix::MixtureSet scaled = set;
+    for (auto& sl : scaled.slices) sl.scale *= factor;
+    bsdf.set_mixture(scaled);
+    const int runs = 6, spp = 8;
+    double d = 0, d2 = 0;
+    mean_table = 0;
+    for (int r = 0; r < runs; ++r) {
+      SceneView v = s->view;
+      v.seed = 50 + std::uint64_t(r);
+      std::vector<double> a, b;
+      render_passes(v, PathEstimator::CdfTab, FiberF::Table, 0, spp, a, nullptr);
+      render_passes(v, PathEstimator::CdfTab, FiberF::StandIn, 0, spp, b, nullptr);
+      const double x = image_mean(b, spp) / image_mean(a, spp) - 1;
+      d += x / runs;
+      d2 += x * x / runs;
+      mean_table += image_mean(a, spp) / runs;
+    }
+    const double se = std::sqrt(std::max(d2 - d * d, 0.0) / (runs - 1));
+    std::printf("render_test: stand-in scale x %.1f: image mean %+.4f relative to the table's (+- %.4f; table image "
+                "mean %.4f); largest stand-in integral error %.4f\n",
+                factor, d, se, mean_table, err);
+    if (factor == 1.0) CHECK(std::abs(d) <= 3 * err + 4 * se + 0.005);
+    else CHECK(d < -0.05);
+  }
+}
+
+TEST_CASE("a render is reproducible for a seed, whatever the thread count", "[render]") {
+  Progress::set_enabled(false);
+  FiberBsdf bsdf(small_table("silk"));
+  bsdf.set_mixture(broad_mixture(bsdf.meta()));
+  auto s = make_scene(bsdf, sky(), true, 10);
+  s->view.max_depth = 12;
+  for (const PathEstimator e : kAll) {
+    std::vector<double> a, b, c;
+    SceneView v = s->view;
+    v.threads = 1;
+    render_passes(v, e, FiberF::Table, 0, 3, a, nullptr);
+    v.threads = 3;
+    render_passes(v, e, FiberF::Table, 0, 3, b, nullptr);
+    v.seed = 2;
+    render_passes(v, e, FiberF::Table, 0, 3, c, nullptr);
+    CHECK(a == b);
+    CHECK(a != c);
+  }
+}
+
+TEST_CASE("bad render configs are rejected with one line naming the key", "[render]") {
+  const std::string table = small_table("silk");
+  auto error = [&](const std::string& body) {
+    try {
+      const Config c = parse_config("table: " + table + "\nrender:\n" + body, "scene.yaml");
+      parse_render(*c.render);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK_THAT(error("  estimators: [uniform, mis_tabb]\n"), Catch::Contains("scene.yaml: render.estimators (line 3)") &&
+                                                              Catch::Contains("unknown estimator 'mis_tabb'"));
+  CHECK_THAT(error("  camera: {position: [0, 1]}\n"), Catch::Contains("render.camera.position") &&
+                                                         Catch::Contains("three numbers"));
+  CHECK_THAT(error("  cloth: {weav: plain}\n"), Catch::Contains("render.cloth.weav") && Catch::Contains("unknown key"));
+  CHECK_THAT(error("  scene: nowhere.yaml\n"), Catch::Contains("render.scene") && Catch::Contains("not found"));
+  CHECK_THAT(error("  width: 0\n"), Catch::Contains("render.width (line 3)"));
+  CHECK_THAT(error("  ground: {albedo: 2}\n"), Catch::Contains("render.ground.albedo"));
+  CHECK_THAT(error("  cloth: {weave: satin}\n"),
+             Catch::Contains("no error"));  // parsed here; make_cloth rejects it, below
+  ClothParams p;
+  p.weave = "satin";
+  CHECK_THROWS_WITH(make_cloth(p, "scene.yaml: render.cloth"), Catch::Contains("weave"));
+}
