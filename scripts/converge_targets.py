@@ -33,44 +33,16 @@ import math
 import os
 import sys
 
+from targets_common import failer, fmt, key, read as read_csv
+
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
 
-def fail(msg):
-    print("converge_targets: error: " + msg, file=sys.stderr)
-    sys.exit(1)
+fail = failer("converge_targets")
 
 
 def read(path, needed):
-    try:
-        with open(path, newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as e:
-        fail("cannot read %s: %s" % (path, e))
-    if not rows:
-        fail("%s: no rows" % path)
-    missing = [c for c in needed if c not in rows[0]]
-    if missing:
-        fail("%s: missing columns %s" % (path, ", ".join(missing)))
-    return rows
-
-
-def key(r):
-    return (r["table"], round(float(r["theta_o"]), 6), round(float(r["phi_o"]), 6))
-
-
-def fmt(x, digits=3):
-    if x is None:
-        return "-"
-    if isinstance(x, str):
-        return x
-    if not math.isfinite(x):
-        return "inf" if x > 0 else "nan"
-    if x != 0 and (abs(x) >= 1e5 or abs(x) < 1e-2):
-        return "%.1e" % x
-    if abs(x) >= 100:
-        return "%.0f" % x
-    return ("%." + str(digits) + "g") % x
+    return read_csv(path, needed, fail)
 
 
 def targets(csvs, tails, n_target):

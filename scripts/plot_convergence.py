@@ -178,7 +178,7 @@ def main():
                 title = "%s theta_o = %.0f deg, scene %s" % (d[0], math.degrees(d[1]), scene)
                 ax.set_title(("[%s] " % kind if kind else "") + title, fontsize=10)
                 measured, predicted = is_tab_fails(d, scene)
-                if measured or predicted:
+                if (measured or predicted) and series.get(d + (scene, "is_tab")):
                     why = "is_tab above us_tab here" if measured else "is_tab: unbounded f/pdf in the tails"
                     ax.text(0.02, 0.03, why + "\n(Gaussian tails fall faster than f)\n-> use mis_tab",
                             transform=ax.transAxes, fontsize=8, color=STYLE["is_tab"]["color"],

@@ -402,7 +402,12 @@ def stand_in(rows, images, meta, exposure, out):
     norm = mcolors.Normalize(*DIFF_RANGE)
     with np.errstate(divide="ignore"):
         im = axes[2].imshow(np.log10(np.maximum(diff, 1e-30)), cmap="magma", norm=norm, interpolation="nearest")
-    axes[2].set_title("relative difference\nmean %.3g" % mean_diff, fontsize=8)
+    if "stand_in_difference_4x4" in meta:
+        axes[2].set_title("sum |s - t| / sum t: %.2f %% (pixels),\n%.2f %% (4 x 4 blocks; noise floor %.2f %%)"
+                          % (100 * float(meta["stand_in_difference"]), 100 * float(meta["stand_in_difference_4x4"]),
+                             100 * float(meta.get("table_noise_4x4", 0.0))), fontsize=8)
+    else:
+        axes[2].set_title("relative difference\nmean %.3g" % mean_diff, fontsize=8)
     cax = fig.add_axes([1.0 - 0.8 / fig_w, 0.15 / fig_h, 0.12 / fig_w, 1.0 - 1.0 / fig_h])
     cb = fig.colorbar(im, cax=cax)
     cb.set_label("log10 |s - t| / (t + 0.1 mean t)", fontsize=7)

@@ -8,6 +8,8 @@
 // labels: sample
 #include <catch2/catch.hpp>
 
+#include "chi_square.hpp"
+
 #include <bsdfmix/mixture.hpp>
 
 #include <algorithm>
@@ -43,37 +45,6 @@ Vec3 cross(const Vec3& a, const Vec3& b) {
 Vec3 from_z_az(double z, double az) {
   const double r = std::sqrt(std::max(0.0, 1 - z * z));
   return {r * std::cos(az), r * std::sin(az), z};
-}
-
-// Regularized upper incomplete gamma Q(a, x) (Numerical Recipes, series / continued
-// fraction), as in tests/sample_test.cpp.
-double gamma_q(double a, double x) {
-  if (x <= 0) return 1;
-  const double gln = std::lgamma(a);
-  if (x < a + 1) {
-    double ap = a, sum = 1 / a, del = sum;
-    for (int n = 0; n < 100000; ++n) {
-      ap += 1;
-      del *= x / ap;
-      sum += del;
-      if (std::abs(del) < std::abs(sum) * 1e-15) break;
-    }
-    return 1 - sum * std::exp(-x + a * std::log(x) - gln);
-  }
-  double b = x + 1 - a, c = 1 / 1e-300, d = 1 / b, h = d;
-  for (int i = 1; i < 100000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < 1e-300) d = 1e-300;
-    c = b + an / c;
-    if (std::abs(c) < 1e-300) c = 1e-300;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-15) break;
-  }
-  return std::exp(-x + a * std::log(x) - gln) * h;
 }
 
 const double kGx[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
@@ -197,27 +168,12 @@ struct Chi2 {
   int dof = 0;
 };
 
-// Pearson chi-square of observed against expected counts, bins expecting fewer than 5
-// samples pooled (as Mitsuba's chi2 test).
 Chi2 pearson(const std::vector<double>& obs, const std::vector<double>& expct) {
+  const bsdfmix::test::ChiSquare c = bsdfmix::test::pearson(obs, expct);
   Chi2 r;
-  double pooled_o = 0, pooled_e = 0;
-  int bins = 0;
-  for (std::size_t k = 0; k < obs.size(); ++k) {
-    if (expct[k] < 5) {
-      pooled_o += obs[k];
-      pooled_e += expct[k];
-      continue;
-    }
-    r.stat += (obs[k] - expct[k]) * (obs[k] - expct[k]) / expct[k];
-    ++bins;
-  }
-  if (pooled_e > 5) {
-    r.stat += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
-    ++bins;
-  }
-  r.dof = bins - 1;
-  r.p = gamma_q(0.5 * r.dof, 0.5 * r.stat);
+  r.stat = c.stat;
+  r.p = c.p;
+  r.dof = c.dof;
   return r;
 }
 

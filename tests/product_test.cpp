@@ -7,6 +7,8 @@
 // labels: sample
 #include <catch2/catch.hpp>
 
+#include "chi_square.hpp"
+
 #include <bsdfmix/mixture.hpp>
 
 #include <algorithm>
@@ -85,37 +87,6 @@ double rel(double x, double ref) { return std::abs(x - ref) / std::max(std::abs(
 // Standard normal CDF.
 double Phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 
-// Regularized upper incomplete gamma Q(a, x) (Numerical Recipes, series / continued
-// fraction), as in tests/sample_test.cpp.
-double gamma_q(double a, double x) {
-  if (x <= 0) return 1;
-  const double gln = std::lgamma(a);
-  if (x < a + 1) {
-    double ap = a, sum = 1 / a, del = sum;
-    for (int n = 0; n < 100000; ++n) {
-      ap += 1;
-      del *= x / ap;
-      sum += del;
-      if (std::abs(del) < std::abs(sum) * 1e-15) break;
-    }
-    return 1 - sum * std::exp(-x + a * std::log(x) - gln);
-  }
-  double b = x + 1 - a, c = 1 / 1e-300, d = 1 / b, h = d;
-  for (int i = 1; i < 100000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < 1e-300) d = 1e-300;
-    c = b + an / c;
-    if (std::abs(c) < 1e-300) c = 1e-300;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-15) break;
-  }
-  return std::exp(-x + a * std::log(x) - gln) * h;
-}
-
 const double kGx[6] = {-0.9324695142031521, -0.6612093864662645, -0.2386191860831969,
                        0.2386191860831969,  0.6612093864662645,  0.9324695142031521};
 const double kGw[6] = {0.1713244923791704, 0.3607615730481386, 0.4679139345726910,
@@ -168,23 +139,10 @@ Chi2 chi2(const SliceMixture& m, Domain d, std::uint32_t stream, std::size_t n) 
     }
   expct.back() = std::max(0.0, 1 - r.mass) * N;
   r.invalid = obs.back() / N;
-  double pooled_o = 0, pooled_e = 0;
-  int bins = 0;
-  for (std::size_t k = 0; k < obs.size(); ++k) {
-    if (expct[k] < 5) {
-      pooled_o += obs[k];
-      pooled_e += expct[k];
-      continue;
-    }
-    r.stat += (obs[k] - expct[k]) * (obs[k] - expct[k]) / expct[k];
-    ++bins;
-  }
-  if (pooled_e > 5) {
-    r.stat += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
-    ++bins;
-  }
-  r.dof = bins - 1;
-  r.p = gamma_q(0.5 * r.dof, 0.5 * r.stat);
+  const bsdfmix::test::ChiSquare c = bsdfmix::test::pearson(obs, expct);
+  r.stat = c.stat;
+  r.p = c.p;
+  r.dof = c.dof;
   return r;
 }
 

@@ -7,6 +7,8 @@
 #include <Random123/philox.h>
 #include <catch2/catch.hpp>
 
+#include "chi_square.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -90,36 +92,6 @@ const Device& device() {
   return d.front();
 }
 
-// Regularized upper incomplete gamma Q(a, x) (Numerical Recipes, series / continued fraction).
-double gamma_q(double a, double x) {
-  if (x <= 0) return 1;
-  const double gln = std::lgamma(a);
-  if (x < a + 1) {
-    double ap = a, sum = 1 / a, del = sum;
-    for (int n = 0; n < 100000; ++n) {
-      ap += 1;
-      del *= x / ap;
-      sum += del;
-      if (std::abs(del) < std::abs(sum) * 1e-15) break;
-    }
-    return 1 - sum * std::exp(-x + a * std::log(x) - gln);
-  }
-  double b = x + 1 - a, c = 1 / 1e-300, d = 1 / b, h = d;
-  for (int i = 1; i < 100000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < 1e-300) d = 1e-300;
-    c = b + an / c;
-    if (std::abs(c) < 1e-300) c = 1e-300;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-15) break;
-  }
-  return std::exp(-x + a * std::log(x) - gln) * h;
-}
-
 // Integral of the set's pdf_param over [t0, t1] x [p0, p1] (Gauss-Legendre 6 x 6).
 double bin_mass(const mix::MixtureSet& set, double to, double po, double t0, double t1, double p0, double p1) {
   static const double x[6] = {-0.9324695142, -0.6612093865, -0.2386191861, 0.2386191861, 0.6612093865, 0.9324695142};
@@ -164,23 +136,10 @@ Chi2 chi2(const mix::MixtureSet& set, double to, double po, const std::vector<mi
     }
   expct.back() = std::max(0.0, 1 - r.mass) * N;
   r.invalid = obs.back() / N;
-  double pooled_o = 0, pooled_e = 0;
-  int bins = 0;
-  for (std::size_t k = 0; k < obs.size(); ++k) {
-    if (expct[k] < 5) {
-      pooled_o += obs[k];
-      pooled_e += expct[k];
-      continue;
-    }
-    r.stat += (obs[k] - expct[k]) * (obs[k] - expct[k]) / expct[k];
-    ++bins;
-  }
-  if (pooled_e > 5) {
-    r.stat += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
-    ++bins;
-  }
-  r.dof = bins - 1;
-  r.p = gamma_q(0.5 * r.dof, 0.5 * r.stat);
+  const bsdfmix::test::ChiSquare c = bsdfmix::test::pearson(obs, expct);
+  r.stat = c.stat;
+  r.p = c.p;
+  r.dof = c.dof;
   return r;
 }
 

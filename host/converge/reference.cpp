@@ -177,19 +177,23 @@ TailDiagnostic tail_diagnostic(const Problem& p) {
 
 namespace bsdfmix {
 
-LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators) {
-  LightTail r;
+// Per table cell where f > 0: W = the integral of L f c d(omega) over the cell and, for each
+// of `k` densities, its integral over the cell (sub-cell Gauss-Legendre fine enough for the
+// lighting); `pdfs(theta, phi, out)` writes the k densities at a point.
+struct CellMasses {
+  std::size_t k = 0;
+  std::vector<double> W, P;  // [cell], [cell][k]
+  double I = 0;              // the sum of W
+};
+
+template <class Pdfs>
+CellMasses cell_masses(const Problem& p, std::size_t k, Pdfs pdfs) {
   const TableSlice& t = p.table;
-  const std::size_t ne = estimators.size();
-  r.relvar.assign(ne, 0.0);
-  r.max_weight.assign(ne, 0.0);
-  r.missed.assign(ne, 0.0);
+  CellMasses cm;
+  cm.k = k;
   const int n = sub_points(std::max(t.dth, t.dph), p.light.finest_feature(), 3, 8);
-  std::vector<double> x, w;
+  std::vector<double> x, w, at(k);
   gauss_legendre(n, x, w);
-  // Per cell: W = integral of L f c d(omega), P_e = integral of estimator e's density.
-  std::vector<double> W(t.n_theta * t.n_phi, 0.0), P(t.n_theta * t.n_phi * ne, 0.0);
-  double I = 0;
   for (std::size_t i = 0; i < t.n_theta; ++i) {
     const double ta = t.theta_edge(i), tb = t.theta_edge(i + 1);
     if (!(tb > ta)) continue;
@@ -198,7 +202,8 @@ LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators)
       if (!(fc > 0)) continue;
       const double p0 = t.ph0 + t.dph * double(j) + t.rotate;
       double wc = 0;
-      double* pc = &P[(i * t.n_phi + j) * ne];
+      const std::size_t base = cm.P.size();
+      cm.P.resize(base + k, 0.0);
       for (int kt = 0; kt < n; ++kt) {
         const double th = 0.5 * (ta + tb) + 0.5 * (tb - ta) * x[std::size_t(kt)];
         const double jac = jacobian(t.domain, th), cf = cos_factor(t.domain, th);
@@ -206,13 +211,29 @@ LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators)
           const double ph = wrap_phi(p0 + 0.5 * t.dph * (1 + x[std::size_t(kp)]));
           const double dw = 0.25 * (tb - ta) * t.dph * w[std::size_t(kt)] * w[std::size_t(kp)] * jac;  // d(omega)
           wc += dw * fc * cf * p.light.radiance(th, ph);
-          for (std::size_t e = 0; e < ne; ++e) pc[e] += dw * estimator_pdf(p, estimators[e], th, ph);
+          pdfs(th, ph, at.data());
+          for (std::size_t e = 0; e < k; ++e) cm.P[base + e] += dw * at[e];
         }
       }
-      W[i * t.n_phi + j] = wc;
-      I += wc;
+      cm.W.push_back(wc);
+      cm.I += wc;
     }
   }
+  return cm;
+}
+
+LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators) {
+  LightTail r;
+  const std::size_t ne = estimators.size();
+  r.relvar.assign(ne, 0.0);
+  r.max_weight.assign(ne, 0.0);
+  r.missed.assign(ne, 0.0);
+  const CellMasses cm = cell_masses(p, ne, [&](double th, double ph, double* out) {
+    for (std::size_t e = 0; e < ne; ++e) out[e] = estimator_pdf(p, estimators[e], th, ph);
+  });
+  const std::vector<double>& W = cm.W;
+  const std::vector<double>& P = cm.P;
+  const double I = cm.I;
   r.reference = I;
   if (!(I > 0)) return r;
   for (std::size_t c = 0; c < W.size(); ++c) {
@@ -237,40 +258,18 @@ LightTail light_tail(const Problem& p, const std::vector<Estimator>& estimators)
 namespace bsdfmix {
 
 ProductTuning tune_product_fractions(const Problem& p, double max_weight_bound) {
-  const TableSlice& t = p.table;
-  const int n = sub_points(std::max(t.dth, t.dph), p.light.finest_feature(), 3, 8);
-  std::vector<double> x, w;
-  gauss_legendre(n, x, w);
-  // Per cell with f > 0: the integrand's share W and each technique's probability.
+  // Per cell: the integrand's share and each technique's probability.
+  const CellMasses cm = cell_masses(p, 3, [&](double th, double ph, double* out) {
+    out[0] = estimator_pdf(p, Estimator::Product, th, ph);
+    out[1] = estimator_pdf(p, Estimator::Light, th, ph);
+    out[2] = estimator_pdf(p, Estimator::UsTab, th, ph);
+  });
   struct Cell {
     double W, prod, light, uni;
   };
   std::vector<Cell> cells;
-  double I = 0;
-  for (std::size_t i = 0; i < t.n_theta; ++i) {
-    const double ta = t.theta_edge(i), tb = t.theta_edge(i + 1);
-    if (!(tb > ta)) continue;
-    for (std::size_t j = 0; j < t.n_phi; ++j) {
-      const double fc = t.f[i * t.n_phi + j];
-      if (!(fc > 0)) continue;
-      const double p0 = t.ph0 + t.dph * double(j) + t.rotate;
-      Cell c{0, 0, 0, 0};
-      for (int kt = 0; kt < n; ++kt) {
-        const double th = 0.5 * (ta + tb) + 0.5 * (tb - ta) * x[std::size_t(kt)];
-        const double jac = jacobian(t.domain, th), cf = cos_factor(t.domain, th);
-        for (int kp = 0; kp < n; ++kp) {
-          const double ph = wrap_phi(p0 + 0.5 * t.dph * (1 + x[std::size_t(kp)]));
-          const double dw = 0.25 * (tb - ta) * t.dph * w[std::size_t(kt)] * w[std::size_t(kp)] * jac;
-          c.W += dw * fc * cf * p.light.radiance(th, ph);
-          c.prod += dw * estimator_pdf(p, Estimator::Product, th, ph);
-          c.light += dw * estimator_pdf(p, Estimator::Light, th, ph);
-          c.uni += dw * estimator_pdf(p, Estimator::UsTab, th, ph);
-        }
-      }
-      I += c.W;
-      cells.push_back(c);
-    }
-  }
+  for (std::size_t c = 0; c < cm.W.size(); ++c) cells.push_back({cm.W[c], cm.P[3 * c], cm.P[3 * c + 1], cm.P[3 * c + 2]});
+  const double I = cm.I;
   ProductTuning best;
   best.product_fraction = p.mis.product_fraction;
   best.product_light = p.mis.product_light;

@@ -17,11 +17,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kGoldenAngle = 2.39996322972865332;  // pi (3 - sqrt 5): the sunflower pattern
 constexpr double kMaxSegments = 5e6;                 // beyond this the tracer's memory is the limit
 
-V3 normalized(const V3& v) {
-  const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  return {v[0] / n, v[1] / n, v[2] / n};
-}
-
 // Floor division and non-negative parity, so that crossings left of the first yarn
 // (j = -1) continue the pattern.
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }

@@ -4,15 +4,14 @@
 // points with one radius; the renderer traces them as curves (render/tracer.hpp).
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "render/vec3.hpp"
+
 namespace bsdfmix {
 namespace render {
-
-using V3 = std::array<double, 3>;
 
 struct ClothParams {
   std::string weave = "plain";  // plain or twill (2/2)

@@ -11,25 +11,6 @@ namespace render {
 
 namespace {
 
-double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-V3 normalized(const V3& v) {
-  const double l = std::sqrt(dot(v, v));
-  return {v[0] / l, v[1] / l, v[2] / l};
-}
-
-std::size_t find(const float* cdf, std::size_t n, double u) {
-  std::size_t lo = 0, hi = n;
-  while (lo < hi) {
-    const std::size_t mid = (lo + hi) / 2;
-    if (double(cdf[mid + 1]) > u) hi = mid;
-    else lo = mid + 1;
-  }
-  return std::min(lo, n - 1);
-}
-
 constexpr double kUniformPdf = 1 / (4 * kPi);
 
 }  // namespace
@@ -198,9 +179,9 @@ void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double
     const CellCdf& c = cdf_[sl];
     if (c.marginal.empty()) return;
     const std::size_t nt = meta_.theta_i.size(), np = meta_.phi_i.size();
-    const std::size_t i = find(c.marginal.data(), nt, u[1]);
+    const std::size_t i = cdf_find(c.marginal.data(), nt, u[1]);
     const float* row = &c.conditional[i * (np + 1)];
-    const std::size_t j = find(row, np, u[2]);
+    const std::size_t j = cdf_find(row, np, u[2]);
     const double a = std::max(th0_ + dth_ * double(i), -kPi / 2), b = std::min(th0_ + dth_ * double(i + 1), kPi / 2);
     // u[3] places the point: its two halves for theta (sin uniform) and phi
     const double v = u[3] * 4096.0, vt = std::floor(v) / 4096.0, vp = v - std::floor(v);

@@ -12,16 +12,6 @@ namespace render {
 
 namespace {
 
-double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-V3 normalized(const V3& v) {
-  const double l = std::sqrt(dot(v, v));
-  return {v[0] / l, v[1] / l, v[2] / l};
-}
-V3 neg(const V3& v) { return {-v[0], -v[1], -v[2]}; }
-
 constexpr std::uint32_t kRenderStream = 0x72656e64u;  // "rend"
 
 // Uniforms number `dim` of pixel p's sample s (four at a time).

@@ -58,13 +58,6 @@ const char* error_name(RTCError e) {
 // Embree reports the message of an error only through this callback; keep the last one.
 void remember_error(void* user, RTCError, const char* str) { *static_cast<std::string*>(user) = str ? str : ""; }
 
-V3 sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-
-V3 normalized(const V3& v) {
-  const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  return n > 0 ? V3{v[0] / n, v[1] / n, v[2] / n} : V3{0, 0, 0};
-}
-
 }  // namespace
 
 struct Tracer::Impl {

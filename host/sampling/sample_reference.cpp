@@ -14,6 +14,16 @@ std::vector<mix::Sample> sample_cpu(const mix::MixtureSet& set, double theta_o, 
   return out;
 }
 
+std::size_t cdf_find(const float* cdf, std::size_t n, double u) {
+  std::size_t lo = 0, hi = n;
+  while (lo < hi) {
+    const std::size_t mid = (lo + hi) / 2;
+    if (double(cdf[mid + 1]) > u) hi = mid;
+    else lo = mid + 1;
+  }
+  return std::min(lo, n - 1);
+}
+
 void run_uniforms(std::uint64_t seed, std::uint32_t stream, std::uint32_t run, std::uint64_t n, double u[4]) {
   const std::uint32_t ctr[4] = {std::uint32_t(n), std::uint32_t(n >> 32), stream, run};
   const std::uint32_t key[2] = {std::uint32_t(seed), std::uint32_t(seed >> 32)};
@@ -32,17 +42,6 @@ void uniform_draw(Domain d, double u, double v, double& theta, double& phi) {
 double uniform_pdf(Domain d) { return d == Domain::Hemisphere ? 1 / (2 * kPi) : 1 / (4 * kPi); }
 double cos_factor(Domain d, double theta) { return d == Domain::Hemisphere ? std::cos(theta) : 1.0; }
 mix::Domain mix_domain(Domain d) { return d == Domain::Fiber ? mix::Domain::Fiber : mix::Domain::Hemisphere; }
-
-// First i in [0, n) with cdf[i + 1] > u.
-std::size_t cdf_find(const float* cdf, std::size_t n, double u) {
-  std::size_t lo = 0, hi = n;
-  while (lo < hi) {
-    const std::size_t mid = (lo + hi) / 2;
-    if (double(cdf[mid + 1]) > u) hi = mid;
-    else lo = mid + 1;
-  }
-  return std::min(lo, n - 1);
-}
 
 bool inside(Domain d, double theta) { return theta >= theta_min(d) && theta <= theta_max(d); }
 

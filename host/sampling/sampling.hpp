@@ -100,6 +100,9 @@ struct CellCdf {
   std::vector<float> conditional;  // [n_theta][n_phi + 1]
 };
 CellCdf build_cdf(const TableSlice& t);
+// The cell of u in a cumulative table: the first i in [0, n) with cdf[i + 1] > u (cdf[0] =
+// 0, cdf[n] = 1).
+std::size_t cdf_find(const float* cdf, std::size_t n, double u);
 
 // How the MIS estimators combine their techniques (docs/sampling.md, "Sampling with the
 // lighting"): one-sample MIS, each technique picked with its fraction.
