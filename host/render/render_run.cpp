@@ -2,9 +2,11 @@
 #include "render/render_run.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -12,6 +14,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/output_lock.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
 #include "pipeline/scripts.hpp"
@@ -94,6 +97,8 @@ void run_render(const Config& config, const std::string& device_selector, bool f
   const std::string dev = device_for(config, device_selector);
   stage_table(config, dev);
   std::filesystem::create_directories(s.output);
+  // one render per output directory at a time (a second one fails at once, naming the first)
+  const OutputLock lock((std::filesystem::path(s.output) / "render").string());
   const std::string csv = (std::filesystem::path(s.output) / "render.csv").string();
   const std::string json = (std::filesystem::path(s.output) / "render.json").string();
   prepare_output(csv);
@@ -176,10 +181,16 @@ void run_render(const Config& config, const std::string& device_selector, bool f
     }
   }
   std::vector<Row> rows;
+  std::map<std::string, double> pass_seconds;  // per estimator: seconds per pass at equal samples
   auto passes = [&](PathEstimator e, FiberF f, int spp, double budget, const std::string& what,
                     std::vector<Row>* progress_rows) {
     std::vector<double> sum;
-    Progress prog("render " + what, std::uint64_t(budget > 0 ? 0 : spp), "spp");
+    // with a time budget, the passes it should hold (for the progress line's ETA)
+    const auto known = pass_seconds.find(path_estimator_name(e));
+    const int expect = budget > 0 && known != pass_seconds.end() && known->second > 0
+                           ? std::max(1, int(std::lround(budget / known->second)))
+                           : spp;
+    Progress prog("render " + what, std::uint64_t(std::max(expect, 1)), "spp");
     RenderStats st = render_passes(view, e, f, 0, budget > 0 ? 1 << 20 : spp, sum, [&](int done, double sec) {
       prog.advance();
       if (progress_rows && (done & (done - 1)) == 0 && !reference.v.empty()) {
@@ -201,10 +212,51 @@ void run_render(const Config& config, const std::string& device_selector, bool f
   view.width = s.width;
   view.height = s.height;
   if (reference.v.empty()) {
-    auto [im, st] = passes(s.reference_estimator, FiberF::Table, s.reference_spp, 0, "reference", nullptr);
-    save(s.output, "reference", im);
+    // The reference is the long part: its sums are checkpointed every 1/16 of it, and a killed
+    // run resumes from the last checkpoint of the same key (pass i always draws the same
+    // numbers, so the result is the same as an uninterrupted run's).
+    const std::string ckpt = (std::filesystem::path(s.output) / "reference.partial").string();
+    std::vector<double> sum;
+    int done = 0;
+    {
+      std::ifstream in(ckpt, std::ios::binary);
+      std::string head;
+      if (in && std::getline(in, head) && head == Hash64().update(key.data(), key.size()).hex()) {
+        in.read(reinterpret_cast<char*>(&done), sizeof done);
+        sum.resize(std::size_t(s.width) * std::size_t(s.height));
+        in.read(reinterpret_cast<char*>(sum.data()), std::streamsize(sum.size() * sizeof(double)));
+        if (!in || done < 0 || done > s.reference_spp) {
+          sum.clear();
+          done = 0;
+        } else {
+          log_line("render: the reference resumes at " + std::to_string(done) + " of " +
+                   std::to_string(s.reference_spp) + " spp (" + ckpt + ")");
+        }
+      }
+    }
+    Progress prog("render reference", std::uint64_t(s.reference_spp), "spp");
+    prog.advance(std::uint64_t(done));
+    const int every = std::max(1, s.reference_spp / 16);
+    const RenderStats st =
+        render_passes(view, s.reference_estimator, FiberF::Table, done, s.reference_spp - done, sum, [&](int n, double) {
+          prog.advance();
+          if ((done + n) % every == 0 && done + n < s.reference_spp) {
+            std::string blob = Hash64().update(key.data(), key.size()).hex() + "\n";
+            const int at = done + n;
+            blob.append(reinterpret_cast<const char*>(&at), sizeof at);
+            blob.append(reinterpret_cast<const char*>(sum.data()), sum.size() * sizeof(double));
+            write_text_atomic(ckpt, blob);
+          }
+          return true;
+        });
+    prog.finish();
+    log_line("render: reference: " + std::to_string(s.reference_spp) + " spp (" + std::to_string(st.spp) + " in " +
+             num(st.seconds, "%.1f") + " s, " + num(double(st.rays) / std::max(st.seconds, 1e-9) / 1e6, "%.2f") +
+             " M rays/s)");
+    reference = to_image(sum, s.reference_spp, s.width, s.height);
+    save(s.output, "reference", reference);
     write_text_atomic(key_path, key);
-    reference = im;
+    std::filesystem::remove(ckpt);
   }
   {
     Row r;
@@ -216,18 +268,20 @@ void run_render(const Config& config, const std::string& device_selector, bool f
   }
 
   // 4. Every estimator at equal samples, then at equal time.
-  double budget = s.seconds;
+  double budget = s.seconds, slowest = 0;
   for (const PathEstimator e : s.estimators) {
     const std::string name = path_estimator_name(e);
     std::vector<Row> prog;
     auto [im, st] = passes(e, FiberF::Table, s.spp, 0, name + " (" + std::to_string(s.spp) + " spp)", &prog);
     save(s.output, name + "_spp", im);
+    pass_seconds[name] = st.seconds / std::max(st.spp, 1);
     Row r{name, "equal_spp", name + "_spp.exr", st.spp, st.seconds, double(st.rays) / std::max(st.seconds, 1e-9),
           relative_mse(im, reference)};
     rows.push_back(r);
     rows.insert(rows.end(), prog.begin(), prog.end());
-    if (!(budget > 0)) budget = st.seconds;
+    slowest = std::max(slowest, st.seconds);
   }
+  if (!(budget > 0)) budget = slowest;  // every estimator gets at least spp samples
   for (const PathEstimator e : s.estimators) {
     const std::string name = path_estimator_name(e);
     auto [im, st] = passes(e, FiberF::Table, 0, budget, name + " (" + num(budget, "%.1f") + " s)", nullptr);

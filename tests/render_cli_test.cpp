@@ -1,0 +1,126 @@
+// `bsdfmix render` end to end on a tiny scene: the outputs (render.csv with its exact
+// header, render.json, the images), a reference killed by SIGKILL after its first
+// checkpoint resumes to the same image an uninterrupted run makes, and a second render of
+// the same output directory is refused while the first holds it.
+// labels: render cli
+#include <catch2/catch.hpp>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / "bsdfmix_render_cli_test";
+  fs::create_directories(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A config: a small silk table, K <= 4, a 16 x 16 render whose reference takes 256 passes.
+std::string config(const std::string& name) {
+  const fs::path d = temp_dir();
+  const std::string out = (d / name).string();
+  const std::string cfg = (d / (name + ".yaml")).string();
+  std::ofstream f(cfg);
+  f << "table: " << (d / "silk.h5").string() << "\n"
+    << "generate: {preset: silk, theta_o: 18, theta_i: 30, phi_i: 60}\n"
+    << "fit: {output: " << (d / (name + "_mixture.h5")).string() << ", report: " << (d / (name + "_fit.csv")).string()
+    << ", search_report: " << (d / (name + "_search.csv")).string() << ", k_max: 4, restarts: 1, final_restarts: 1}\n"
+    << "render:\n  output: " << out << "\n  width: 16\n  height: 16\n  spp: 4\n  reference_spp: 256\n"
+    << "  reference_estimator: mis_light_gmm\n  estimators: [uniform, mis_light_gmm]\n  stand_in: false\n"
+    << "  scene: " << BSDFMIX_SOURCE_DIR << "/configs/scenes/sky.yaml\n  threads: 1\n  prepass: 8\n";
+  return cfg;
+}
+
+int run(const std::string& cfg) {
+  const std::string cmd = std::string(BSDFMIX_BINARY) + " render -q --no-figures " + cfg + " > /dev/null 2>&1";
+  return std::system(cmd.c_str());
+}
+
+}  // namespace
+
+TEST_CASE("bsdfmix render writes its CSV, JSON and images", "[render][cli]") {
+  const std::string cfg = config("plain");
+  REQUIRE(run(cfg) == 0);
+  const fs::path out = temp_dir() / "plain";
+  const std::string csv = slurp(out / "render.csv");
+  CHECK(csv.rfind("scene,fiber,estimator,mode,spp,seconds,rays_per_second,rel_mse,image\n", 0) == 0);
+  CHECK(csv.find(",uniform,equal_spp,4,") != std::string::npos);
+  CHECK(csv.find(",mis_light_gmm,equal_time,") != std::string::npos);
+  CHECK(slurp(out / "render.json").find("\"slices_needed\": ") != std::string::npos);
+  for (const char* f : {"reference.exr", "reference.pfm", "uniform_spp.exr", "mis_light_gmm_time.pfm"})
+    CHECK(fs::exists(out / f));
+  CHECK_FALSE(fs::exists(out / "reference.partial"));
+  CHECK_FALSE(fs::exists(out / "render.lock"));
+}
+
+TEST_CASE("a render killed during its reference resumes to the same reference", "[render][cli]") {
+  const std::string whole = config("whole"), killed = config("killed");
+  REQUIRE(run(whole) == 0);
+  const fs::path out = temp_dir() / "killed";
+  fs::remove_all(out);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl(BSDFMIX_BINARY, BSDFMIX_BINARY, "render", "-q", "--no-figures", killed.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // SIGKILL as soon as the first checkpoint is on disk (an event, not a clock)
+  int status = 0;
+  bool exited = false;
+  while (!fs::exists(out / "reference.partial") && !(exited = waitpid(pid, &status, WNOHANG) == pid))
+    std::this_thread::sleep_for(200us);
+  REQUIRE_FALSE(exited);
+  kill(pid, SIGKILL);
+  waitpid(pid, &status, 0);
+  REQUIRE(WIFSIGNALED(status));
+  CHECK_FALSE(fs::exists(out / "reference.pfm"));
+  // the rerun resumes, and its reference is the uninterrupted run's, byte for byte
+  REQUIRE(run(killed) == 0);
+  CHECK(slurp(out / "reference.pfm") == slurp(temp_dir() / "whole" / "reference.pfm"));
+  CHECK_FALSE(fs::exists(out / "reference.partial"));
+}
+
+TEST_CASE("a second render of the same output directory is refused while the first runs", "[render][cli]") {
+  const std::string cfg = config("locked");
+  const fs::path out = temp_dir() / "locked";
+  fs::remove_all(out);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl(BSDFMIX_BINARY, BSDFMIX_BINARY, "render", "-q", "--no-figures", cfg.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  bool exited = false;
+  while (!fs::exists(out / "reference.partial") && !(exited = waitpid(pid, &status, WNOHANG) == pid))
+    std::this_thread::sleep_for(200us);
+  REQUIRE_FALSE(exited);
+  const std::string err = (temp_dir() / "locked_second.err").string();
+  const int rc = std::system((std::string(BSDFMIX_BINARY) + " render -q --no-figures " + cfg + " 2> " + err).c_str());
+  kill(pid, SIGKILL);
+  waitpid(pid, &status, 0);
+  CHECK(rc != 0);
+  const std::string text = slurp(err);
+  INFO(text);
+  CHECK(text.rfind("bsdfmix: error: ", 0) == 0);
+  CHECK(text.find("render") != std::string::npos);
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+}
