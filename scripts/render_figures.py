@@ -214,7 +214,7 @@ def fmt_bytes(n):
     n = float(n)
     for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
         if abs(n) < 1024 or unit == "TiB":
-            return ("%d %s" % (n, unit)) if unit == "B" else ("%.3g %s" % (n, unit))
+            return ("%d %s" % (n, unit)) if unit == "B" else (("%.0f %s" if abs(n) >= 100 else "%.3g %s") % (n, unit))
         n /= 1024.0
 
 

@@ -275,6 +275,7 @@ void run_render(const Config& config, const std::string& device_selector, bool f
     auto [im, st] = passes(e, FiberF::Table, s.spp, 0, name + " (" + std::to_string(s.spp) + " spp)", &prog);
     save(s.output, name + "_spp", im);
     pass_seconds[name] = st.seconds / std::max(st.spp, 1);
+    for (Row& pr : prog) pr.rays_per_second = double(st.rays) / std::max(st.seconds, 1e-9);
     Row r{name, "equal_spp", name + "_spp.exr", st.spp, st.seconds, double(st.rays) / std::max(st.seconds, 1e-9),
           relative_mse(im, reference)};
     rows.push_back(r);

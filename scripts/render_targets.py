@@ -1,0 +1,108 @@
+#!/usr/bin/python3
+"""Targets of `bsdfmix render` (docs/render.md, "Measured"), from render.csv and render.json.
+
+For every render directory given, one row:
+  equal-time rel MSE   of uniform, of the best mixture estimator (mis_tab, mis_light_gmm)
+                       and of the best table-CDF estimator (cdf_tab, mis_light_cdf)
+  vs uniform           uniform's rel MSE over the best mixture estimator's (target >= 5
+                       under the sky)
+  vs table CDF         the best mixture estimator's rel MSE over the best table CDF
+                       estimator's (target <= 1.5)
+  memory               table bytes / mixture bytes (target >= 100) and full 4D table bytes /
+                       mixture bytes (target >= 1000)
+  stand-in             sum |stand-in - table| / sum table per pixel and over 4 x 4 blocks
+                       (target <= 2 % at the block level), and the images' means
+  64 spp               the slowest estimator's seconds for `spp` samples per pixel at the
+                       render's size (target <= 120 s at 256 x 256, 64 spp)
+  rays/s               the range over the estimators' equal-sample renders
+
+  scripts/render_targets.py out/render_silk/sky out/render_cotton/sky ... [--markdown]
+"""
+
+import argparse
+import csv
+import json
+import os
+import sys
+
+from targets_common import failer, fmt
+
+fail = failer("render_targets")
+MIXTURE = ["mis_tab", "mis_light_gmm"]
+TABLE_CDF = ["cdf_tab", "mis_light_cdf"]
+
+
+def row_for(d):
+    try:
+        with open(os.path.join(d, "render.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        with open(os.path.join(d, "render.json")) as f:
+            meta = json.load(f)
+    except (OSError, ValueError) as e:
+        fail("%s: %s" % (d, e))
+    eq_time = {r["estimator"]: float(r["rel_mse"]) for r in rows if r["mode"] == "equal_time"}
+    eq_spp = [r for r in rows if r["mode"] == "equal_spp"]
+    if "uniform" not in eq_time:
+        fail("%s: no equal_time row for uniform" % d)
+    best = lambda names: min(((eq_time[n], n) for n in names if n in eq_time), default=(None, None))
+    mix, mix_name = best(MIXTURE)
+    cdf, cdf_name = best(TABLE_CDF)
+    mb = float(meta["mixture_bytes"])
+    return dict(
+        fiber=meta["fiber"].replace("_table", ""), scene=meta["scene"],
+        size="%dx%d" % (meta["width"], meta["height"]),
+        uniform=eq_time["uniform"], mixture=mix, mixture_name=mix_name, cdf=cdf, cdf_name=cdf_name,
+        vs_uniform=eq_time["uniform"] / mix if mix else None,
+        vs_cdf=mix / cdf if mix and cdf else None,
+        memory=float(meta["table_bytes"]) / mb, memory_full=float(meta["full_table_bytes"]) / mb,
+        stand_in=100 * float(meta.get("stand_in_difference", -1)),
+        stand_in_4x4=100 * float(meta.get("stand_in_difference_4x4", -1)),
+        stand_in_mean=100 * float(meta.get("stand_in_mean_difference", 0)),
+        slices="%s/%s" % (meta["slices_needed"], meta["slices_total"]),
+        slowest=max(float(r["seconds"]) for r in eq_spp),
+        spp=int(eq_spp[0]["spp"]) if eq_spp else 0,
+        rays="%.1f-%.1f M" % (min(float(r["rays_per_second"]) for r in eq_spp) / 1e6,
+                              max(float(r["rays_per_second"]) for r in eq_spp) / 1e6),
+    )
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("dirs", nargs="+", help="render output directories (render.csv, render.json)")
+    ap.add_argument("--markdown", action="store_true")
+    a = ap.parse_args()
+    rows = [row_for(d) for d in a.dirs]
+    cols = [("fiber", "fiber", None), ("scene", "scene", None), ("size", "size", None),
+            ("uniform rel MSE", "uniform", None), ("best mixture", "mixture_name", None),
+            ("its rel MSE", "mixture", None), ("best table CDF", "cdf_name", None), ("its rel MSE", "cdf", None),
+            ("vs uniform", "vs_uniform", lambda x, r: x >= 5 or r["scene"] != "sky"),
+            ("vs table CDF", "vs_cdf", lambda x, r: x <= 1.5),
+            ("table / mixtures", "memory", lambda x, r: x >= 100),
+            ("full 4D / mixtures", "memory_full", lambda x, r: x >= 1000),
+            ("slices fitted", "slices", None),
+            ("stand-in diff % (pixels)", "stand_in", None),
+            ("stand-in diff % (4x4)", "stand_in_4x4", lambda x, r: x <= 2),
+            ("stand-in mean %", "stand_in_mean", None),
+            ("slowest 64 spp (s)", "slowest", lambda x, r: x <= 120 or r["size"] != "256x256"),
+            ("rays/s (2 cores)", "rays", None)]
+
+    def cell(r, name, ok):
+        x = r[name]
+        if ok is None or x is None or isinstance(x, str):
+            return fmt(x)
+        return fmt(x) if ok(x, r) else fmt(x) + " !"
+
+    if a.markdown:
+        print("| " + " | ".join(c[0] for c in cols) + " |")
+        print("|" + "---|" * len(cols))
+        for r in rows:
+            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
+    else:
+        w = csv.writer(sys.stdout)
+        w.writerow([c[1] for c in cols])
+        for r in rows:
+            w.writerow([r[n] for _, n, _ in cols])
+
+
+if __name__ == "__main__":
+    main()
