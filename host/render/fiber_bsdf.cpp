@@ -170,6 +170,10 @@ void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double
     if (!m.valid) return;
     theta = m.theta;
     phi = m.phi;
+    // the sampler already evaluated the mixture's density there: the same number pdf()
+    // would compute again (MixtureSet::sample calls pdf_omega at the sample)
+    pdf_out = uniform_fraction * kUniformPdf + (1 - uniform_fraction) * m.pdf_omega;
+    return;
   } else {
     // the table CDF of one of the two slices around theta_o, picked by its weight
     std::size_t i0, i1;

@@ -294,8 +294,9 @@ void run_render(const Config& config, const std::string& device_selector, bool f
   // 5. The stand-in against the table: the same estimator, seed and samples.
   double stand_in_diff = -1, stand_in_diff4 = -1, table_noise4 = -1, stand_in_mean = 0;
   if (s.stand_in) {
-    auto [a, sa] = passes(PathEstimator::MisTab, FiberF::Table, s.stand_in_spp, 0, "table f (mis_tab)", nullptr);
-    auto [b, sb] = passes(PathEstimator::MisTab, FiberF::StandIn, s.stand_in_spp, 0, "stand-in f (mis_tab)", nullptr);
+    const std::string se = path_estimator_name(s.stand_in_estimator);
+    auto [a, sa] = passes(s.stand_in_estimator, FiberF::Table, s.stand_in_spp, 0, "table f (" + se + ")", nullptr);
+    auto [b, sb] = passes(s.stand_in_estimator, FiberF::StandIn, s.stand_in_spp, 0, "stand-in f (" + se + ")", nullptr);
     save(s.output, "table", a);
     save(s.output, "stand_in", b);
     stand_in_diff = image_difference(b, a, 1);
@@ -307,9 +308,9 @@ void run_render(const Config& config, const std::string& device_selector, bool f
       mb += b.v[i];
     }
     stand_in_mean = ma > 0 ? mb / ma - 1 : 0;
-    rows.push_back({"mis_tab", "table", "table.exr", sa.spp, sa.seconds, double(sa.rays) / std::max(sa.seconds, 1e-9),
+    rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, double(sa.rays) / std::max(sa.seconds, 1e-9),
                     relative_mse(a, reference)});
-    rows.push_back({"mis_tab", "stand_in", "stand_in.exr", sb.spp, sb.seconds,
+    rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds,
                     double(sb.rays) / std::max(sb.seconds, 1e-9), relative_mse(b, reference)});
     log_line("render: the stand-in image differs from the table image by " + num(100 * stand_in_diff, "%.2f") +
              " % per pixel, " + num(100 * stand_in_diff4, "%.2f") + " % over 4 x 4 blocks (the table image's own noise "

@@ -69,6 +69,7 @@ RenderSettings parse_render(const RenderSection& section) {
   }
   r.stand_in = n.boolean("stand_in");
   r.stand_in_spp = int(n.integer("stand_in_spp", 1, 1 << 20));
+  r.stand_in_estimator = parse_estimator_name(n, "stand_in_estimator", n.str("stand_in_estimator"));
   r.max_depth = int(n.integer("max_depth", 1, 1000));
   r.rr_depth = int(n.integer("rr_depth", 1, 1000));
   r.seed = std::uint64_t(n.integer("seed", 0, INT64_MAX));

@@ -29,7 +29,7 @@ struct RenderSettings {
   std::string output;
   int width = 256, height = 256, spp = 64, reference_spp = 1024, stand_in_spp = 256;
   double seconds = 0;
-  PathEstimator reference_estimator = PathEstimator::MisLightGmm;
+  PathEstimator reference_estimator = PathEstimator::MisLightGmm, stand_in_estimator = PathEstimator::MisLightGmm;
   std::vector<PathEstimator> estimators;
   bool stand_in = true;
   int max_depth = 24, rr_depth = 3;
