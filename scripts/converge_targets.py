@@ -28,12 +28,10 @@ The tail CSV of X.csv is X_tail.csv unless --tail names them (same order).
 """
 
 import argparse
-import csv
 import math
 import os
-import sys
 
-from targets_common import failer, fmt, key, read as read_csv
+from targets_common import failer, fmt, print_table, key, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
@@ -140,16 +138,7 @@ def main():
             return fmt(x) if not isinstance(x, (int, str)) or isinstance(x, bool) else str(x)
         return check(x, ok)
 
-    if a.markdown:
-        print("| " + " | ".join(c[0] for c in cols) + " |")
-        print("|" + "---|" * len(cols))
-        for r in rows:
-            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
-    else:
-        w = csv.writer(sys.stdout)
-        w.writerow([c[1] for c in cols])
-        for r in rows:
-            w.writerow([r[n] for _, n, _ in cols])
+    print_table(rows, cols, cell, a.markdown)
 
 
 if __name__ == "__main__":

@@ -27,12 +27,10 @@ The tail CSVs of X.csv are X_tail.csv and X_light_tail.csv.
 """
 
 import argparse
-import csv
 import math
 import os
-import sys
 
-from targets_common import failer, fmt, key, read as read_csv
+from targets_common import failer, fmt, print_table, key, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
@@ -137,16 +135,7 @@ def main():
             return fmt(x)
         return fmt(x) if ok(x) else fmt(x) + " !"
 
-    if a.markdown:
-        print("| " + " | ".join(c[0] for c in cols) + " |")
-        print("|" + "---|" * len(cols))
-        for r in rows:
-            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
-    else:
-        w = csv.writer(sys.stdout)
-        w.writerow([c[1] for c in cols])
-        for r in rows:
-            w.writerow([r[n] for _, n, _ in cols])
+    print_table(rows, cols, cell, a.markdown)
 
 
 if __name__ == "__main__":

@@ -23,9 +23,8 @@ import argparse
 import csv
 import json
 import os
-import sys
 
-from targets_common import failer, fmt
+from targets_common import failer, fmt, print_table
 
 fail = failer("render_targets")
 MIXTURE = ["mis_tab", "mis_light_gmm"]
@@ -92,16 +91,7 @@ def main():
             return fmt(x)
         return fmt(x) if ok(x, r) else fmt(x) + " !"
 
-    if a.markdown:
-        print("| " + " | ".join(c[0] for c in cols) + " |")
-        print("|" + "---|" * len(cols))
-        for r in rows:
-            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
-    else:
-        w = csv.writer(sys.stdout)
-        w.writerow([c[1] for c in cols])
-        for r in rows:
-            w.writerow([r[n] for _, n, _ in cols])
+    print_table(rows, cols, cell, a.markdown)
 
 
 if __name__ == "__main__":

@@ -45,3 +45,17 @@ def fmt(x, digits=3):
     if abs(x) >= 100:
         return "%.0f" % x
     return ("%." + str(digits) + "g") % x
+
+
+def print_table(rows, cols, cell, markdown):
+    """cols: (heading, key, check); a Markdown table of cell(row, key, check), else CSV of the raw values."""
+    if markdown:
+        print("| " + " | ".join(c[0] for c in cols) + " |")
+        print("|" + "---|" * len(cols))
+        for r in rows:
+            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
+    else:
+        w = csv.writer(sys.stdout)
+        w.writerow([c[1] for c in cols])
+        for r in rows:
+            w.writerow([r[n] for _, n, _ in cols])
