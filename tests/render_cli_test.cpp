@@ -56,6 +56,21 @@ int run(const std::string& cfg) {
   return std::system(cmd.c_str());
 }
 
+// Starts `bsdfmix render cfg` and returns its pid once the reference's first checkpoint
+// is in `out` (an event, not a clock); -1 if the render exited before that.
+pid_t start_until_checkpoint(const std::string& cfg, const fs::path& out) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl(BSDFMIX_BINARY, BSDFMIX_BINARY, "render", "-q", "--no-figures", cfg.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  while (!fs::exists(out / "reference.partial"))
+    if (waitpid(pid, &status, WNOHANG) == pid) return -1;
+    else std::this_thread::sleep_for(200us);
+  return pid;
+}
+
 }  // namespace
 
 TEST_CASE("bsdfmix render writes its CSV, JSON and images", "[render][cli]") {
@@ -78,17 +93,10 @@ TEST_CASE("a render killed during its reference resumes to the same reference", 
   REQUIRE(run(whole) == 0);
   const fs::path out = temp_dir() / "killed";
   fs::remove_all(out);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    execl(BSDFMIX_BINARY, BSDFMIX_BINARY, "render", "-q", "--no-figures", killed.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
   // SIGKILL as soon as the first checkpoint is on disk (an event, not a clock)
+  const pid_t pid = start_until_checkpoint(killed, out);
+  REQUIRE(pid > 0);
   int status = 0;
-  bool exited = false;
-  while (!fs::exists(out / "reference.partial") && !(exited = waitpid(pid, &status, WNOHANG) == pid))
-    std::this_thread::sleep_for(200us);
-  REQUIRE_FALSE(exited);
   kill(pid, SIGKILL);
   waitpid(pid, &status, 0);
   REQUIRE(WIFSIGNALED(status));
@@ -103,16 +111,9 @@ TEST_CASE("a second render of the same output directory is refused while the fir
   const std::string cfg = config("locked");
   const fs::path out = temp_dir() / "locked";
   fs::remove_all(out);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    execl(BSDFMIX_BINARY, BSDFMIX_BINARY, "render", "-q", "--no-figures", cfg.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  const pid_t pid = start_until_checkpoint(cfg, out);
+  REQUIRE(pid > 0);
   int status = 0;
-  bool exited = false;
-  while (!fs::exists(out / "reference.partial") && !(exited = waitpid(pid, &status, WNOHANG) == pid))
-    std::this_thread::sleep_for(200us);
-  REQUIRE_FALSE(exited);
   const std::string err = (temp_dir() / "locked_second.err").string();
   const int rc = std::system((std::string(BSDFMIX_BINARY) + " render -q --no-figures " + cfg + " 2> " + err).c_str());
   kill(pid, SIGKILL);
