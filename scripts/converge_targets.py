@@ -31,7 +31,7 @@ import argparse
 import math
 import os
 
-from targets_common import failer, fmt, print_table, key, read as read_csv
+from targets_common import Measures, failer, fmt, key, print_table, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
@@ -55,33 +55,15 @@ def targets(csvs, tails, n_target):
             est = groups[g]
             if "us_tab" not in est:
                 continue
-            n_max = max(est["us_tab"])
             if n_target not in est["us_tab"]:
                 fail("%s: us_tab has no row at N = %d" % (path, n_target))
-            r_us = float(est["us_tab"][n_target]["rel_rmse"])
-            ns_us = float(est["us_tab"][n_max]["ns_per_sample"])
 
-            def at_max(e, col):
-                return float(est[e][max(est[e])][col]) if e in est else None
-
-            def fewer(e):
-                r = at_max(e, "rel_rmse")
-                if r is None:
-                    return None
-                n_e = max(est[e]) * (r / r_us) ** 2
-                return n_target / n_e if n_e > 0 else math.inf
-
-            def cost(e):
-                ns = at_max(e, "ns_per_sample")
-                return ns / ns_us if ns is not None else None
+            m = Measures(est, n_target)
+            fewer, cost, var = m.fewer, m.cost, m.var
 
             def time_ratio(e):
                 f, c = fewer(e), cost(e)
                 return f / c if f is not None and c else None
-
-            def var(e):
-                r = at_max(e, "rel_rmse")
-                return r * r * max(est[e]) if r is not None else None
 
             t = tail.get(g[:3], {})
             k = int(t["k"]) if t else None
@@ -93,7 +75,7 @@ def targets(csvs, tails, n_target):
                     storage=int(t["table_bytes"]) / int(t["mixture_bytes"]) if t and int(t["mixture_bytes"]) else None,
                     mis_fewer=fewer("mis_tab"), mis_time=time_ratio("mis_tab"),
                     cost_is=cost("is_tab"), cost_mis=cost("mis_tab"), cost_isgmm=cost("is_gmm"),
-                    ns_us=ns_us,
+                    ns_us=m.ns_us,
                     mis_cdf=v_mis / v_cdf if v_mis is not None and v_cdf else None,
                     is_fewer=fewer("is_tab"), is_time=time_ratio("is_tab"),
                     is_max_weight=float(t["max_weight_is"]) if t else None,

@@ -30,7 +30,7 @@ import argparse
 import math
 import os
 
-from targets_common import failer, fmt, print_table, key, read as read_csv
+from targets_common import Measures, failer, fmt, key, print_table, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
@@ -61,26 +61,9 @@ def targets(csvs, n_target):
                 continue
             if n_target not in est["us_tab"]:
                 fail("%s: us_tab has no row at N = %d" % (path, n_target))
-            r_us = float(est["us_tab"][n_target]["rel_rmse"])
-            ns_us = float(est["us_tab"][max(est["us_tab"])]["ns_per_sample"])
 
-            def at_max(e, col):
-                return float(est[e][max(est[e])][col]) if e in est else None
-
-            def fewer(e):
-                r = at_max(e, "rel_rmse")
-                if r is None:
-                    return None
-                n_e = max(est[e]) * (r / r_us) ** 2
-                return n_target / n_e if n_e > 0 else math.inf
-
-            def cost(e):
-                ns = at_max(e, "ns_per_sample")
-                return ns / ns_us if ns is not None else None
-
-            def var(e):
-                r = at_max(e, "rel_rmse")
-                return r * r * max(est[e]) if r is not None else None
+            m = Measures(est, n_target)
+            at_max, fewer, cost, var = m.at_max, m.fewer, m.cost, m.var
 
             lt = light.get(g + ("mis_product",), {})
             f_mp, f_mlc = fewer("mis_product"), fewer("mis_light_cdf")

@@ -59,3 +59,32 @@ def print_table(rows, cols, cell, markdown):
         w.writerow([c[1] for c in cols])
         for r in rows:
             w.writerow([r[n] for _, n, _ in cols])
+
+
+class Measures:
+    """The estimators of one (table, direction, scene) against us_tab, from their
+    convergence rows est[estimator][N]: us_tab's rel_rmse at n_target and ns_per_sample."""
+
+    def __init__(self, est, n_target):
+        self.est, self.n = est, n_target
+        self.r_us = float(est["us_tab"][n_target]["rel_rmse"])
+        self.ns_us = float(est["us_tab"][max(est["us_tab"])]["ns_per_sample"])
+
+    def at_max(self, e, col):
+        return float(self.est[e][max(self.est[e])][col]) if e in self.est else None
+
+    def fewer(self, e):
+        """How many times fewer samples than us_tab's n_target reach its error (1/sqrt(N))."""
+        r = self.at_max(e, "rel_rmse")
+        if r is None:
+            return None
+        n_e = max(self.est[e]) * (r / self.r_us) ** 2
+        return self.n / n_e if n_e > 0 else math.inf
+
+    def cost(self, e):
+        ns = self.at_max(e, "ns_per_sample")
+        return ns / self.ns_us if ns is not None else None
+
+    def var(self, e):
+        r = self.at_max(e, "rel_rmse")
+        return r * r * max(self.est[e]) if r is not None else None
