@@ -1,8 +1,10 @@
 #!/usr/bin/python3
 """The Gaussian-count search before and after, side by side in one run of one binary.
 
-`fit.search: restarts` (independent k-means++ restarts at every candidate K) against
-`fit.search: smem` (the walk over K with split-and-merge moves, docs/fitting.md), on the
+Three methods (docs/fitting.md): `search: restarts` with `refine: none` (independent
+k-means++ restarts at every candidate K: before), `search: smem` with `refine: none` (the
+walk over K with split-and-merge moves), and `search: smem` with `refine: l1` (the walk, then
+the final fits refined toward the least L1 error: after, the defaults), on the
 thesis-scale polyester table (180 slices of 90 x 180) and the three RGL materials of
 data/rgl (90 slices of 90 x 180 each): the search with the default settings (K in
 [1, 32]: chosen K, L1 at the chosen K, wall time) and pinned K = 8 and 16 (L1 median and
@@ -54,7 +56,10 @@ def make_table(bsdfmix, work, name):
     return path
 
 
-def fit(bsdfmix, work, table, stem, search, k_min=1, k_max=32, extra=""):
+METHODS = (("restarts", "none"), ("smem", "none"), ("smem", "l1"))
+
+
+def fit(bsdfmix, work, table, stem, search, k_min=1, k_max=32, extra="", refine="l1"):
     out = os.path.join(work, stem)
     for suffix in ("_mixture.h5",):
         if os.path.exists(out + suffix):
@@ -62,7 +67,8 @@ def fit(bsdfmix, work, table, stem, search, k_min=1, k_max=32, extra=""):
     cfg = out + ".yaml"
     with open(cfg, "w") as f:
         f.write(f"table: {table}\nfit:\n  output: {out}_mixture.h5\n  report: {out}_fit.csv\n"
-                f"  search_report: {out}_search.csv\n  k_min: {k_min}\n  k_max: {k_max}\n  search: {search}\n{extra}")
+                f"  search_report: {out}_search.csv\n  k_min: {k_min}\n  k_max: {k_max}\n  search: {search}\n"
+                f"  refine: {refine}\n{extra}")
     start = time.monotonic()
     subprocess.run([bsdfmix, "fit", "-q", cfg], check=True)
     seconds = time.monotonic() - start
@@ -91,21 +97,22 @@ def main():
     results = []
     for name in args.tables.split(","):
         table = make_table(args.bsdfmix, args.work, name)
-        for search in ("restarts", "smem"):
-            r = fit(args.bsdfmix, args.work, table, f"{name}_{search}_search", search)
-            print(f"{name:10s} {search:8s} search: {r['slices']} slices, mean K {r['mean_k']:.2f}, L1 median "
-                  f"{100 * r['l1_median']:.2f}% p90 {100 * r['l1_p90']:.2f}%, {r['seconds']:.1f} s", flush=True)
-            results.append((name, search, "search", r))
+        for search, refine in METHODS:
+            stem = f"{name}_{search}_{refine}"
+            r = fit(args.bsdfmix, args.work, table, f"{stem}_search", search, refine=refine)
+            print(f"{name:10s} {search:8s} {refine:4s} search: {r['slices']} slices, mean K {r['mean_k']:.2f}, L1 "
+                  f"median {100 * r['l1_median']:.2f}% p90 {100 * r['l1_p90']:.2f}%, {r['seconds']:.1f} s", flush=True)
+            results.append((name, search, refine, "search", r))
             for k in fixed:
-                r = fit(args.bsdfmix, args.work, table, f"{name}_{search}_k{k}", search, k, k)
-                print(f"{name:10s} {search:8s} K = {k:2d}: L1 median {100 * r['l1_median']:.2f}% p90 "
+                r = fit(args.bsdfmix, args.work, table, f"{stem}_k{k}", search, k, k, refine=refine)
+                print(f"{name:10s} {search:8s} {refine:4s} K = {k:2d}: L1 median {100 * r['l1_median']:.2f}% p90 "
                       f"{100 * r['l1_p90']:.2f}%, {r['seconds']:.1f} s", flush=True)
-                results.append((name, search, f"k{k}", r))
+                results.append((name, search, refine, f"k{k}", r))
     with open(args.csv, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["table", "search", "run", "slices", "mean_k", "l1_median", "l1_p90", "seconds", "cpu"])
-        for name, search, run, r in results:
-            w.writerow([name, search, run, r["slices"], f"{r['mean_k']:.3f}", f"{r['l1_median']:.5f}",
+        w.writerow(["table", "search", "refine", "run", "slices", "mean_k", "l1_median", "l1_p90", "seconds", "cpu"])
+        for name, search, refine, run, r in results:
+            w.writerow([name, search, refine, run, r["slices"], f"{r['mean_k']:.3f}", f"{r['l1_median']:.5f}",
                         f"{r['l1_p90']:.5f}", f"{r['seconds']:.1f}", cpu])
     print("wrote", args.csv)
     if args.chart:
@@ -114,42 +121,62 @@ def main():
 
 def chart(args):
     """L1 against K, before and after, for the sharpest and the broadest polyester slice
-    (the largest and the smallest chosen K of the `restarts` search): both searches
-    with k_penalty 0 on those two slices, so that every K is fitted."""
+    (the largest and the smallest chosen K of the `restarts` search) and a satin slice
+    at theta_o 45 degrees (a broad measured lobe over a diffuse base): both searches with
+    k_penalty 0 and refine none on those slices, so that every K is fitted by EM alone,
+    and pinned fits of every K from 1 to 16 with the L1 refinement (the defaults)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    table = make_table(args.bsdfmix, args.work, "polyester")
-    rows = fit(args.bsdfmix, args.work, table, "polyester_restarts_search", "restarts")["rows"]
-    sharp = max(rows, key=lambda r: (int(r["k"]), float(r["l1_rel"])))
-    broad = min(rows, key=lambda r: (int(r["k"]), float(r["l1_rel"])))
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    for ax, (label, row) in zip(axes, (("sharp", sharp), ("broad", broad))):
+    def report(table_name):
+        path = os.path.join(args.work, f"{table_name}_restarts_none_search_fit.csv")
+        if not os.path.exists(path):
+            table = make_table(args.bsdfmix, args.work, table_name)
+            fit(args.bsdfmix, args.work, table, f"{table_name}_restarts_none_search", "restarts", refine="none")
+        with open(path) as f:
+            return list(csv.DictReader(f))
+
+    rows = report("polyester")
+    satin = report("satin")
+    panels = [("polyester", "sharp", max(rows, key=lambda r: (int(r["k"]), float(r["l1_rel"])))),
+              ("polyester", "broad", min(rows, key=lambda r: (int(r["k"]), float(r["l1_rel"])))),
+              ("satin", "measured", min(satin, key=lambda r: abs(float(r["theta_o"]) - 0.7854)))]
+    fig, axes = plt.subplots(1, len(panels), figsize=(15, 4.2))
+    for ax, (name, label, row) in zip(axes, panels):
+        table = make_table(args.bsdfmix, args.work, name)
         theta = float(row["theta_o"])
+        slice_index = int(row["slice"])
         for search, style in (("restarts", "o-"), ("smem", "s-")):
-            stem = f"chart_{label}_{search}"
-            fit(args.bsdfmix, args.work, table, stem, search,
+            stem = f"chart_{name}_{label}_{search}"
+            fit(args.bsdfmix, args.work, table, stem, search, refine="none",
                 extra=f"  k_penalty: 0.0\n  theta_o: [{theta!r}]\n")
             best = {}
             with open(os.path.join(args.work, stem + "_search.csv")) as f:
                 for r in csv.DictReader(f):
-                    if int(r["slice"]) != int(row["slice"]):
+                    if int(r["slice"]) != slice_index:
                         continue
                     k, l1 = int(r["k"]), float(r["l1_rel"])
                     best[k] = min(best.get(k, 9.0), l1)
             ks = sorted(best)
             ax.plot(ks, [100 * best[k] for k in ks], style, ms=3,
-                    label="before: k-means++ restarts" if search == "restarts" else "after: walk + split-and-merge")
-        ax.set_title(f"polyester slice {row['slice']} (theta_o {float(row['theta_o']):.2f} rad), {label}")
+                    label="before: k-means++ restarts" if search == "restarts" else "walk + split-and-merge")
+        refined = {}
+        for k in range(1, 17):
+            r = fit(args.bsdfmix, args.work, table, f"chart_{name}_{label}_l1_k{k}", "smem", k, k,
+                    extra=f"  theta_o: [{theta!r}]\n")
+            refined[k] = next(float(x["l1_rel"]) for x in r["rows"] if int(x["slice"]) == slice_index)
+        ks = sorted(refined)
+        ax.plot(ks, [100 * refined[k] for k in ks], "^-", ms=3, label="after: walk + split-and-merge + L1 refinement")
+        ax.set_title(f"{name} slice {slice_index} (theta_o {theta:.2f} rad), {label}")
         ax.set_xlabel("K")
         ax.set_ylabel("relative L1 error (%)")
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=8)
     fig.tight_layout()
     out = os.path.join(ROOT, "docs", "images", "search_l1_vs_k.png")
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=100)
     print("wrote", out)
 
 

@@ -62,6 +62,7 @@ typedef float real_t;
 #define TWO_PI_F 6.283185307179586f
 #define PI_F 3.14159265358979f
 #define LOG2E_F 1.4426950408889634f
+#define LN2_F 0.6931471805599453f
 #define LN2_R R(0.6931471805599453)
 #define PI_R R(3.141592653589793)
 #define TWO_PI_R R(6.283185307179586)
@@ -174,6 +175,30 @@ inline floatv exp2_neg(floatv x) {
 #endif
 }
 
+// log2(x) for normal positive x: the exponent from the bits, log2 of the mantissa
+// m in [1, 2) from t = (m - 1) / (m + 1) in [0, 1/3] by the odd series of atanh,
+// 2 / ln 2 (t + t^3/3 + ... + t^11/11) (absolute error < 2e-7). Inline: the builtin
+// is a library call on some CPU compilers, and em_estep takes one per cell.
+inline floatv log2_fast(floatv x) {
+#if VEC == 1
+  const int bits = as_int(x);
+  const float e = (float)((bits >> 23) - 127);
+  const float m = as_float((bits & 0x007FFFFF) | 0x3F800000);
+#else
+  const VINT bits = AS_VINT(x);
+  const floatv e = CAT(convert_float, VEC)((bits >> 23) - 127);
+  const floatv m = AS_VFLOAT((bits & 0x007FFFFF) | 0x3F800000);
+#endif
+  const floatv t = (m - 1.0f) / (m + 1.0f);
+  const floatv t2 = t * t;
+  floatv p = fma(t2, 0.0909090909f, 0.1111111111f);
+  p = fma(p, t2, 0.1428571429f);
+  p = fma(p, t2, 0.2f);
+  p = fma(p, t2, 0.3333333333f);
+  p = fma(p, t2, 1.0f);
+  return fma(2.8853900817779268f * t, p, e);
+}
+
 // Writes the E-step constants of component k of a problem from its state.
 inline void component_constants(__global const real_t* st, __global float* cp, int k) {
   const real_t w = st[0 * K_MAX + k], mt = st[1 * K_MAX + k], mp = st[2 * K_MAX + k];
@@ -252,7 +277,7 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
       s += r;
     }
     const floatv f = wv / s;
-    ll = fma(wv, m + native_log2(s), ll);
+    ll = fma(wv, m + log2_fast(s), ll);
     for (int j = 0; j < k; ++j) {
       const floatv dt = t - cp[0 * K_MAX + j];
       const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
@@ -509,5 +534,123 @@ void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
     barrier(CLK_LOCAL_MEM_FENCE);
   }
   if (lid == 0) partials[p * G + g] = LN2_R * scratch[0];
+#endif
+}
+
+// The refinement's objective, the smoothed L1 error of a mixture as the stand-in for its
+// slice plus kl times the Kullback-Leibler divergence of the mixture from the slice, and
+// the statistics of its gradient (host/fit/l1_refine.cpp, docs/fitting.md "L1
+// refinement"). Per cell: m = area * sum_j sum_images pi_j N_j (the weights of a slice
+// sum to 1), d = w - m, rho = sqrt(d^2 + eps^2), s = d / rho + kl * w / m. Per chunk:
+// sum of rho + kl * w log(w / m) at LL_INDEX, and per component the six sums of
+// s * pi_j N_j times (1, dt, dp, dt^2, dt dp, dp^2), each image with its own offset dp
+// from the mean. prob_images[p * K_MAX + j]: the phi images on each side
+// that component j needs. Cells past n_cells (the padding) take no part. Global size
+// (G * WG, P), local (WG, 1).
+__kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
+void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
+           const float theta0, const float dtheta, const float phi0, const float dphi,
+           __global const float* restrict weights, __global const int* restrict prob_slice,
+           __global const int* restrict prob_k, __global const float* restrict cparams,
+           __global const int* restrict prob_images, const uint n_cells, const float area,
+           const float eps, const float kl, __global real_t* restrict partials) {
+  const uint p = get_group_id(1);
+  const uint g = get_group_id(0);
+  const uint G = get_num_groups(0);
+  const uint lid = get_local_id(0);
+  const int k = prob_k[p];
+  __global const float* cp = cparams + p * NCONST;
+  __global const int* images = prob_images + p * K_MAX;
+  __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
+  const float nphi = (float)n_phi;
+  const float eps2 = eps * eps;
+
+  // Per component: the six accumulators and the density of the nearest image at the
+  // current cell, relative to the largest of them (em_estep's scheme: one exp2 per cell,
+  // exp2_neg per component); farther images (wide components only) directly.
+  floatv a[7 * K_MAX];
+  for (int q = 0; q < 7 * k; ++q) a[q] = (floatv)0.f;
+  floatv obj = (floatv)0.f;
+
+  const uint base = g * (WG * CPW * VEC);
+  for (uint it = 0; it < CPW; ++it) {
+    const uint c = base + (it * WG + lid) * VEC;
+    const floatv wv = VLOADV(0, w + c);
+    floatv t, ph;
+    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c + LANES < (float)n_cells);
+    floatv top = (floatv)(-INFINITY);
+    for (int j = 0; j < k; ++j) {
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
+      const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+                            fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+      a[7 * j + 6] = ej;
+      top = fmax(top, ej);
+    }
+    const floatv unit = exp2(top);
+    floatv m = (floatv)0.f;
+    for (int j = 0; j < k; ++j) {
+      const floatv r = unit * exp2_neg(a[7 * j + 6] - top);
+      a[7 * j + 6] = r;
+      m += r;
+      const int n = images[j];
+      if (n == 0) continue;
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
+      for (int img = -n; img <= n; ++img) {
+        if (img == 0) continue;
+        const floatv dp = d0 + (float)img * TWO_PI_F;
+        m += exp2(fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+                      fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j])));
+      }
+    }
+    const floatv am = fmax(area * m, (floatv)1e-30f);
+    const floatv d = wv - area * m;
+    const floatv rho = sqrt(fma(d, d, (floatv)eps2));
+    const floatv kl_cell =
+        select((floatv)0.f, LN2_F * wv * (log2_fast(fmax(wv, (floatv)1e-30f)) - log2_fast(am)), wv > 0.f);
+    obj = fma(valid, fma((floatv)kl, kl_cell, rho), obj);
+    const floatv s = valid * (d / rho + kl * wv / am);
+    for (int j = 0; j < k; ++j) {
+      const floatv dt = t - cp[0 * K_MAX + j];
+      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
+      const int n = images[j];
+      for (int img = -n; img <= n; ++img) {
+        const floatv dp = d0 + (float)img * TWO_PI_F;
+        const floatv dens = img == 0 ? a[7 * j + 6]
+                                     : exp2(fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+                                                fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j])));
+        const floatv sn = s * dens;
+        const floatv snt = sn * dt, snp = sn * dp;
+        a[7 * j + 0] += sn;
+        a[7 * j + 1] += snt;
+        a[7 * j + 2] += snp;
+        a[7 * j + 3] = fma(snt, dt, a[7 * j + 3]);
+        a[7 * j + 4] = fma(snt, dp, a[7 * j + 4]);
+        a[7 * j + 5] = fma(snp, dp, a[7 * j + 5]);
+      }
+    }
+  }
+
+  __global real_t* out = partials + (p * G + g) * NSTAT;
+#if WG == 1
+  for (int j = 0; j < k; ++j)
+    for (int q = 0; q < 6; ++q) out[q * K_MAX + j] = hsum(a[7 * j + q]);
+  out[LL_INDEX] = hsum(obj);
+#else
+  __local real_t scratch[WG];
+  for (int q = 0; q <= 6 * k; ++q) {
+    const int j = q % k;
+    const int which = q / k;
+    scratch[lid] = hsum(which < 6 ? a[7 * j + which] : obj);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint span = WG / 2; span > 0; span >>= 1) {
+      if (lid < span) scratch[lid] += scratch[lid + span];
+      barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    if (lid == 0) out[which < 6 ? which * K_MAX + j : LL_INDEX] = scratch[0];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
 #endif
 }

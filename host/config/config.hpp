@@ -40,6 +40,9 @@ struct FitSection {
   std::optional<double> error_target;
   int search_pool = 1;
   std::string search = "smem";  // smem: walk K with split-and-merge moves; restarts: independent restarts per K
+  std::string refine = "l1";    // l1: the final fits refined toward the least L1 error; none: EM's fits
+  int refine_evaluations = 150;
+  double refine_kl = 5.0;       // weight of the KL divergence (EM's objective) beside the L1 error
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 

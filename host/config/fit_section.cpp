@@ -26,6 +26,11 @@ FitSection parse_fit(const ConfigNode& n) {
   f.search = n.str("search");
   if (f.search != "smem" && f.search != "restarts")
     n.fail("search", "'" + f.search + "' is not a search method (expected smem or restarts)");
+  f.refine = n.str("refine");
+  if (f.refine != "l1" && f.refine != "none")
+    n.fail("refine", "'" + f.refine + "' is not a refinement (expected l1 or none)");
+  f.refine_evaluations = static_cast<int>(n.integer("refine_evaluations", 1, 100000));
+  f.refine_kl = n.number("refine_kl", 0.0, 1000.0);
   if (n.has("theta_o")) {
     f.theta_o = n.numbers("theta_o");
     for (double t : f.theta_o)

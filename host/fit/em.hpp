@@ -9,6 +9,7 @@
 
 #include "device/device.hpp"
 #include "fit/gmm.hpp"
+#include "fit/l1_refine.hpp"
 #include "fit/slices.hpp"
 
 namespace bsdfmix {
@@ -67,6 +68,11 @@ class EmEngine {
 
   std::vector<EmResult> fit(const SliceSet& set, const std::vector<EmTask>& tasks,
                             Progress* progress = nullptr);
+
+  // The L1 refinement's objective and gradient statistics of each query (kernels/em.cl
+  // em_l1, fit/l1_refine.hpp): queries batched by K bucket over the work queues like fit().
+  std::vector<L1Value> l1_values(const SliceSet& set, const std::vector<L1Query>& queries,
+                                 const L1Objective& objective);
 
   // Upper bound on the point-component updates of one EM iteration of a batch
   // (sum over its problems of padded cells x K bucket); at least one problem per batch.

@@ -21,41 +21,13 @@ namespace bsdfmix {
 
 using namespace em_detail;
 
-namespace {
+namespace em_detail {
 
-// Cells per chunk (one work-group): WG * CPW * VEC, the same on every device kind.
-constexpr std::size_t kChunkCells = 512;
-// Iterations between two reads of the per-problem status (to stop converged batches).
-constexpr int kStatusEvery = 4;
-
-struct KernelShape {
-  int vec, wg, cpw;
-};
-
-// CPUs: one work-item per work-group walking 16-wide float vectors (the CPU
-// compiler vectorizes the vector code, not across work-items). Others: scalar
-// work-items, 64 per work-group.
 KernelShape shape_for(const DeviceInfo& info, bool gpu_layout) {
   if (info.is_cpu() && !gpu_layout) return {16, 1, static_cast<int>(kChunkCells / 16)};
   return {1, 64, static_cast<int>(kChunkCells / 64)};
 }
 
-struct Problem {
-  std::size_t task;
-  int restart;
-};
-
-struct Batch {
-  int bucket;
-  const EmSettings* settings;
-  std::vector<std::size_t> problems;
-};
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-// Values in the device's real type (double or float), as bytes.
 std::vector<unsigned char> pack(const std::vector<double>& v, bool fp64) {
   std::vector<unsigned char> out(v.size() * (fp64 ? 8 : 4));
   if (fp64) {
@@ -78,6 +50,28 @@ double unpack(const std::vector<unsigned char>& b, std::size_t i, bool fp64) {
   float f;
   std::memcpy(&f, b.data() + 4 * i, 4);
   return f;
+}
+
+}  // namespace em_detail
+
+namespace {
+
+// Iterations between two reads of the per-problem status (to stop converged batches).
+constexpr int kStatusEvery = 4;
+
+struct Problem {
+  std::size_t task;
+  int restart;
+};
+
+struct Batch {
+  int bucket;
+  const EmSettings* settings;
+  std::vector<std::size_t> problems;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 }  // namespace

@@ -54,6 +54,21 @@ double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, cons
 // Smallest power of two >= max(k, 4): the K_MAX a problem of k components runs under.
 int k_bucket(int k);
 
+// Cells per chunk (one work-group): WG * CPW * VEC, the same on every device kind.
+constexpr std::size_t kChunkCells = 512;
+
+// The kernel layout: CPUs one work-item per work-group walking 16-wide float vectors
+// (the CPU compiler vectorizes the vector code, not across work-items); others (and
+// CPUs with gpu_layout) scalar work-items, 64 per work-group.
+struct KernelShape {
+  int vec, wg, cpw;
+};
+KernelShape shape_for(const DeviceInfo& info, bool gpu_layout);
+
+// Values in the device's real type (double or float), as bytes, and back.
+std::vector<unsigned char> pack(const std::vector<double>& v, bool fp64);
+double unpack(const std::vector<unsigned char>& b, std::size_t i, bool fp64);
+
 // Largest eigenvalue of the covariance [a b; b c] and its unit eigenvector; with
 // `minor`, the smallest and the eigenvector perpendicular.
 void principal_axis(double a, double b, double c, double& lambda, double& vx, double& vy, bool minor = false);

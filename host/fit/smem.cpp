@@ -18,6 +18,9 @@ namespace {
 
 double wrap_diff(double d) { return d - 2 * kPi * std::nearbyint(d / (2 * kPi)); }
 
+// exp(x), 0 below the normal range: libm takes a slow path for results that underflow.
+double exp_or_zero(double x) { return x < -708 ? 0.0 : std::exp(x); }
+
 }  // namespace
 
 ComponentScores score_components(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm,
@@ -49,15 +52,15 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
       m = std::max(m, lw[j] + l);
     }
     double s = 0;
-    for (int j = 0; j < k; ++j) s += std::exp(lw[j] + logn[i * k + j] - m);
+    for (int j = 0; j < k; ++j) s += exp_or_zero(lw[j] + logn[i * k + j] - m);
     logs[i] = m + std::log(s);
   }
   // log Z_k = log sum_i N_k(x_i), and the claimed mass A_k = sum_i w_i r_ik.
   std::vector<double> zsum(k, 0.0);
   for (std::size_t i = 0; i < n; ++i)
     for (int j = 0; j < k; ++j) {
-      zsum[j] += std::exp(logn[i * k + j] - zmax[j]);
-      if (w[i] > 0) mass[j] += w[i] * std::exp(lw[j] + logn[i * k + j] - logs[i]);
+      zsum[j] += exp_or_zero(logn[i * k + j] - zmax[j]);
+      if (w[i] > 0) mass[j] += w[i] * exp_or_zero(lw[j] + logn[i * k + j] - logs[i]);
     }
   ComponentScores out;
   out.split.assign(k, 0.0);
@@ -77,7 +80,7 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
     ract.clear();
     for (int j = 0; j < k; ++j) {
       const double lr = lw[j] + logn[i * k + j] - logs[i];
-      const double r = std::exp(lr);
+      const double r = exp_or_zero(lr);
       if (!(r > 0) || !(mass[j] > 0)) continue;
       // f log(f / p), f = w r / A, p = N / Z.
       // f log(f / p) in logs (w r can underflow where log f cannot).

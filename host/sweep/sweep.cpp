@@ -70,7 +70,9 @@ std::string fit_settings_json(const FitSection& f) {
     << ", \"tolerance\": " << num(f.tolerance) << ", \"k_penalty\": " << num(f.k_penalty)
     << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
     << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << f.search
-    << "\", \"criterion\": \"l1_rel + k_penalty * K\"}";
+    << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
+    << ", \"refine_kl\": " << num(f.refine_kl)
+    << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
   return s.str();
 }
 
@@ -186,8 +188,12 @@ class BatchFitter {
       if (fit_.search == "smem") search_walk();
       else search();
     }
-    if (fit_.search == "smem") final_walk();
-    else final_fits();
+    if (fit_.search == "smem") {
+      final_walk();
+    } else {
+      final_fits();
+      refine(false);
+    }
     reduce_k();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return part(seconds);
@@ -437,6 +443,7 @@ class BatchFitter {
         else if (fitted[i].ok && fitted[i].l1 < below_[s].l1) below_[s] = fitted[i];
       }
     }
+    refine(true);
     for (std::size_t s = 0; s < n; ++s) {
       if (below_[s].ok && best_[s].ok) {
         const std::vector<Candidate> two = {{below_[s].gmm.k(), below_[s].l1, true}, {chosen_[s], best_[s].l1, true}};
@@ -447,6 +454,48 @@ class BatchFitter {
       }
       for (const auto& [k, row] : walk_rows_[s]) search_rows_ << row << (k == chosen_[s] ? "1" : "0") << "\n";
     }
+  }
+
+  // The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `below`,
+  // of the candidate K below it (final_walk compares the two after). A refined mixture
+  // replaces its start only when its relative L1 error (sweep/fit_error.cpp, the exact
+  // periodic density) is lower; its log-likelihood is recomputed.
+  void refine(bool below) {
+    if (fit_.refine != "l1") return;
+    std::vector<L1Query> queries;
+    std::vector<Fitted*> owners;
+    for (std::size_t s = 0; s < work_.size(); ++s) {
+      if (best_[s].ok) {
+        queries.push_back({s, best_[s].gmm});
+        owners.push_back(&best_[s]);
+      }
+      if (below && s < below_.size() && below_[s].ok) {
+        queries.push_back({s, below_[s].gmm});
+        owners.push_back(&below_[s]);
+      }
+    }
+    if (queries.empty()) return;
+    const L1Evaluator evaluate = [this](const SliceSet& ss, const std::vector<L1Query>& q, const L1Objective& o) {
+      return engine_.l1_values(ss, q, o);
+    };
+    const std::vector<Gmm> refined =
+        refine_l1(evaluate, full_set_, queries, RefineSettings{fit_.refine_evaluations, fit_.refine_kl});
+    const std::size_t threads = std::min<std::size_t>(queries.size(), std::max(1u, std::thread::hardware_concurrency()));
+    run_on_workers(queries.size(), threads, [&](std::size_t, std::size_t i) {
+      const std::size_t s = queries[i].slice;
+      const Gmm& g = refined[i];
+      double l1;
+      try {
+        l1 = l1_rel_error(work_[s].full, make_slice_mixture(g.weight, g.mean, g.cov));
+      } catch (const std::exception&) {
+        return;  // not positive definite in double: keep the start
+      }
+      Fitted& f = *owners[i];
+      if (!(l1 < f.l1)) return;
+      f.gmm = g;
+      f.l1 = l1;
+      f.loglik = em_detail::weighted_loglik(full_set_.grid, em_detail::prepare_slice(full_set_, s).w, g);
+    });
   }
 
   // A slice with fewer non-zero cells than K cannot hold K components: it is refitted

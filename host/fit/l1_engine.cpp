@@ -1,0 +1,152 @@
+// The L1 refinement's evaluations on the devices: kernels/em.cl em_l1, batched by K bucket.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "core/error.hpp"
+#include "device/program.hpp"
+#include "fit/em.hpp"
+#include "fit/em_internal.hpp"
+#include "fit/scheduler.hpp"
+
+namespace bsdfmix {
+
+using namespace em_detail;
+
+std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<L1Query>& queries,
+                                         const L1Objective& objective) {
+  validate_slices(set);
+  const SliceGrid& grid = set.grid;
+  const std::size_t n_cells = grid.cells();
+  const std::size_t n_chunks = (n_cells + kChunkCells - 1) / kChunkCells;
+  const std::size_t stride = n_chunks * kChunkCells;
+  const std::size_t n_phi = grid.phi.size();
+  const double dtheta = grid.theta.size() > 1 ? axis_step(grid.theta) : 0.0;
+  const double dphi = axis_step(grid.phi);
+  const double area = axis_step(grid.theta) * dphi;
+
+  std::map<std::size_t, PreparedSlice> prepared;
+  for (const auto& q : queries) {
+    if (q.slice >= set.weights.size())
+      throw ConfigError("L1 query: slice " + std::to_string(q.slice) + " out of range");
+    if (q.gmm.k() < 1 || q.gmm.k() > kEmMaxK)
+      throw ConfigError("L1 query: K = " + std::to_string(q.gmm.k()) + " outside 1.." + std::to_string(kEmMaxK));
+    if (!prepared.count(q.slice)) prepared.emplace(q.slice, prepare_slice(set, q.slice));
+  }
+  std::vector<L1Value> out(queries.size());
+  // Batches: queries of one K bucket, up to the budget.
+  std::map<int, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    out[i].stats.assign(6 * static_cast<std::size_t>(queries[i].gmm.k()), 0.0);
+    if (prepared.at(queries[i].slice).w.empty()) continue;  // a zero slice: objective 0
+    groups[k_bucket(queries[i].gmm.k())].push_back(i);
+  }
+  std::vector<std::pair<int, std::vector<std::size_t>>> batches;
+  for (auto& [bucket, list] : groups) {
+    const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket);
+    const std::size_t cap = static_cast<std::size_t>(std::max<std::uint64_t>(1, batch_budget_ / per));
+    for (std::size_t b = 0; b < list.size(); b += cap)
+      batches.push_back({bucket, std::vector<std::size_t>(list.begin() + b, list.begin() + std::min(list.size(), b + cap))});
+  }
+
+  std::vector<cl::CommandQueue> queues;
+  std::vector<std::size_t> queue_device;
+  for (std::size_t d = 0; d < devices_.size(); ++d)
+    for (int q = 0; q < queues_per_device_; ++q) {
+      queues.push_back(devices_[d].make_queue());
+      queue_device.push_back(d);
+    }
+
+  auto run_batch = [&](std::size_t worker, std::size_t bi) {
+    const int K = batches[bi].first;
+    const std::vector<std::size_t>& items = batches[bi].second;
+    const std::size_t d = queue_device[worker];
+    const Device& dev = devices_[d];
+    const bool fp64 = uses_fp64(d);
+    const KernelShape shape = shape_for(dev.info(), gpu_layout_);
+    const std::size_t P = items.size(), real_size = fp64 ? 8 : 4;
+    const std::size_t nstat = 6 * static_cast<std::size_t>(K) + 1, nconst = 6 * static_cast<std::size_t>(K);
+
+    std::map<std::size_t, int> local_slice;
+    std::vector<int> prob_slice(P), prob_k(P), images(P * K, 0);
+    std::vector<float> cparams(P * nconst, 0.0f);
+    for (std::size_t i = 0; i < P; ++i) {
+      const L1Query& q = queries[items[i]];
+      auto it = local_slice.find(q.slice);
+      if (it == local_slice.end()) it = local_slice.emplace(q.slice, static_cast<int>(local_slice.size())).first;
+      prob_slice[i] = it->second;
+      prob_k[i] = q.gmm.k();
+      // The E-step constants of kernels/em.cl component_constants, in double then float.
+      for (int j = 0; j < q.gmm.k(); ++j) {
+        const double a = q.gmm.cov[3 * j], b = q.gmm.cov[3 * j + 1], c = q.gmm.cov[3 * j + 2];
+        const double det = a * c - b * b, l2e = 1.4426950408889634;
+        float* cp = &cparams[i * nconst];
+        cp[0 * K + j] = static_cast<float>(q.gmm.mean[2 * j]);
+        cp[1 * K + j] = static_cast<float>(wrap_phi(q.gmm.mean[2 * j + 1]));
+        cp[2 * K + j] = static_cast<float>(-0.5 * l2e * c / det);
+        cp[3 * K + j] = static_cast<float>(l2e * b / det);
+        cp[4 * K + j] = static_cast<float>(-0.5 * l2e * a / det);
+        cp[5 * K + j] = static_cast<float>(std::log2(q.gmm.weight[j]) - std::log2(2 * kPi) - 0.5 * std::log2(det));
+        images[i * K + j] = l1_images(c);
+      }
+    }
+    std::vector<float> weights(local_slice.size() * stride, 0.0f);
+    for (const auto& [slice, local] : local_slice) {
+      const auto& w = prepared.at(slice).w;
+      float* dst = &weights[static_cast<std::size_t>(local) * stride];
+      for (std::size_t c = 0; c < n_cells; ++c) dst[c] = static_cast<float>(w[c]);
+    }
+    std::vector<unsigned char> partials(P * n_chunks * nstat * real_size);
+    try {
+      const std::string options = "-DK_MAX=" + std::to_string(K) + " -DVEC=" + std::to_string(shape.vec) +
+                                  " -DWG=" + std::to_string(shape.wg) + " -DCPW=" + std::to_string(shape.cpw) +
+                                  " -DEM_FP64=" + (fp64 ? "1" : "0") + " -cl-denorms-are-zero";
+      cl::Program program = build_program(dev, "em", options);
+      const cl::Context& ctx = dev.context();
+      const cl::CommandQueue& queue = queues[worker];
+      cl::Buffer b_weights(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, weights.size() * 4, weights.data());
+      cl::Buffer b_slice(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_slice.data());
+      cl::Buffer b_k(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_k.data());
+      cl::Buffer b_const(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, cparams.size() * 4, cparams.data());
+      cl::Buffer b_images(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, images.size() * sizeof(int), images.data());
+      cl::Buffer b_partials(ctx, CL_MEM_WRITE_ONLY, partials.size());
+      cl::Kernel kern(program, "em_l1");
+      kern.setArg(0, static_cast<cl_uint>(stride));
+      kern.setArg(1, static_cast<cl_uint>(n_phi));
+      kern.setArg(2, static_cast<float>(1.0 / static_cast<double>(n_phi)));
+      kern.setArg(3, static_cast<float>(grid.theta.front()));
+      kern.setArg(4, static_cast<float>(dtheta));
+      kern.setArg(5, static_cast<float>(grid.phi.front()));
+      kern.setArg(6, static_cast<float>(dphi));
+      kern.setArg(7, b_weights);
+      kern.setArg(8, b_slice);
+      kern.setArg(9, b_k);
+      kern.setArg(10, b_const);
+      kern.setArg(11, b_images);
+      kern.setArg(12, static_cast<cl_uint>(n_cells));
+      kern.setArg(13, static_cast<float>(area));
+      kern.setArg(14, static_cast<float>(objective.eps));
+      kern.setArg(15, static_cast<float>(objective.kl));
+      kern.setArg(16, b_partials);
+      launch(queue, kern, "em_l1", cl::NDRange(n_chunks * static_cast<std::size_t>(shape.wg), P),
+             cl::NDRange(static_cast<std::size_t>(shape.wg), 1));
+      queue.enqueueReadBuffer(b_partials, CL_TRUE, 0, partials.size(), partials.data());
+    } catch (const cl::Error& e) {
+      throw_device_error(e, "L1 evaluation on " + dev.info().label());
+    }
+    for (std::size_t i = 0; i < P; ++i) {
+      L1Value& v = out[items[i]];
+      const int k = prob_k[i];
+      for (std::size_t g = 0; g < n_chunks; ++g) {
+        const std::size_t base = (i * n_chunks + g) * nstat;
+        v.objective += unpack(partials, base + 6 * K, fp64);
+        for (int q = 0; q < 6; ++q)
+          for (int j = 0; j < k; ++j) v.stats[q * k + j] += unpack(partials, base + q * K + j, fp64);
+      }
+    }
+  };
+  run_on_workers(batches.size(), queues.size(), run_batch);
+  return out;
+}
+
+}  // namespace bsdfmix
