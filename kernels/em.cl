@@ -213,6 +213,32 @@ inline void component_constants(__global const real_t* st, __global float* cp, i
   cp[5 * K_MAX + k] = (float)(log2(w) - log2(TWO_PI_R) - R(0.5) * log2(det));
 }
 
+// Writes a work-group's statistics to `out`: per component j the six sums a[7 j + q]
+// at q * K_MAX + j, then `last` at LL_INDEX; with WG > 1 each summed over the
+// work-group through `scratch` (WG values of local memory).
+inline void write_partials(const floatv* a, const floatv last, const int k, __global real_t* out,
+                           __local real_t* scratch) {
+#if WG == 1
+  for (int j = 0; j < k; ++j)
+    for (int q = 0; q < 6; ++q) out[q * K_MAX + j] = hsum(a[7 * j + q]);
+  out[LL_INDEX] = hsum(last);
+#else
+  const uint lid = get_local_id(0);
+  for (int q = 0; q <= 6 * k; ++q) {
+    const int j = q % k;
+    const int which = q / k;
+    scratch[lid] = hsum(which < 6 ? a[7 * j + which] : last);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint span = WG / 2; span > 0; span >>= 1) {
+      if (lid < span) scratch[lid] += scratch[lid + span];
+      barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    if (lid == 0) out[which < 6 ? which * K_MAX + j : LL_INDEX] = scratch[0];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+#endif
+}
+
 // Status per problem: [2p] = 0 running, 1 done, 2 failed; [2p + 1] = iterations (M-steps) done.
 
 __kernel void em_constants(const uint n_problems, __global const int* prob_k,
@@ -292,33 +318,8 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
     }
   }
 
-  __global real_t* out = partials + (p * G + g) * NSTAT;
-#if WG == 1
-  for (int j = 0; j < k; ++j) {
-    out[0 * K_MAX + j] = hsum(A0(j));
-    out[1 * K_MAX + j] = hsum(A1(j));
-    out[2 * K_MAX + j] = hsum(A2(j));
-    out[3 * K_MAX + j] = hsum(A3(j));
-    out[4 * K_MAX + j] = hsum(A4(j));
-    out[5 * K_MAX + j] = hsum(A5(j));
-  }
-  out[LL_INDEX] = hsum(ll);
-#else
   __local real_t scratch[WG];
-  for (int q = 0; q <= 6 * k; ++q) {
-    const int j = q % k;
-    const int which = q / k;
-    const floatv v = which < 6 ? a[7 * j + which] : ll;
-    scratch[lid] = hsum(v);
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint span = WG / 2; span > 0; span >>= 1) {
-      if (lid < span) scratch[lid] += scratch[lid + span];
-      barrier(CLK_LOCAL_MEM_FENCE);
-    }
-    if (lid == 0) out[which < 6 ? which * K_MAX + j : LL_INDEX] = scratch[0];
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-#endif
+  write_partials(a, ll, k, partials + (p * G + g) * NSTAT, scratch);
 }
 
 // Sum over the G chunks of one statistic: plain in double, compensated (Kahan) in float.
@@ -633,24 +634,6 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
     }
   }
 
-  __global real_t* out = partials + (p * G + g) * NSTAT;
-#if WG == 1
-  for (int j = 0; j < k; ++j)
-    for (int q = 0; q < 6; ++q) out[q * K_MAX + j] = hsum(a[7 * j + q]);
-  out[LL_INDEX] = hsum(obj);
-#else
   __local real_t scratch[WG];
-  for (int q = 0; q <= 6 * k; ++q) {
-    const int j = q % k;
-    const int which = q / k;
-    scratch[lid] = hsum(which < 6 ? a[7 * j + which] : obj);
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint span = WG / 2; span > 0; span >>= 1) {
-      if (lid < span) scratch[lid] += scratch[lid + span];
-      barrier(CLK_LOCAL_MEM_FENCE);
-    }
-    if (lid == 0) out[which < 6 ? which * K_MAX + j : LL_INDEX] = scratch[0];
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-#endif
+  write_partials(a, obj, k, partials + (p * G + g) * NSTAT, scratch);
 }

@@ -347,6 +347,7 @@ TEST_CASE("the search finds the true K of known mixtures and their parameters", 
       CHECK(std::abs(fit.cov[3 * q + 2] - truth.cov[3 * j + 2]) <= 0.1 * spp * spp);
     }
   }
+  std::printf("true K on %d of %zu known-mixture slices;%s\n", right, known.size(), misses.str().c_str());
   INFO("true K on " << right << " of " << known.size() << " slices; misses:" << misses.str());
   CHECK(right >= int(std::ceil(0.95 * double(known.size()))));
 }

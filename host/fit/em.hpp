@@ -86,6 +86,9 @@ class EmEngine {
   void set_gpu_layout(bool on) { gpu_layout_ = on; }
 
  private:
+  // One queue per worker: queues_per_device on each device, and each queue's device.
+  void make_queues(std::vector<cl::CommandQueue>& queues, std::vector<std::size_t>& device) const;
+
   std::vector<Device> devices_;
   int queues_per_device_;
   EmPrecision precision_;

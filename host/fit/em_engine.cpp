@@ -23,6 +23,24 @@ using namespace em_detail;
 
 namespace em_detail {
 
+ChunkLayout::ChunkLayout(const SliceGrid& grid)
+    : cells(grid.cells()),
+      chunks((cells + kChunkCells - 1) / kChunkCells),
+      stride(chunks * kChunkCells),
+      n_phi(grid.phi.size()),
+      dtheta(grid.theta.size() > 1 ? axis_step(grid.theta) : 0.0),
+      dphi(axis_step(grid.phi)) {}
+
+void set_grid_args(cl::Kernel& kernel, const ChunkLayout& layout, const SliceGrid& grid) {
+  kernel.setArg(0, static_cast<cl_uint>(layout.stride));
+  kernel.setArg(1, static_cast<cl_uint>(layout.n_phi));
+  kernel.setArg(2, static_cast<float>(1.0 / static_cast<double>(layout.n_phi)));
+  kernel.setArg(3, static_cast<float>(grid.theta.front()));
+  kernel.setArg(4, static_cast<float>(layout.dtheta));
+  kernel.setArg(5, static_cast<float>(grid.phi.front()));
+  kernel.setArg(6, static_cast<float>(layout.dphi));
+}
+
 KernelShape shape_for(const DeviceInfo& info, bool gpu_layout) {
   if (info.is_cpu() && !gpu_layout) return {16, 1, static_cast<int>(kChunkCells / 16)};
   return {1, 64, static_cast<int>(kChunkCells / 64)};
@@ -89,6 +107,14 @@ EmEngine::EmEngine(std::vector<Device> devices, int queues_per_device, EmPrecisi
                           " has no cl_khr_fp64 (use fp32 or auto)");
 }
 
+void EmEngine::make_queues(std::vector<cl::CommandQueue>& queues, std::vector<std::size_t>& device) const {
+  for (std::size_t d = 0; d < devices_.size(); ++d)
+    for (int q = 0; q < queues_per_device_; ++q) {
+      queues.push_back(devices_[d].make_queue());
+      device.push_back(d);
+    }
+}
+
 bool EmEngine::uses_fp64(std::size_t device) const {
   if (precision_ == EmPrecision::Fp32) return false;
   return devices_.at(device).info().fp64;
@@ -101,12 +127,8 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
   validate_slices(set);
   validate_tasks(set, tasks);
   const SliceGrid& grid = set.grid;
-  const std::size_t n_cells = grid.cells();
-  const std::size_t n_chunks = (n_cells + kChunkCells - 1) / kChunkCells;
-  const std::size_t stride = n_chunks * kChunkCells;
-  const std::size_t n_phi = grid.phi.size();
-  const double dtheta = grid.theta.size() > 1 ? axis_step(grid.theta) : 0.0;
-  const double dphi = axis_step(grid.phi);
+  const ChunkLayout layout(grid);
+  const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
 
   // Slices, task failures, problems.
   std::vector<std::unique_ptr<PreparedSlice>> prepared(set.weights.size());
@@ -153,11 +175,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
   // One queue per worker.
   std::vector<cl::CommandQueue> queues;
   std::vector<std::size_t> queue_device;
-  for (std::size_t d = 0; d < devices_.size(); ++d)
-    for (int q = 0; q < queues_per_device_; ++q) {
-      queues.push_back(devices_[d].make_queue());
-      queue_device.push_back(d);
-    }
+  make_queues(queues, queue_device);
   std::mutex timing_mutex;
 
   auto run_batch = [&](std::size_t worker, std::size_t bi) {
@@ -239,13 +257,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
       k_const.setArg(2, b_state);
       k_const.setArg(3, b_const);
       for (cl::Kernel* kk : {&k_estep, &k_ll}) {
-        kk->setArg(0, static_cast<cl_uint>(stride));
-        kk->setArg(1, static_cast<cl_uint>(n_phi));
-        kk->setArg(2, static_cast<float>(1.0 / static_cast<double>(n_phi)));
-        kk->setArg(3, static_cast<float>(grid.theta.front()));
-        kk->setArg(4, static_cast<float>(dtheta));
-        kk->setArg(5, static_cast<float>(grid.phi.front()));
-        kk->setArg(6, static_cast<float>(dphi));
+        set_grid_args(*kk, layout, grid);
         kk->setArg(7, b_weights);
         kk->setArg(8, b_slice);
         kk->setArg(9, b_k);

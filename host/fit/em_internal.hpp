@@ -65,6 +65,18 @@ struct KernelShape {
 };
 KernelShape shape_for(const DeviceInfo& info, bool gpu_layout);
 
+// The cells of a slice grid in chunks of kChunkCells, as the kernels walk them: a slice
+// takes `stride` floats (its cells, then zero padding to whole chunks).
+struct ChunkLayout {
+  std::size_t cells = 0, chunks = 0, stride = 0, n_phi = 0;
+  double dtheta = 0, dphi = 0;  // dtheta 0 for a single theta row
+  explicit ChunkLayout(const SliceGrid& grid);
+};
+
+// Sets the grid arguments 0..6 that em_estep, em_loglik and em_l1 share (stride, n_phi,
+// 1 / n_phi, theta0, dtheta, phi0, dphi).
+void set_grid_args(cl::Kernel& kernel, const ChunkLayout& layout, const SliceGrid& grid);
+
 // Values in the device's real type (double or float), as bytes, and back.
 std::vector<unsigned char> pack(const std::vector<double>& v, bool fp64);
 double unpack(const std::vector<unsigned char>& b, std::size_t i, bool fp64);

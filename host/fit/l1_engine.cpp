@@ -17,13 +17,9 @@ std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<
                                          const L1Objective& objective) {
   validate_slices(set);
   const SliceGrid& grid = set.grid;
-  const std::size_t n_cells = grid.cells();
-  const std::size_t n_chunks = (n_cells + kChunkCells - 1) / kChunkCells;
-  const std::size_t stride = n_chunks * kChunkCells;
-  const std::size_t n_phi = grid.phi.size();
-  const double dtheta = grid.theta.size() > 1 ? axis_step(grid.theta) : 0.0;
-  const double dphi = axis_step(grid.phi);
-  const double area = axis_step(grid.theta) * dphi;
+  const ChunkLayout layout(grid);
+  const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
+  const double area = axis_step(grid.theta) * layout.dphi;
 
   std::map<std::size_t, PreparedSlice> prepared;
   for (const auto& q : queries) {
@@ -51,11 +47,7 @@ std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<
 
   std::vector<cl::CommandQueue> queues;
   std::vector<std::size_t> queue_device;
-  for (std::size_t d = 0; d < devices_.size(); ++d)
-    for (int q = 0; q < queues_per_device_; ++q) {
-      queues.push_back(devices_[d].make_queue());
-      queue_device.push_back(d);
-    }
+  make_queues(queues, queue_device);
 
   auto run_batch = [&](std::size_t worker, std::size_t bi) {
     const int K = batches[bi].first;
@@ -111,13 +103,7 @@ std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<
       cl::Buffer b_images(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, images.size() * sizeof(int), images.data());
       cl::Buffer b_partials(ctx, CL_MEM_WRITE_ONLY, partials.size());
       cl::Kernel kern(program, "em_l1");
-      kern.setArg(0, static_cast<cl_uint>(stride));
-      kern.setArg(1, static_cast<cl_uint>(n_phi));
-      kern.setArg(2, static_cast<float>(1.0 / static_cast<double>(n_phi)));
-      kern.setArg(3, static_cast<float>(grid.theta.front()));
-      kern.setArg(4, static_cast<float>(dtheta));
-      kern.setArg(5, static_cast<float>(grid.phi.front()));
-      kern.setArg(6, static_cast<float>(dphi));
+      set_grid_args(kern, layout, grid);
       kern.setArg(7, b_weights);
       kern.setArg(8, b_slice);
       kern.setArg(9, b_k);
