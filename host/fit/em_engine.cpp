@@ -46,6 +46,12 @@ KernelShape shape_for(const DeviceInfo& info, bool gpu_layout) {
   return {1, 64, static_cast<int>(kChunkCells / 64)};
 }
 
+std::string em_program_options(int k_max, const KernelShape& shape, bool fp64) {
+  return "-DK_MAX=" + std::to_string(k_max) + " -DVEC=" + std::to_string(shape.vec) + " -DWG=" +
+         std::to_string(shape.wg) + " -DCPW=" + std::to_string(shape.cpw) + " -DEM_FP64=" + (fp64 ? "1" : "0") +
+         " -cl-denorms-are-zero";
+}
+
 std::vector<unsigned char> pack(const std::vector<double>& v, bool fp64) {
   std::vector<unsigned char> out(v.size() * (fp64 ? 8 : 4));
   if (fp64) {
@@ -234,10 +240,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     std::vector<unsigned char> ll_bytes(P * n_chunks * real_size);
     int launched = 0;
     try {
-      const std::string options = "-DK_MAX=" + std::to_string(K) + " -DVEC=" + std::to_string(shape.vec) +
-                                  " -DWG=" + std::to_string(shape.wg) + " -DCPW=" + std::to_string(shape.cpw) +
-                                  " -DEM_FP64=" + (fp64 ? "1" : "0") + " -cl-denorms-are-zero";
-      cl::Program program = build_program(dev, "em", options);
+      cl::Program program = build_program(dev, "em", em_program_options(K, shape, fp64));
       const cl::Context& ctx = dev.context();
       cl::Buffer b_weights(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, weights.size() * 4, weights.data());
       cl::Buffer b_slice(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_slice.data());

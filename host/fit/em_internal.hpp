@@ -65,6 +65,9 @@ struct KernelShape {
 };
 KernelShape shape_for(const DeviceInfo& info, bool gpu_layout);
 
+// The build options of kernels/em.cl for a K_MAX bucket, a layout and a precision.
+std::string em_program_options(int k_max, const KernelShape& shape, bool fp64);
+
 // The cells of a slice grid in chunks of kChunkCells, as the kernels walk them: a slice
 // takes `stride` floats (its cells, then zero padding to whole chunks).
 struct ChunkLayout {

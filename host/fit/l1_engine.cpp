@@ -90,10 +90,7 @@ std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<
     }
     std::vector<unsigned char> partials(P * n_chunks * nstat * real_size);
     try {
-      const std::string options = "-DK_MAX=" + std::to_string(K) + " -DVEC=" + std::to_string(shape.vec) +
-                                  " -DWG=" + std::to_string(shape.wg) + " -DCPW=" + std::to_string(shape.cpw) +
-                                  " -DEM_FP64=" + (fp64 ? "1" : "0") + " -cl-denorms-are-zero";
-      cl::Program program = build_program(dev, "em", options);
+      cl::Program program = build_program(dev, "em", em_program_options(K, shape, fp64));
       const cl::Context& ctx = dev.context();
       const cl::CommandQueue& queue = queues[worker];
       cl::Buffer b_weights(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, weights.size() * 4, weights.data());
