@@ -51,7 +51,9 @@ LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, cons
                                std::to_string(fit.seed) + "," + std::to_string(fit.restarts) + "," +
                                std::to_string(fit.final_restarts) + "," + std::to_string(fit.iterations) + "," +
                                std::to_string(fit.final_iterations) + "," + std::to_string(fit.tolerance) + "," +
-                               std::to_string(fit.k_penalty) + "," + fit.search + "," + BSDFMIX_VERSION;
+                               std::to_string(fit.k_penalty) + "," + fit.search + "," + fit.refine + "," +
+                               std::to_string(fit.refine_evaluations) + "," + std::to_string(fit.refine_kl) + "," +
+                               BSDFMIX_VERSION;
   h.update(settings.data(), settings.size());
   std::string name = light.name;
   for (char& c : name)
