@@ -62,9 +62,6 @@ METHODS = (("restarts", "none"), ("smem", "none"), ("smem", "l1"))
 
 def fit(bsdfmix, work, table, stem, search, k_min=1, k_max=32, extra="", refine="l1", runs=1):
     out = os.path.join(work, stem)
-    for suffix in ("_mixture.h5",):
-        if os.path.exists(out + suffix):
-            os.remove(out + suffix)
     cfg = out + ".yaml"
     with open(cfg, "w") as f:
         f.write(f"table: {table}\nfit:\n  output: {out}_mixture.h5\n  report: {out}_fit.csv\n"

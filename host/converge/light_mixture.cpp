@@ -47,13 +47,7 @@ LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, cons
   h.update(std::uint64_t(light.domain == Domain::Fiber ? 1 : 2));
   h.update(grid.theta_i.data(), grid.theta_i.size() * sizeof(double));
   h.update(grid.phi_i.data(), grid.phi_i.size() * sizeof(double));
-  const std::string settings = std::to_string(fit.k_min) + "," + std::to_string(fit.k_max) + "," +
-                               std::to_string(fit.seed) + "," + std::to_string(fit.restarts) + "," +
-                               std::to_string(fit.final_restarts) + "," + std::to_string(fit.iterations) + "," +
-                               std::to_string(fit.final_iterations) + "," + std::to_string(fit.tolerance) + "," +
-                               std::to_string(fit.k_penalty) + "," + fit.search + "," + fit.refine + "," +
-                               std::to_string(fit.refine_evaluations) + "," + std::to_string(fit.refine_kl) + "," +
-                               BSDFMIX_VERSION;
+  const std::string settings = fit_settings_json(fit) + "," + BSDFMIX_VERSION;
   h.update(settings.data(), settings.size());
   std::string name = light.name;
   for (char& c : name)

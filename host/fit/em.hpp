@@ -71,8 +71,19 @@ class EmEngine {
 
   // The L1 refinement's objective and gradient statistics of each query (kernels/em.cl
   // em_l1, fit/l1_refine.hpp): queries batched by K bucket over the work queues like fit().
-  std::vector<L1Value> l1_values(const SliceSet& set, const std::vector<L1Query>& queries,
+  // A refinement evaluates the same slices many times: l1_prepare checks and normalizes
+  // them once (throws InputError), and the first overload takes them made ready.
+  struct L1Slices {
+    SliceGrid grid;
+    std::vector<std::vector<float>> w;  // per slice, normalized to sum 1; empty: a zero slice
+  };
+  static L1Slices l1_prepare(const SliceSet& set);
+  std::vector<L1Value> l1_values(const L1Slices& slices, const std::vector<L1Query>& queries,
                                  const L1Objective& objective);
+  std::vector<L1Value> l1_values(const SliceSet& set, const std::vector<L1Query>& queries,
+                                 const L1Objective& objective) {
+    return l1_values(l1_prepare(set), queries, objective);
+  }
 
   // Upper bound on the point-component updates of one EM iteration of a batch
   // (sum over its problems of padded cells x K bucket); at least one problem per batch.

@@ -13,28 +13,37 @@ namespace bsdfmix {
 
 using namespace em_detail;
 
-std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<L1Query>& queries,
-                                         const L1Objective& objective) {
+EmEngine::L1Slices EmEngine::l1_prepare(const SliceSet& set) {
   validate_slices(set);
-  const SliceGrid& grid = set.grid;
+  L1Slices out;
+  out.grid = set.grid;
+  out.w.resize(set.weights.size());
+  for (std::size_t s = 0; s < set.weights.size(); ++s) {
+    const PreparedSlice p = prepare_slice(set, s);
+    out.w[s].assign(p.w.begin(), p.w.end());
+  }
+  return out;
+}
+
+std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vector<L1Query>& queries,
+                                         const L1Objective& objective) {
+  const SliceGrid& grid = slices.grid;
   const ChunkLayout layout(grid);
   const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
   const double area = axis_step(grid.theta) * layout.dphi;
 
-  std::map<std::size_t, PreparedSlice> prepared;
   for (const auto& q : queries) {
-    if (q.slice >= set.weights.size())
+    if (q.slice >= slices.w.size())
       throw ConfigError("L1 query: slice " + std::to_string(q.slice) + " out of range");
     if (q.gmm.k() < 1 || q.gmm.k() > kEmMaxK)
       throw ConfigError("L1 query: K = " + std::to_string(q.gmm.k()) + " outside 1.." + std::to_string(kEmMaxK));
-    if (!prepared.count(q.slice)) prepared.emplace(q.slice, prepare_slice(set, q.slice));
   }
   std::vector<L1Value> out(queries.size());
   // Batches: queries of one K bucket, up to the budget.
   std::map<int, std::vector<std::size_t>> groups;
   for (std::size_t i = 0; i < queries.size(); ++i) {
     out[i].stats.assign(6 * static_cast<std::size_t>(queries[i].gmm.k()), 0.0);
-    if (prepared.at(queries[i].slice).w.empty()) continue;  // a zero slice: objective 0
+    if (slices.w[queries[i].slice].empty()) continue;  // a zero slice: objective 0
     groups[k_bucket(queries[i].gmm.k())].push_back(i);
   }
   std::vector<std::pair<int, std::vector<std::size_t>>> batches;
@@ -83,11 +92,8 @@ std::vector<L1Value> EmEngine::l1_values(const SliceSet& set, const std::vector<
       }
     }
     std::vector<float> weights(local_slice.size() * stride, 0.0f);
-    for (const auto& [slice, local] : local_slice) {
-      const auto& w = prepared.at(slice).w;
-      float* dst = &weights[static_cast<std::size_t>(local) * stride];
-      for (std::size_t c = 0; c < n_cells; ++c) dst[c] = static_cast<float>(w[c]);
-    }
+    for (const auto& [slice, local] : local_slice)
+      std::copy(slices.w[slice].begin(), slices.w[slice].end(), weights.begin() + static_cast<std::ptrdiff_t>(local) * stride);
     std::vector<unsigned char> partials(P * n_chunks * nstat * real_size);
     try {
       cl::Program program = build_program(dev, "em", em_program_options(K, shape, fp64));

@@ -62,19 +62,6 @@ std::string joined_names(const std::vector<Device>& devices) {
   return n;
 }
 
-std::string fit_settings_json(const FitSection& f) {
-  std::ostringstream s;
-  s << "{\"k_min\": " << f.k_min << ", \"k_max\": " << f.k_max << ", \"seed\": " << f.seed
-    << ", \"restarts\": " << f.restarts << ", \"final_restarts\": " << f.final_restarts
-    << ", \"iterations\": " << f.iterations << ", \"final_iterations\": " << f.final_iterations
-    << ", \"tolerance\": " << num(f.tolerance) << ", \"k_penalty\": " << num(f.k_penalty)
-    << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
-    << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << f.search
-    << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
-    << ", \"refine_kl\": " << num(f.refine_kl)
-    << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
-  return s.str();
-}
 
 // A single Gaussian matched to the slice's moments: the fallback when EM fails.
 void moment_gaussian(const WeightedSlice& s, std::vector<double>& w, std::vector<double>& mean,
@@ -475,8 +462,9 @@ class BatchFitter {
       }
     }
     if (queries.empty()) return;
-    const L1Evaluator evaluate = [this](const SliceSet& ss, const std::vector<L1Query>& q, const L1Objective& o) {
-      return engine_.l1_values(ss, q, o);
+    const EmEngine::L1Slices slices = EmEngine::l1_prepare(full_set_);  // once, not per evaluation
+    const L1Evaluator evaluate = [&](const SliceSet&, const std::vector<L1Query>& q, const L1Objective& o) {
+      return engine_.l1_values(slices, q, o);
     };
     const std::vector<Gmm> refined =
         refine_l1(evaluate, full_set_, queries, RefineSettings{fit_.refine_evaluations, fit_.refine_kl});
@@ -656,6 +644,20 @@ std::string sweep_fingerprint(const std::string& table_path, const TableMeta& me
 }
 
 }  // namespace
+
+std::string fit_settings_json(const FitSection& f) {
+  std::ostringstream s;
+  s << "{\"k_min\": " << f.k_min << ", \"k_max\": " << f.k_max << ", \"seed\": " << f.seed
+    << ", \"restarts\": " << f.restarts << ", \"final_restarts\": " << f.final_restarts
+    << ", \"iterations\": " << f.iterations << ", \"final_iterations\": " << f.final_iterations
+    << ", \"tolerance\": " << num(f.tolerance) << ", \"k_penalty\": " << num(f.k_penalty)
+    << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
+    << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << f.search
+    << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
+    << ", \"refine_kl\": " << num(f.refine_kl)
+    << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
+  return s.str();
+}
 
 std::string SweepSummary::text() const {
   auto size = [](double b) {

@@ -35,6 +35,10 @@ struct SweepSummary {
   std::string text() const;          // the printed summary
 };
 
+// The fit settings that make a result, as JSON (the mixture file's `fit_settings`
+// attribute, docs/formats.md): every key of the `fit:` section but the paths and slices.
+std::string fit_settings_json(const FitSection& fit);
+
 // Fits the slices `fit` asks for. With `max_batches`, stops after committing that many
 // batches (the summary's `complete` is false and no final file is written): a later run
 // resumes from the checkpoint.
