@@ -14,9 +14,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "converge/light_mixture.hpp"
+#include "scene/light_mixture.hpp"
 #include "converge/reference.hpp"
-#include "converge/scene.hpp"
+#include "scene/scene.hpp"
 #include "converge/study.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"

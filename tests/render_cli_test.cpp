@@ -65,7 +65,7 @@ pid_t start_until_checkpoint(const std::string& cfg, const fs::path& out) {
     _exit(127);
   }
   int status = 0;
-  while (!fs::exists(out / "reference.partial"))
+  while (!fs::exists(out / "reference.partial.h5"))
     if (waitpid(pid, &status, WNOHANG) == pid) return -1;
     else std::this_thread::sleep_for(200us);
   return pid;
@@ -84,7 +84,7 @@ TEST_CASE("bsdfmix render writes its CSV, JSON and images", "[render][cli]") {
   CHECK(slurp(out / "render.json").find("\"slices_needed\": ") != std::string::npos);
   for (const char* f : {"reference.exr", "reference.pfm", "uniform_spp.exr", "mis_light_gmm_time.pfm"})
     CHECK(fs::exists(out / f));
-  CHECK_FALSE(fs::exists(out / "reference.partial"));
+  CHECK_FALSE(fs::exists(out / "reference.partial.h5"));
   CHECK_FALSE(fs::exists(out / "render.lock"));
 }
 
@@ -104,7 +104,7 @@ TEST_CASE("a render killed during its reference resumes to the same reference", 
   // the rerun resumes, and its reference is the uninterrupted run's, byte for byte
   REQUIRE(run(killed) == 0);
   CHECK(slurp(out / "reference.pfm") == slurp(temp_dir() / "whole" / "reference.pfm"));
-  CHECK_FALSE(fs::exists(out / "reference.partial"));
+  CHECK_FALSE(fs::exists(out / "reference.partial.h5"));
 }
 
 TEST_CASE("a second render of the same output directory is refused while the first runs", "[render][cli]") {

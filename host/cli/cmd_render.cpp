@@ -2,6 +2,7 @@
 #include "cli/commands.hpp"
 #include "config/config.hpp"
 #include "core/progress.hpp"
+#include "pipeline/stages.hpp"
 #include "render/render_run.hpp"
 
 namespace bsdfmix::cli {
@@ -19,7 +20,10 @@ void add_render(CLI::App& app, Common& common) {
   sub->callback([&common] {
     Progress::set_enabled(!common.quiet);
     const Config config = load_config(file);
-    render::run_render(config, common.device, !no_figures);
+    const render::RenderSettings settings = render::render_settings(config);  // checked before any work
+    const std::string dev = device_for(config, common.device);
+    stage_table(config, dev);
+    render::run_render(config, settings, dev, !no_figures);
   });
 }
 

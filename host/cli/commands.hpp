@@ -28,4 +28,7 @@ void add_render(CLI::App& app, Common& common);
 // Adds --device and --quiet to a subcommand.
 void add_common_options(CLI::App& sub, Common& common);
 
+// A subcommand of one required CONFIG.yaml argument (stored in `file`), with the common options.
+CLI::App* add_config_command(CLI::App& app, Common& common, const char* name, const char* help, std::string& file);
+
 }  // namespace bsdfmix::cli

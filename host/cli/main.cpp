@@ -19,6 +19,13 @@ void add_common_options(CLI::App& sub, Common& common) {
   sub.add_flag("-q,--quiet", common.quiet, "no progress or log lines on stderr");
 }
 
+CLI::App* add_config_command(CLI::App& app, Common& common, const char* name, const char* help, std::string& file) {
+  auto* sub = app.add_subcommand(name, help);
+  sub->add_option("config", file, "YAML config (keys: configs/defaults.yaml)")->required();
+  add_common_options(*sub, common);
+  return sub;
+}
+
 // The error line with control characters escaped: a message quotes names and values
 // read from the input (a key, an attribute, a field name), and a newline in them must
 // not split the one error line.

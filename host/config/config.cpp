@@ -85,6 +85,10 @@ Config parse_config(const std::string& text, const std::string& name) {
   return c;
 }
 
+std::string device_for(const Config& config, const std::string& cli_selector) {
+  return cli_selector.empty() ? config.device : cli_selector;
+}
+
 Config load_config(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw ConfigError(path + ": cannot read config file (missing or not readable)");

@@ -102,6 +102,10 @@ Config load_config(const std::string& path);
 // The same from YAML text (`name` stands for the file in messages).
 Config parse_config(const std::string& text, const std::string& name);
 
+// The device selector in force: the command line's when given, else the config's
+// `device:` ("" leaves the choice to BSDFMIX_DEVICE, then device 0).
+std::string device_for(const Config& config, const std::string& cli_selector);
+
 // The defaults document (configs/defaults.yaml as embedded at build time).
 const std::string& default_config_text();
 

@@ -95,10 +95,4 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   return c;
 }
 
-ChartsSection parse_charts(const ConfigNode& n) {
-  ChartsSection c;
-  c.dir = n.str("dir");
-  return c;
-}
-
 }  // namespace bsdfmix

@@ -10,7 +10,7 @@
 #include <map>
 #include <sstream>
 
-#include "converge/light_mixture.hpp"
+#include "scene/light_mixture.hpp"
 #include "converge/reference.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"

@@ -26,7 +26,7 @@ struct StudySpec {
   MisOptions mis;      // the MIS estimators' fractions and heuristic, the product's pruning
   bool product_auto = false;  // mis_product's fractions by tune_product_fractions, per direction and scene
   // product and mis_product: the lighting mixtures are fitted with these settings and
-  // cached in light_cache_dir (converge/light_mixture.hpp)
+  // cached in light_cache_dir (scene/light_mixture.hpp)
   FitSection light_fit;
   std::string light_cache_dir;
   std::string device;  // selector

@@ -6,8 +6,8 @@
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
-#include "pipeline/converge_charts.hpp"
-#include "pipeline/scripts.hpp"
+#include "pipeline/converge_paths.hpp"
+#include "core/scripts.hpp"
 #include "pipeline/stages.hpp"
 #include "sweep/k_timing.hpp"
 
@@ -58,6 +58,17 @@ void fit_charts(const Config& config, const std::string& device_selector, const 
   run_script("plot_fit.py", {"--table", config.table, "--mixture", fit.output, "--report", fit.report, "--search",
                              fit.search_report, "--timing", timing, "-o", dir});
   log_line("charts: fit charts in " + dir + " (fit_speed_accuracy, fit_chosen_k, fit_slices; PNG and SVG)");
+}
+
+// Charts of the convergence CSV (scripts/plot_convergence.py) into `dir`.
+void converge_charts(const Config& config, const std::string& dir) {
+  const ConvergeSection& c = *config.converge;
+  const std::string tail = converge_tail_path(c);
+  for (const auto* p : {&c.csv, &tail})
+    if (!std::filesystem::exists(*p)) throw Error("charts: " + *p + " not found (run the converge stage first)");
+  run_script("plot_convergence.py", {"--csv", c.csv, "--tail", tail, "-o", dir});
+  log_line("charts: convergence charts in " + dir +
+           " (convergence_samples, convergence_time, variance_reduction, speed_accuracy; PNG and SVG)");
 }
 
 }  // namespace

@@ -1,12 +1,12 @@
 // The convergence stage: the Monte Carlo study of the estimators (docs/sampling.md).
 #include <filesystem>
 
-#include "converge/scene.hpp"
+#include "scene/scene.hpp"
 #include "converge/study.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "io/table.hpp"
-#include "pipeline/converge_charts.hpp"
+#include "pipeline/converge_paths.hpp"
 #include "pipeline/stages.hpp"
 
 namespace bsdfmix {

@@ -4,10 +4,6 @@
 
 namespace bsdfmix {
 
-std::string device_for(const Config& config, const std::string& cli_selector) {
-  return cli_selector.empty() ? config.device : cli_selector;
-}
-
 void run_all(const Config& config, const std::string& device_selector) {
   const std::string dev = device_for(config, device_selector);
   stage_table(config, dev);

@@ -26,7 +26,4 @@ void stage_charts(const Config& config, const std::string& device_selector);
 // Every stage the config names, in order.
 void run_all(const Config& config, const std::string& device_selector);
 
-// The device selector in force: the command line's, else the config's.
-std::string device_for(const Config& config, const std::string& cli_selector);
-
 }  // namespace bsdfmix

@@ -5,7 +5,7 @@
 #include <set>
 
 #include "config/node.hpp"
-#include "converge/scene.hpp"
+#include "scene/scene.hpp"
 #include "core/error.hpp"
 
 namespace bsdfmix {

@@ -1,5 +1,5 @@
 // Running the project's plotting scripts.
-#include "pipeline/scripts.hpp"
+#include "core/scripts.hpp"
 
 #include <sys/wait.h>
 

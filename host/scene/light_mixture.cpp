@@ -1,5 +1,5 @@
 // The lighting's mixture: cell weights, the pseudo-table the sweep fits, the cache.
-#include "converge/light_mixture.hpp"
+#include "scene/light_mixture.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-// `bsdfmix fit|converge|run CONFIG.yaml`: the config-driven stages.
+// `bsdfmix fit CONFIG.yaml`: the fitting sweep (docs/fitting.md), shared under mpirun.
 #include "cli/commands.hpp"
 #include "config/config.hpp"
 #include "core/error.hpp"
@@ -7,18 +7,6 @@
 #include "scale/mpi_farm.hpp"
 
 namespace bsdfmix::cli {
-
-namespace {
-
-CLI::App* add_config_command(CLI::App& app, Common& common, const char* name, const char* help,
-                             std::string& file) {
-  auto* sub = app.add_subcommand(name, help);
-  sub->add_option("config", file, "YAML config (keys: configs/defaults.yaml)")->required();
-  add_common_options(*sub, common);
-  return sub;
-}
-
-}  // namespace
 
 void add_fit(CLI::App& app, Common& common) {
   static std::string file;
@@ -41,27 +29,6 @@ void add_fit(CLI::App& app, Common& common) {
     }
     stage_table(c, dev);
     stage_fit(c, dev, max_batches);
-  });
-}
-
-void add_converge(CLI::App& app, Common& common) {
-  static std::string file;
-  auto* sub = add_config_command(app, common, "converge", "the Monte Carlo convergence study, writing the convergence CSV",
-                                 file);
-  sub->callback([&common] {
-    Progress::set_enabled(!common.quiet);
-    const Config c = load_config(file);
-    if (!c.converge) throw ConfigError(file + ": converge: section missing");
-    stage_converge(c, device_for(c, common.device));
-  });
-}
-
-void add_run(CLI::App& app, Common& common) {
-  static std::string file;
-  auto* sub = add_config_command(app, common, "run", "every stage the config names, in order, charts included", file);
-  sub->callback([&common] {
-    Progress::set_enabled(!common.quiet);
-    run_all(load_config(file), common.device);
   });
 }
 

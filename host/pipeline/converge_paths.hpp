@@ -1,4 +1,5 @@
-// The convergence study's files and charts, for the converge and charts stages.
+// Where the convergence study's files go when the config does not say: the defaults of
+// the converge section's output paths, for the converge and charts stages.
 #pragma once
 
 #include <string>
@@ -17,8 +18,5 @@ std::string converge_light_mixture_dir(const ConvergeSection& c);
 
 // The mixture file the study samples: converge.mixture, else fit.output; ConfigError if neither.
 std::string converge_mixture_path(const Config& config);
-
-// Charts of the convergence CSV (scripts/plot_convergence.py) into `dir`.
-void converge_charts(const Config& config, const std::string& dir);
 
 }  // namespace bsdfmix

@@ -1,5 +1,5 @@
 // Convergence scenes: YAML parsing with errors naming file and key, and PFM images.
-#include "converge/scene.hpp"
+#include "scene/scene.hpp"
 
 #include <cmath>
 #include <cstdint>

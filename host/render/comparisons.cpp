@@ -1,0 +1,140 @@
+// The estimators at equal samples and equal time, and the stand-in against the table.
+#include "render/comparisons.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "core/progress.hpp"
+#include "render/reference_image.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+namespace {
+
+std::string fixed(double x, const char* f) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, x);
+  return b;
+}
+
+double rays_per_second(const RenderStats& st) { return double(st.rays) / std::max(st.seconds, 1e-9); }
+
+// Renders passes of one estimator and f: `spp` of them, or (budget > 0) as many as fit in
+// `budget` seconds. With `progress`, the error against the reference after 1, 2, 4, ... passes.
+class PassRunner {
+ public:
+  PassRunner(const SceneView& view, const Image& reference) : view_(view), reference_(reference) {}
+
+  std::pair<Image, RenderStats> run(PathEstimator e, FiberF f, int spp, double budget, const std::string& what,
+                                    std::vector<RenderRow>* progress) {
+    std::vector<double> sum;
+    // with a time budget, the passes it should hold (for the progress line's ETA)
+    const auto known = pass_seconds_.find(path_estimator_name(e));
+    const int expect = budget > 0 && known != pass_seconds_.end() && known->second > 0
+                           ? std::max(1, int(std::lround(budget / known->second)))
+                           : spp;
+    Progress prog("render " + what, std::uint64_t(std::max(expect, 1)), "spp");
+    const RenderStats st = render_passes(view_, e, f, 0, budget > 0 ? 1 << 20 : spp, sum, [&](int done, double sec) {
+      prog.advance();
+      if (progress && (done & (done - 1)) == 0 && !reference_.v.empty()) {
+        RenderRow r;
+        r.estimator = path_estimator_name(e);
+        r.mode = "progress";
+        r.spp = done;
+        r.seconds = sec;
+        r.rel_mse = relative_mse(mean_image(sum, done, view_.width, view_.height), reference_);
+        progress->push_back(r);
+      }
+      return budget > 0 ? sec < budget : true;
+    });
+    prog.finish();
+    log_line("render: " + what + ": " + std::to_string(st.spp) + " spp in " + fixed(st.seconds, "%.1f") + " s, " +
+             fixed(rays_per_second(st) / 1e6, "%.2f") + " M rays/s");
+    return {mean_image(sum, st.spp, view_.width, view_.height), st};
+  }
+
+  // Seconds per pass of an estimator at equal samples (for the ETA of its equal-time render).
+  void record(PathEstimator e, const RenderStats& st) {
+    pass_seconds_[path_estimator_name(e)] = st.seconds / std::max(st.spp, 1);
+  }
+
+ private:
+  const SceneView& view_;
+  const Image& reference_;
+  std::map<std::string, double> pass_seconds_;
+};
+
+}  // namespace
+
+double image_difference(const Image& a, const Image& b, int block) {
+  double d = 0, t = 0;
+  for (int y0 = 0; y0 + block <= a.height; y0 += block)
+    for (int x0 = 0; x0 + block <= a.width; x0 += block) {
+      double sa = 0, sb = 0;
+      for (int y = y0; y < y0 + block; ++y)
+        for (int x = x0; x < x0 + block; ++x) {
+          sa += a.at(x, y);
+          sb += b.at(x, y);
+        }
+      d += std::abs(sa - sb);
+      t += std::abs(sb);
+    }
+  return t > 0 ? d / t : 0;
+}
+
+Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, const Image& reference) {
+  Comparisons out;
+  PassRunner passes(view, reference);
+  // Every estimator at equal samples, then at equal time.
+  double budget = s.seconds, slowest = 0;
+  for (const PathEstimator e : s.estimators) {
+    const std::string name = path_estimator_name(e);
+    std::vector<RenderRow> prog;
+    auto [im, st] = passes.run(e, FiberF::Table, s.spp, 0, name + " (" + std::to_string(s.spp) + " spp)", &prog);
+    save_image(s.output, name + "_spp", im);
+    passes.record(e, st);
+    for (RenderRow& pr : prog) pr.rays_per_second = rays_per_second(st);
+    out.rows.push_back({name, "equal_spp", name + "_spp.exr", st.spp, st.seconds, rays_per_second(st),
+                        relative_mse(im, reference)});
+    out.rows.insert(out.rows.end(), prog.begin(), prog.end());
+    slowest = std::max(slowest, st.seconds);
+  }
+  if (!(budget > 0)) budget = slowest;  // every estimator gets at least spp samples
+  out.equal_time_seconds = budget;
+  for (const PathEstimator e : s.estimators) {
+    const std::string name = path_estimator_name(e);
+    auto [im, st] = passes.run(e, FiberF::Table, 0, budget, name + " (" + fixed(budget, "%.1f") + " s)", nullptr);
+    save_image(s.output, name + "_time", im);
+    out.rows.push_back({name, "equal_time", name + "_time.exr", st.spp, st.seconds, rays_per_second(st),
+                        relative_mse(im, reference)});
+  }
+
+  // The stand-in against the table: the same estimator, seed and samples.
+  if (!s.stand_in) return out;
+  const std::string se = path_estimator_name(s.stand_in_estimator);
+  auto [a, sa] = passes.run(s.stand_in_estimator, FiberF::Table, s.stand_in_spp, 0, "table f (" + se + ")", nullptr);
+  auto [b, sb] = passes.run(s.stand_in_estimator, FiberF::StandIn, s.stand_in_spp, 0, "stand-in f (" + se + ")", nullptr);
+  save_image(s.output, "table", a);
+  save_image(s.output, "stand_in", b);
+  out.stand_in_difference = image_difference(b, a, 1);
+  out.stand_in_difference_4x4 = image_difference(b, a, 4);
+  out.table_noise_4x4 = image_difference(a, reference, 4);
+  double ma = 0, mb = 0;
+  for (std::size_t i = 0; i < a.v.size(); ++i) {
+    ma += a.v[i];
+    mb += b.v[i];
+  }
+  out.stand_in_mean = ma > 0 ? mb / ma - 1 : 0;
+  out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), relative_mse(a, reference)});
+  out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), relative_mse(b, reference)});
+  log_line("render: the stand-in image differs from the table image by " + fixed(100 * out.stand_in_difference, "%.2f") +
+           " % per pixel, " + fixed(100 * out.stand_in_difference_4x4, "%.2f") +
+           " % over 4 x 4 blocks (the table image's own noise against the reference there: " +
+           fixed(100 * out.table_noise_4x4, "%.2f") + " %); image means " + fixed(100 * out.stand_in_mean, "%+.2f") + " %");
+  return out;
+}
+
+}  // namespace render
+}  // namespace bsdfmix

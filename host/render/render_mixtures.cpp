@@ -1,0 +1,51 @@
+// The mixtures a render uses: the slices it needs, fitted once and kept.
+#include "render/render_mixtures.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "sweep/sweep.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta& meta, const std::string& where) {
+  const std::vector<double> thetas = collect_theta_o(prepass, 2);
+  std::set<std::size_t> need;
+  const double dto = meta.theta_o.size() > 1 ? axis_step(meta.theta_o) : 1.0;
+  for (const double t : thetas) {
+    const double u = std::clamp((t - meta.theta_o.front()) / dto, 0.0, double(meta.theta_o.size() - 1));
+    need.insert(std::size_t(std::floor(u)));
+    need.insert(std::min(std::size_t(std::ceil(u)), meta.theta_o.size() - 1));
+  }
+  if (need.empty()) throw InputError(where + ": render: no fiber is visible from the camera (check camera and cloth)");
+  log_line("render: the pre-pass (" + std::to_string(prepass.width) + " x " + std::to_string(prepass.height) + ", " +
+           std::to_string(thetas.size()) + " fiber hits) needs " + std::to_string(need.size()) + " of " +
+           std::to_string(meta.theta_o.size()) + " theta_o slices");
+  return {need.begin(), need.end()};
+}
+
+MixtureFile render_mixtures(const std::string& table, const FitSection& fit_section,
+                            const std::vector<std::size_t>& need, const std::string& device_selector) {
+  const TableReader reader(table);
+  const TableMeta& meta = reader.meta();
+  FitSection fit = fit_section;
+  fit.theta_o.clear();
+  for (std::size_t i : need) fit.theta_o.push_back(meta.theta_o[i]);
+  if (std::filesystem::exists(fit.output)) {
+    // Reused when it holds exactly the slices needed (the sweep stores their grid theta_o),
+    // fitted to this table with these settings.
+    MixtureFile mf = read_mixture_file(fit.output);
+    if (mf.theta_o == fit.theta_o && mf.table_source == meta.source && mf.fit_settings == fit_settings_json(fit))
+      return mf;
+  }
+  run_sweep(table, fit, device_selector);
+  return read_mixture_file(fit.output);
+}
+
+}  // namespace render
+}  // namespace bsdfmix

@@ -1,0 +1,30 @@
+// The mixtures a render uses: the theta_o slices its camera sees (a pre-pass), fitted by
+// the sweep's in-memory entry, only those, and kept in the config's fit output so that a
+// second render of the same scene reuses them.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "config/config.hpp"
+#include "io/mixture_file.hpp"
+#include "io/table.hpp"
+#include "render/integrator.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+// The theta_o slice indices of the table the scene needs: both grid neighbours of the
+// theta_o of every fiber hit of a small render (collect_theta_o), sorted, unique.
+// InputError naming `where` when no fiber is visible.
+std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta& meta, const std::string& where);
+
+// The mixtures of `need` (theta_o slice indices of `table`): read from fit.output when it
+// holds exactly those slices, else fitted on `device_selector` and written there with the
+// fit report and search CSVs.
+MixtureFile render_mixtures(const std::string& table, const FitSection& fit, const std::vector<std::size_t>& need,
+                            const std::string& device_selector);
+
+}  // namespace render
+}  // namespace bsdfmix

@@ -1,0 +1,37 @@
+// The scene of a render, built once from its settings: the cloth, the tracer over it and
+// the ground, the light sampler, and the view every pass renders (render/integrator.hpp).
+#pragma once
+
+#include <string>
+
+#include "render/cloth.hpp"
+#include "render/integrator.hpp"
+#include "render/render_settings.hpp"
+#include "render/tracer.hpp"
+#include "sampling/light_sampler.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+class RenderScene {
+ public:
+  // `where` names the render section in errors; `bsdf` must outlive the scene.
+  RenderScene(const RenderSettings& s, const FiberBsdf& bsdf, const std::string& where);
+  RenderScene(const RenderScene&) = delete;
+  RenderScene& operator=(const RenderScene&) = delete;
+
+  const Cloth& cloth() const { return cloth_; }
+  // The view at the render's size and depth.
+  const SceneView& view() const { return view_; }
+  // The view of the pre-pass: prepass x prepass pixels, at most prepass_depth bounces.
+  SceneView prepass_view(const RenderSettings& s) const;
+
+ private:
+  Cloth cloth_;
+  Tracer tracer_;
+  LightSampler light_;
+  SceneView view_;
+};
+
+}  // namespace render
+}  // namespace bsdfmix
