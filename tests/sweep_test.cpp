@@ -190,7 +190,7 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
     INFO("search: " << method);
     FitSection f = fit_settings("known_" + method);
     f.k_max = 10;
-    f.search = method;
+    f.search = *search_strategy(method);
     const SweepSummary s = run_sweep(table, f, "");
     CHECK(s.slices == 4);
     const MixtureFile m = read_mixture_file(f.output);

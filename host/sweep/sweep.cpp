@@ -172,10 +172,10 @@ class BatchFitter {
     const auto start = std::chrono::steady_clock::now();
     load(reader, refs);
     if (fit_.k_min != fit_.k_max) {
-      if (fit_.search == "smem") search_walk();
+      if (fit_.search == SearchStrategy::Smem) search_walk();
       else search();
     }
-    if (fit_.search == "smem") {
+    if (fit_.search == SearchStrategy::Smem) {
       final_walk();
     } else {
       final_fits();
@@ -652,7 +652,7 @@ std::string fit_settings_json(const FitSection& f) {
     << ", \"iterations\": " << f.iterations << ", \"final_iterations\": " << f.final_iterations
     << ", \"tolerance\": " << num(f.tolerance) << ", \"k_penalty\": " << num(f.k_penalty)
     << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
-    << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << f.search
+    << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << search_name(f.search)
     << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
     << ", \"refine_kl\": " << num(f.refine_kl)
     << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
