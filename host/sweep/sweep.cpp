@@ -19,6 +19,7 @@
 #include "device/program.hpp"
 #include "fit/em.hpp"
 #include "fit/em_internal.hpp"
+#include "fit/moment_gaussian.hpp"
 #include "fit/scheduler.hpp"
 #include "fit/smem.hpp"
 #include "io/table.hpp"
@@ -62,47 +63,6 @@ std::string joined_names(const std::vector<Device>& devices) {
   return n;
 }
 
-
-// A single Gaussian matched to the slice's moments: the fallback when EM fails.
-void moment_gaussian(const WeightedSlice& s, std::vector<double>& w, std::vector<double>& mean,
-                     std::vector<double>& cov) {
-  const std::size_t np = s.phi.size();
-  double W = 0, mt = 0, cx = 0, cy = 0;
-  for (std::size_t t = 0; t < s.theta.size(); ++t)
-    for (std::size_t p = 0; p < np; ++p) {
-      const double x = s.w[t * np + p];
-      W += x;
-      mt += x * s.theta[t];
-      cx += x * std::cos(s.phi[p]);
-      cy += x * std::sin(s.phi[p]);
-    }
-  const double mp = W > 0 ? std::atan2(cy, cx) : 0.0;
-  mt = W > 0 ? mt / W : 0.5 * (s.theta.front() + s.theta.back());
-  double stt = 0, stp = 0, spp = 0;
-  for (std::size_t t = 0; t < s.theta.size(); ++t)
-    for (std::size_t p = 0; p < np; ++p) {
-      const double x = s.w[t * np + p];
-      const double dt = s.theta[t] - mt, dp = wrap_phi(s.phi[p] - mp);
-      stt += x * dt * dt;
-      stp += x * dt * dp;
-      spp += x * dp * dp;
-    }
-  const double floor = std::pow(0.25 * std::min(axis_step(s.theta), axis_step(s.phi)), 2);  // EM's default floor
-  if (W > 0) {
-    stt /= W;
-    stp /= W;
-    spp /= W;
-  } else {
-    stt = spp = 1.0;
-    stp = 0;
-  }
-  stt = std::max(stt, floor);
-  spp = std::max(spp, floor);
-  if (stt * spp - stp * stp <= 0) stp = 0;
-  w = {1.0};
-  mean = {mt, wrap_phi(mp)};
-  cov = {stt, stp, spp};
-}
 
 // One fit of a slice, with its relative L1 error at full resolution.
 struct Fitted {
@@ -535,7 +495,7 @@ class BatchFitter {
       Fitted f = best_[s];
       const std::string st = status(s);
       if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
-        moment_gaussian(w.full, f.gmm.weight, f.gmm.mean, f.gmm.cov);
+        f.gmm = moment_gaussian(full_set_.grid, w.full.w);
         f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
         f.loglik = 0;
         f.iterations = 0;
