@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "cli/bench_machine.hpp"
+#include "bench/machine_peak.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "render/cloth.hpp"
@@ -91,7 +91,7 @@ std::vector<Ray> camera_rays(int w, int h) {
 
 int main(int argc, char** argv) {
   try {
-    const std::string machine = short_model(cli::cpu_model_name()) + "-" + std::to_string(cli::logical_cpus()) + "c";
+    const std::string machine = short_model(bench::cpu_model_name()) + "-" + std::to_string(bench::logical_cpus()) + "c";
     std::string csv = "bench/results/render_rays_" + machine + ".csv";
     int runs = 3;
     for (int i = 1; i < argc; ++i) {
@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
     const Cloth cloth = make_cloth(bench_cloth(), "render_rays");
     const std::vector<Ray> rays = camera_rays(512, 512);
     std::printf("machine %s, %zu fibers, %zu segments, %zu rays, best of %d, load average %.2f\n", machine.c_str(),
-                cloth.fibers.size(), cloth.segments(), rays.size(), runs, cli::load_average_1min());
+                cloth.fibers.size(), cloth.segments(), rays.size(), runs, bench::load_average_1min());
 
     const std::pair<CurveType, const char*> types[] = {{CurveType::FlatLinear, "flat_linear"},
                                                        {CurveType::RoundLinear, "round_linear"},

@@ -162,8 +162,14 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
     p.slice_index.push_back(100 + 3 * s);
   }
   p.mixture.loglik[2] = -0.0;  // the sign of zero survives too
-  p.report_rows = "100,0.1,0,1,5,-1.5,0.01,0.1,cpu,ok\n";
-  p.search_rows = std::string("103,2,0,-1,0.2,0.208,1\n") + std::string(1, '\0') + "x";  // any bytes
+  for (std::size_t s = 0; s < 5; ++s)
+    p.report.push_back({p.slice_index[s], u(rng), u(rng), p.mixture.k[s], int(s) * 7, u(rng), std::abs(u(rng)),
+                        std::abs(u(rng)), "cpu+gpu", s == 3 ? "failed: no usable fit; one moment-matched Gaussian stands in"
+                                                            : "ok"});
+  p.report[1].status = std::string("any bytes: ") + std::string(1, '\0') + "x,\n";
+  p.report[2].loglik = -0.0;
+  p.search.push_back({103, 2, 0, -1, 0.2, 0.208, true});
+  p.search.push_back({103, 3, 1, u(rng), u(rng), u(rng), false});
   p.slices_hash = "0123456789abcdef";
 
   const std::vector<std::uint8_t> bytes = scale::encode_part(p);
@@ -183,8 +189,29 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   CHECK(same_bits(q.mixture.weights, p.mixture.weights));
   CHECK(same_bits(q.mixture.means, p.mixture.means));
   CHECK(same_bits(q.mixture.covariances, p.mixture.covariances));
-  CHECK(q.report_rows == p.report_rows);
-  CHECK(q.search_rows == p.search_rows);
+  REQUIRE(q.report.size() == p.report.size());
+  for (std::size_t i = 0; i < p.report.size(); ++i) {
+    const ReportRow &a = q.report[i], &b = p.report[i];
+    CHECK(a.slice == b.slice);
+    CHECK(same_bits(std::vector<double>{a.theta_o, a.phi_o, a.loglik, a.l1_rel, a.seconds},
+                    std::vector<double>{b.theta_o, b.phi_o, b.loglik, b.l1_rel, b.seconds}));
+    CHECK(a.k == b.k);
+    CHECK(a.iterations == b.iterations);
+    CHECK(a.device == b.device);
+    CHECK(a.status == b.status);
+    CHECK(a.failed() == b.failed());
+  }
+  CHECK(q.report[3].failed());
+  CHECK(std::signbit(q.report[2].loglik));
+  REQUIRE(q.search.size() == p.search.size());
+  for (std::size_t i = 0; i < p.search.size(); ++i) {
+    const SearchRow &a = q.search[i], &b = p.search[i];
+    CHECK(a.slice == b.slice);
+    CHECK(a.k == b.k);
+    CHECK(a.restart == b.restart);
+    CHECK(same_bits(std::vector<double>{a.loglik, a.l1_rel, a.score}, std::vector<double>{b.loglik, b.l1_rel, b.score}));
+    CHECK(a.chosen == b.chosen);
+  }
   CHECK(q.slices_hash == p.slices_hash);
   CHECK(std::signbit(q.mixture.loglik[2]));
   CHECK(scale::encode_part(q) == bytes);

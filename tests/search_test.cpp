@@ -145,7 +145,7 @@ FitSection settings(const std::string& stem, const std::string& search, const st
   f.iterations = 60;
   f.final_iterations = 150;
   f.tolerance = 1e-7;
-  f.search = search;
+  f.search = *search_strategy(search);
   f.refine = refine;
   return f;
 }
@@ -400,8 +400,8 @@ TEST_CASE("the search method is a fit key: smem by default, restarts, nothing el
   const fs::path table = temp_dir() / "config.h5";
   if (!fs::exists(table)) write_table(table.string(), make_grid(Domain::Fiber, 2, 1, 2, 4, true), std::vector<float>(16, 1.0f));
   const std::string head = "table: " + table.string() + "\nfit:\n";
-  CHECK(parse_config(head, "cfg.yaml").fit->search == "smem");
-  CHECK(parse_config(head + "  search: restarts\n", "cfg.yaml").fit->search == "restarts");
+  CHECK(parse_config(head, "cfg.yaml").fit->search == SearchStrategy::Smem);
+  CHECK(parse_config(head + "  search: restarts\n", "cfg.yaml").fit->search == SearchStrategy::Restarts);
   CHECK_THROWS_AS(parse_config(head + "  search: kmeans\n", "cfg.yaml"), ConfigError);
 }
 

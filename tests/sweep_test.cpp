@@ -18,6 +18,7 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "config/config.hpp"
@@ -28,7 +29,9 @@
 #include "io/table.hpp"
 #include "sweep/criterion.hpp"
 #include "sweep/fit_error.hpp"
+#include "sweep/fit_slices.hpp"
 #include "sweep/slice_plan.hpp"
+#include "sweep/slice_source.hpp"
 #include "sweep/sweep.hpp"
 
 using namespace bsdfmix;
@@ -93,6 +96,30 @@ FitSection fit_settings(const std::string& stem) {
 std::string slurp(const std::string& p) {
   std::ifstream f(p);
   return std::string((std::istreambuf_iterator<char>(f)), {});
+}
+
+// A CSV file's lines with column `drop` (0-based) removed from each.
+std::vector<std::string> without_column(const std::string& text, std::size_t drop) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    std::string kept;
+    std::size_t col = 0, at = 0;
+    for (;; ++col) {
+      const std::size_t comma = line.find(',', at);
+      if (col != drop) kept += (kept.empty() && col == 0 ? "" : ",") + line.substr(at, comma - at);
+      if (comma == std::string::npos) break;
+      at = comma + 1;
+    }
+    lines.push_back(kept);
+  }
+  return lines;
+}
+
+std::string g9(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
 }
 
 }  // namespace
@@ -190,7 +217,7 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
     INFO("search: " << method);
     FitSection f = fit_settings("known_" + method);
     f.k_max = 10;
-    f.search = method;
+    f.search = *search_strategy(method);
     const SweepSummary s = run_sweep(table, f, "");
     CHECK(s.slices == 4);
     const MixtureFile m = read_mixture_file(f.output);
@@ -324,6 +351,89 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   CHECK(a.scale == b.scale);
   CHECK(a.l1_rel == b.l1_rel);
   CHECK(slurp(whole.search_report) == slurp(part.search_report));
+  // The report rows come back from the part files as they were fitted (but the time).
+  CHECK(without_column(slurp(whole.report), 7) == without_column(slurp(part.report), 7));
+}
+
+namespace {
+
+// Slices held in memory: the integrand weights of a table's slices, read once.
+class MemorySlices final : public SliceSource {
+ public:
+  explicit MemorySlices(const std::string& table) {
+    const TableReader reader(table);
+    meta_ = reader.meta();
+    const TableSlices slices(reader);
+    for (const SliceRef& r : plan_slices(meta_, {}, {})) weights_.push_back(slices.weights(r));
+  }
+  const TableMeta& meta() const override { return meta_; }
+  std::vector<double> weights(const SliceRef& ref) const override { return weights_.at(ref.index); }
+
+ private:
+  TableMeta meta_;
+  std::vector<std::vector<double>> weights_;
+};
+
+}  // namespace
+
+TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") {
+  Progress::set_enabled(false);
+  const std::string table = mixture_table("in_memory.h5", 7, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
+    if (t == 4) return {};  // an all-zero slice
+    return {{0.7, -0.3 + 0.08 * double(t), 0.5, 0.02, 0.0, 0.05}, {0.3, 0.6, -2.0 + 0.3 * double(t), 0.04, 0.01, 0.2}};
+  });
+  for (const SearchStrategy search : {SearchStrategy::Smem, SearchStrategy::Restarts}) {
+    INFO("search: " << search_name(search));
+    FitSection f = fit_settings(std::string("in_memory_") + search_name(search));
+    f.k_max = 4;
+    f.batch = 3;
+    f.search = search;
+    run_sweep(table, f, "");
+    const MixtureFile file = read_mixture_file(f.output);
+
+    const MemorySlices memory(table);
+    std::vector<SliceRef> slices = plan_slices(memory.meta(), {}, {});
+    const SweepResult r = fit_slices(memory, slices, f, select_devices(""), "fit in memory");
+    const MixtureFile& m = r.mixture;
+    REQUIRE(m.slices() == file.slices());
+    CHECK(m.k == file.k);
+    CHECK(m.weights == file.weights);
+    CHECK(m.means == file.means);
+    CHECK(m.covariances == file.covariances);
+    CHECK(m.scale == file.scale);
+    CHECK(m.loglik == file.loglik);
+    CHECK(m.l1_rel == file.l1_rel);
+    CHECK(m.theta_o == file.theta_o);
+    CHECK(m.table_theta_o == file.table_theta_o);
+    CHECK(m.fit_settings == file.fit_settings);
+    CHECK(m.table_source == file.table_source);
+    CHECK(r.failed() == 0);
+    CHECK(r.slice_index == std::vector<std::size_t>{0, 1, 2, 3, 4, 5, 6});
+    REQUIRE(r.report.size() == 7);
+    CHECK(r.report[4].status == "zero: every cell is zero; stored with scale 0");
+    CHECK_FALSE(r.report[4].failed());
+
+    // Its rows are the file sweep's CSV rows.
+    std::string report = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,device,status\n";
+    for (const ReportRow& row : r.report)
+      report += std::to_string(row.slice) + "," + g9(row.theta_o) + "," + g9(row.phi_o) + "," +
+                std::to_string(row.k) + "," + std::to_string(row.iterations) + "," + g9(row.loglik) + "," +
+                g9(row.l1_rel) + "," + row.device + "," + row.status + "\n";
+    CHECK(without_column(report, 99) == without_column(slurp(f.report), 7));
+    std::string search_csv = "slice,k,restart,loglik,l1_rel,score,chosen\n";
+    for (const SearchRow& row : r.search)
+      search_csv += std::to_string(row.slice) + "," + std::to_string(row.k) + "," + std::to_string(row.restart) + "," +
+                    g9(row.loglik) + "," + g9(row.l1_rel) + "," + g9(row.score) + "," + (row.chosen ? "1" : "0") + "\n";
+    CHECK(search_csv == slurp(f.search_report));
+    CHECK_FALSE(r.search.empty());
+
+    // A part of the slices, and slices out of order, refused.
+    slices.erase(slices.begin(), slices.begin() + 5);
+    const SweepResult tail = fit_slices(memory, slices, f, select_devices(""), "fit in memory");
+    CHECK(tail.slice_index == std::vector<std::size_t>{5, 6});
+    std::swap(slices[0], slices[1]);
+    CHECK_THROWS_AS(fit_slices(memory, slices, f, select_devices(""), "fit in memory"), Error);
+  }
 }
 
 namespace {

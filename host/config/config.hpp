@@ -29,6 +29,17 @@ struct ImportSection {  // tabulate an RGL BRDF into `table`
   bool force = false;
 };
 
+// How the sweep searches each slice's Gaussian count (docs/fitting.md), the `search`
+// key of the fit section.
+enum class SearchStrategy {
+  Smem,      // smem: walk K upwards, each K grown from the last, with split-and-merge moves
+  Restarts,  // restarts: independent k-means++ restarts per candidate K
+};
+// The config name of a strategy ("smem", "restarts").
+const char* search_name(SearchStrategy s);
+// The strategy a config name stands for; nullopt when it names none.
+std::optional<SearchStrategy> search_strategy(const std::string& name);
+
 struct FitSection {
   std::string output, report, search_report;
   int k_min = 1, k_max = 32;
@@ -39,7 +50,7 @@ struct FitSection {
   double k_penalty = 0.004;
   std::optional<double> error_target;
   int search_pool = 1;
-  std::string search = "smem";  // smem: walk K with split-and-merge moves; restarts: independent restarts per K
+  SearchStrategy search = SearchStrategy::Smem;
   std::string refine = "l1";    // l1: the final fits refined toward the least L1 error; none: EM's fits
   int refine_evaluations = 150;
   double refine_kl = 5.0;       // weight of the KL divergence (EM's objective) beside the L1 error

@@ -5,6 +5,20 @@
 
 namespace bsdfmix {
 
+const char* search_name(SearchStrategy s) {
+  switch (s) {
+    case SearchStrategy::Smem: return "smem";
+    case SearchStrategy::Restarts: return "restarts";
+  }
+  return "smem";
+}
+
+std::optional<SearchStrategy> search_strategy(const std::string& name) {
+  for (SearchStrategy s : {SearchStrategy::Smem, SearchStrategy::Restarts})
+    if (name == search_name(s)) return s;
+  return std::nullopt;
+}
+
 FitSection parse_fit(const ConfigNode& n) {
   FitSection f;
   f.output = n.str("output");
@@ -23,9 +37,10 @@ FitSection parse_fit(const ConfigNode& n) {
   f.k_penalty = n.number("k_penalty", 0.0, 1.0);
   if (n.has("error_target")) f.error_target = n.number("error_target", 1e-6, 2.0);
   f.search_pool = static_cast<int>(n.integer("search_pool", 1, 16));
-  f.search = n.str("search");
-  if (f.search != "smem" && f.search != "restarts")
-    n.fail("search", "'" + f.search + "' is not a search method (expected smem or restarts)");
+  const std::string search = n.str("search");
+  const std::optional<SearchStrategy> strategy = search_strategy(search);
+  if (!strategy) n.fail("search", "'" + search + "' is not a search method (expected smem or restarts)");
+  f.search = *strategy;
   f.refine = n.str("refine");
   if (f.refine != "l1" && f.refine != "none")
     n.fail("refine", "'" + f.refine + "' is not a refinement (expected l1 or none)");

@@ -1,13 +1,14 @@
 // The charts stage: charts of what the fit and convergence stages wrote.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
-#include "pipeline/converge_paths.hpp"
 #include "core/scripts.hpp"
+#include "io/mixture_file.hpp"
+#include "io/table.hpp"
+#include "pipeline/converge_paths.hpp"
 #include "pipeline/stages.hpp"
 #include "sweep/k_timing.hpp"
 
@@ -15,36 +16,35 @@ namespace bsdfmix {
 
 namespace {
 
-struct ReportRow {
-  std::size_t slice;
+struct FittedSlice {
+  std::size_t slice;  // table slice index
   int k;
 };
 
-std::vector<ReportRow> read_report(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw Error("charts: cannot read fit report " + path);
-  std::vector<ReportRow> rows;
-  std::string line;
-  std::getline(f, line);  // header
-  while (std::getline(f, line)) {
-    std::istringstream s(line);
-    std::string slice, theta, phi, k;
-    std::getline(s, slice, ',');
-    std::getline(s, theta, ',');
-    std::getline(s, phi, ',');
-    std::getline(s, k, ',');
-    if (!slice.empty()) rows.push_back({std::stoul(slice), std::stoi(k)});
-  }
-  return rows;
+// The slices of the fit stage's mixture file with their K: each slice's table index
+// is found from its (theta_o, phi_o) on the table's grid.
+std::vector<FittedSlice> fitted_slices(const std::string& mixture, const TableMeta& meta) {
+  const MixtureFile m = read_mixture_file(mixture);
+  auto nearest = [](const std::vector<double>& axis, double x) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < axis.size(); ++i)
+      if (std::abs(axis[i] - x) < std::abs(axis[best] - x)) best = i;
+    return best;
+  };
+  std::vector<FittedSlice> slices;
+  for (std::size_t s = 0; s < m.slices(); ++s)
+    slices.push_back({meta.slice_index(nearest(meta.theta_o, m.theta_o[s]), nearest(meta.phi_o, m.phi_o[s])), m.k[s]});
+  return slices;
 }
 
 void fit_charts(const Config& config, const std::string& device_selector, const std::string& dir) {
   const FitSection& fit = *config.fit;
   for (const auto* p : {&fit.output, &fit.report})
     if (!std::filesystem::exists(*p)) throw Error("charts: " + *p + " not found (run the fit stage first)");
-  auto rows = read_report(fit.report);
+  auto rows = fitted_slices(fit.output, TableReader(config.table).meta());
   if (rows.empty()) return;
-  std::sort(rows.begin(), rows.end(), [](const ReportRow& a, const ReportRow& b) { return a.k < b.k || (a.k == b.k && a.slice < b.slice); });
+  std::sort(rows.begin(), rows.end(),
+            [](const FittedSlice& a, const FittedSlice& b) { return a.k < b.k || (a.k == b.k && a.slice < b.slice); });
   // Three slice types: the sharpest (most Gaussians), a median one, the broadest.
   std::vector<std::size_t> picks = {rows.back().slice, rows[rows.size() / 2].slice, rows.front().slice};
   std::vector<std::string> types = {"sharp", "medium", "broad"};

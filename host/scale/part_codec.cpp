@@ -1,5 +1,6 @@
 // BatchPart <-> bytes: a versioned header, then every field in a fixed order, each
-// vector as its length followed by its raw elements.
+// vector as its length followed by its raw elements, each list of report or search
+// rows as its length followed by every row's fields (strings: length, then bytes).
 #include "scale/part_codec.hpp"
 
 #include <algorithm>
@@ -13,7 +14,10 @@ namespace bsdfmix::scale {
 namespace {
 
 constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
-constexpr std::uint32_t kVersion = 1;
+// The fewest bytes a report row (7 numbers, two string lengths) and a search row take.
+constexpr std::size_t kReportRowBytes = 8 + 8 + 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8;
+constexpr std::size_t kSearchRowBytes = 8 + 4 + 4 + 8 + 8 + 8 + 1;
+constexpr std::uint32_t kVersion = 2;  // 2: the report and search rows as fields, not CSV text
 
 class Writer {
  public:
@@ -61,6 +65,12 @@ class Reader {
     at_ += n;
     return s;
   }
+  // A count of records of at least `min_bytes` each: refused when the bytes left cannot hold them.
+  std::size_t count(std::size_t min_bytes) {
+    const std::uint64_t n = pod<std::uint64_t>();
+    if (n > (size_ - at_) / min_bytes) fail();
+    return std::size_t(n);
+  }
   bool done() const { return at_ == size_; }
   [[noreturn]] static void fail() { throw InputError("batch part message: truncated or malformed"); }
 
@@ -99,8 +109,29 @@ std::vector<std::uint8_t> encode_part(const BatchPart& p) {
   w.vec(m.weights);
   w.vec(m.means);
   w.vec(m.covariances);
-  w.str(p.report_rows);
-  w.str(p.search_rows);
+  w.pod(std::uint64_t(p.report.size()));
+  for (const ReportRow& r : p.report) {
+    w.pod(std::uint64_t(r.slice));
+    w.pod(r.theta_o);
+    w.pod(r.phi_o);
+    w.pod(std::int32_t(r.k));
+    w.pod(std::int32_t(r.iterations));
+    w.pod(r.loglik);
+    w.pod(r.l1_rel);
+    w.pod(r.seconds);
+    w.str(r.device);
+    w.str(r.status);
+  }
+  w.pod(std::uint64_t(p.search.size()));
+  for (const SearchRow& r : p.search) {
+    w.pod(std::uint64_t(r.slice));
+    w.pod(std::int32_t(r.k));
+    w.pod(std::int32_t(r.restart));
+    w.pod(r.loglik);
+    w.pod(r.l1_rel);
+    w.pod(r.score);
+    w.pod(std::uint8_t(r.chosen));
+  }
   w.str(p.slices_hash);
   return std::move(w.out);
 }
@@ -127,13 +158,36 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   m.weights = r.vec<float>();
   m.means = r.vec<float>();
   m.covariances = r.vec<float>();
-  p.report_rows = r.str();
-  p.search_rows = r.str();
+  p.report.resize(r.count(kReportRowBytes));
+  for (ReportRow& row : p.report) {
+    row.slice = std::size_t(r.pod<std::uint64_t>());
+    row.theta_o = r.pod<double>();
+    row.phi_o = r.pod<double>();
+    row.k = r.pod<std::int32_t>();
+    row.iterations = r.pod<std::int32_t>();
+    row.loglik = r.pod<double>();
+    row.l1_rel = r.pod<double>();
+    row.seconds = r.pod<double>();
+    row.device = r.str();
+    row.status = r.str();
+  }
+  p.search.resize(r.count(kSearchRowBytes));
+  for (SearchRow& row : p.search) {
+    row.slice = std::size_t(r.pod<std::uint64_t>());
+    row.k = r.pod<std::int32_t>();
+    row.restart = r.pod<std::int32_t>();
+    row.loglik = r.pod<double>();
+    row.l1_rel = r.pod<double>();
+    row.score = r.pod<double>();
+    const std::uint8_t chosen = r.pod<std::uint8_t>();
+    if (chosen > 1) Reader::fail();
+    row.chosen = chosen != 0;
+  }
   p.slices_hash = r.str();
   const std::size_t S = m.slices(), K = std::size_t(std::max(m.kmax, 0));
   if (!r.done() || p.slice_index.size() != S || m.phi_o.size() != S || m.scale.size() != S ||
       m.loglik.size() != S || m.l1_rel.size() != S || m.k.size() != S || m.weights.size() != S * K ||
-      m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K)
+      m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K || p.report.size() != S)
     Reader::fail();
   return p;
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "io/mixture_file.hpp"
+#include "sweep/fit_slices.hpp"
 
 namespace bsdfmix {
 
@@ -19,8 +20,9 @@ namespace bsdfmix {
 struct BatchPart {
   std::vector<std::size_t> slice_index;
   MixtureFile mixture;
-  std::string report_rows, search_rows;  // CSV rows, newline-terminated, no header
-  std::string slices_hash;               // content hash of the table slices it was fitted to
+  std::vector<ReportRow> report;  // one per slice, in slice_index order
+  std::vector<SearchRow> search;  // in slice order, each slice's rows in the order searched
+  std::string slices_hash;        // content hash of the integrand weights of the slices it was fitted to
 };
 
 class Checkpoint {

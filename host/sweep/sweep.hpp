@@ -1,6 +1,7 @@
 // The fitting sweep of `bsdfmix fit`: for every slice it needs, search the Gaussian
 // count, fit the chosen K thoroughly, and write the mixture file, the fit report and
 // the search CSVs. Batches of slices are committed as they finish (sweep/checkpoint.hpp).
+// The same fits without files: fit_slices (sweep/fit_slices.hpp).
 #pragma once
 
 #include <cstddef>

@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace bsdfmix::cli {
+namespace bsdfmix::bench {
 
 // "model name" of the first processor in /proc/cpuinfo ("unknown" if absent).
 std::string cpu_model_name();
@@ -31,4 +31,4 @@ struct FmaPeak {
 // `repeat` per ISA, the faster ISA kept.
 FmaPeak measure_fma_peak(int threads, int repeat, double seconds = 0.25);
 
-}  // namespace bsdfmix::cli
+}  // namespace bsdfmix::bench

@@ -1,5 +1,5 @@
-// Machine description and FMA peak microbenchmark for `bsdfmix bench em`.
-#include "cli/bench_machine.hpp"
+// Machine description and FMA peak microbenchmark of `bsdfmix bench em` and the render benchmark.
+#include "bench/machine_peak.hpp"
 
 #include <time.h>
 #include <unistd.h>
@@ -18,7 +18,7 @@
 #define BSDFMIX_X86 0
 #endif
 
-namespace bsdfmix::cli {
+namespace bsdfmix::bench {
 
 std::string cpu_model_name() {
   std::ifstream f("/proc/cpuinfo");
@@ -185,4 +185,4 @@ FmaPeak measure_fma_peak(int threads, int repeat, double seconds) {
   return best;
 }
 
-}  // namespace bsdfmix::cli
+}  // namespace bsdfmix::bench

@@ -1,0 +1,309 @@
+// The fitting of one batch of slices: load, search (sweep/search_*.cpp), final fits,
+// refinement, reduced K, fallbacks, then its part.
+#include "sweep/batch_fitter.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "core/progress.hpp"
+#include "fit/em_internal.hpp"
+#include "fit/moment_gaussian.hpp"
+#include "fit/scheduler.hpp"
+#include "sweep/batch.hpp"
+#include "sweep/criterion.hpp"
+#include "sweep/sweep.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+std::uint64_t splitmix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+SliceSet make_set(Domain domain, const std::vector<SliceWork>& work, bool pooled) {
+  SliceSet set;
+  const WeightedSlice& first = pooled ? work.front().pooled : work.front().full;
+  set.grid.domain = domain;
+  set.grid.theta = first.theta;
+  set.grid.phi = first.phi;
+  for (const auto& w : work) set.weights.push_back(pooled ? w.pooled.w : w.full.w);
+  return set;
+}
+
+// The report's `status` of slice s (docs/formats.md, "Fit report"): ok, zero (an
+// all-zero slice, stored with scale 0), reduced (K lowered to the number of non-zero
+// cells) or failed (a moment-matched Gaussian stands in), each with its reason.
+std::string status(const Batch& b, std::size_t s) {
+  std::string st = "ok";
+  if (b.zero(s)) {
+    st = "zero: every cell is zero; stored with scale 0";
+  } else if (!b.best[s].ok) {
+    st = "failed: " + (b.failure[s].empty() ? std::string("no usable fit") : b.failure[s]) +
+         "; one moment-matched Gaussian stands in";
+  } else if (b.reduced_from[s] > 0) {
+    st = "reduced: K lowered from " + std::to_string(b.reduced_from[s]) + " to " + std::to_string(b.chosen[s]) +
+         ", the number of non-zero cells";
+  }
+  std::replace(st.begin(), st.end(), ',', ';');
+  return st;
+}
+
+}  // namespace
+
+std::uint64_t task_seed(std::uint64_t seed, std::size_t slice, int k, int restart) {
+  return splitmix(splitmix(splitmix(seed) ^ slice) ^ (std::uint64_t(k) << 32 | std::uint32_t(restart)));
+}
+
+EmTask make_task(std::size_t slice, int k, int iterations, double tolerance, std::uint64_t seed) {
+  EmTask t;
+  t.slice = slice;
+  t.k = k;
+  t.settings.iterations = iterations;
+  t.settings.tolerance = tolerance;
+  t.settings.restarts = 1;
+  t.settings.seed = seed;
+  return t;
+}
+
+Fitted evaluate(const EmResult& r, const WeightedSlice& full) {
+  Fitted f;
+  if (!r.ok) {
+    f.failure = r.failure;
+    return f;
+  }
+  try {
+    f.l1 = l1_rel_error(full, make_slice_mixture(r.gmm.weight, r.gmm.mean, r.gmm.cov));
+  } catch (const std::exception&) {
+    f.failure = "a covariance is not positive definite";
+    return f;
+  }
+  f.ok = std::isfinite(f.l1) && std::isfinite(r.loglik);
+  for (const auto* v : {&r.gmm.weight, &r.gmm.mean, &r.gmm.cov})
+    for (double x : *v) f.ok = f.ok && std::isfinite(x);
+  f.gmm = r.gmm;
+  f.loglik = r.loglik;
+  f.iterations = r.iterations;
+  return f;
+}
+
+Batch::Batch(const FitSection& fit_, EmEngine& engine_, Domain domain_)
+    : fit(fit_), engine(engine_), domain(domain_), ks(candidate_ks(fit_.k_min, fit_.k_max)) {}
+
+SliceSet Batch::pooled_set() const { return make_set(domain, work, true); }
+
+SearchRow Batch::search_row(std::size_t s, int k, int restart, const Fitted& f) const {
+  const double l1 = f.ok ? f.l1 : 2.0;  // a failed fit: the worst error
+  return {work[s].ref.index, k, restart, f.ok ? f.loglik : 0.0, l1, candidate_score(k, l1, fit.k_penalty), false};
+}
+
+void Batch::mark_chosen(std::size_t s) {
+  for (SearchRow& r : search_rows[s]) r.chosen = r.k == chosen[s];
+}
+
+void Batch::offer(std::size_t s, const Fitted& f) {
+  if (f.ok && (!best[s].ok || f.l1 < best[s].l1)) best[s] = f;
+  if (!f.ok && failure[s].empty()) failure[s] = f.failure;
+}
+
+void Batch::run(const std::vector<EmTask>& tasks) {
+  if (tasks.empty()) return;
+  const std::vector<EmResult> results = engine.fit(full_set, tasks);
+  for (std::size_t i = 0; i < results.size(); ++i) offer(tasks[i].slice, evaluate(results[i], work[tasks[i].slice].full));
+}
+
+// The lowest L1 error among the final fits and the search's fits of that K is kept.
+void Batch::final_fits() {
+  std::vector<EmTask> tasks;
+  for (std::size_t s = 0; s < size(); ++s) {
+    if (zero(s)) continue;
+    for (int r = 0; r < fit.final_restarts; ++r)
+      tasks.push_back(make_task(s, chosen[s], fit.final_iterations, fit.tolerance,
+                                task_seed(fit.seed, work[s].ref.index, chosen[s], -1 - r)));
+  }
+  run(tasks);
+}
+
+// The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `with_below`,
+// of the candidate K below it (final_smem compares the two after). A refined mixture
+// replaces its start only when its relative L1 error (sweep/fit_error.cpp, the exact
+// periodic density) is lower; its log-likelihood is recomputed.
+void Batch::refine(bool with_below) {
+  if (fit.refine != "l1") return;
+  std::vector<L1Query> queries;
+  std::vector<Fitted*> owners;
+  for (std::size_t s = 0; s < size(); ++s) {
+    if (best[s].ok) {
+      queries.push_back({s, best[s].gmm});
+      owners.push_back(&best[s]);
+    }
+    if (with_below && s < below.size() && below[s].ok) {
+      queries.push_back({s, below[s].gmm});
+      owners.push_back(&below[s]);
+    }
+  }
+  if (queries.empty()) return;
+  const EmEngine::L1Slices slices = EmEngine::l1_prepare(full_set);  // once, not per evaluation
+  const L1Evaluator l1_values = [&](const SliceSet&, const std::vector<L1Query>& q, const L1Objective& o) {
+    return engine.l1_values(slices, q, o);
+  };
+  const std::vector<Gmm> refined =
+      refine_l1(l1_values, full_set, queries, RefineSettings{fit.refine_evaluations, fit.refine_kl});
+  const std::size_t threads = std::min<std::size_t>(queries.size(), std::max(1u, std::thread::hardware_concurrency()));
+  run_on_workers(queries.size(), threads, [&](std::size_t, std::size_t i) {
+    const std::size_t s = queries[i].slice;
+    const Gmm& g = refined[i];
+    double l1;
+    try {
+      l1 = l1_rel_error(work[s].full, make_slice_mixture(g.weight, g.mean, g.cov));
+    } catch (const std::exception&) {
+      return;  // not positive definite in double: keep the start
+    }
+    Fitted& f = *owners[i];
+    if (!(l1 < f.l1)) return;
+    f.gmm = g;
+    f.l1 = l1;
+    f.loglik = em_detail::weighted_loglik(full_set.grid, em_detail::prepare_slice(full_set, s).w, g);
+  });
+}
+
+// A slice with fewer non-zero cells than K cannot hold K components: it is refitted
+// with one component per non-zero cell.
+void Batch::reduce_k() {
+  std::vector<EmTask> tasks;
+  for (std::size_t s = 0; s < size(); ++s) {
+    if (best[s].ok || zero(s)) continue;
+    const int positive =
+        static_cast<int>(std::count_if(work[s].full.w.begin(), work[s].full.w.end(), [](double x) { return x > 0; }));
+    if (positive >= chosen[s]) continue;
+    reduced_from[s] = chosen[s];
+    chosen[s] = positive;
+    for (int r = 0; r < fit.final_restarts; ++r)
+      tasks.push_back(make_task(s, positive, fit.final_iterations, fit.tolerance,
+                                task_seed(fit.seed, work[s].ref.index, positive, -1 - r)));
+  }
+  run(tasks);
+}
+
+BatchFitter::BatchFitter(const SliceSource& source, const FitSection& fit, EmEngine& engine, std::string device_names)
+    : source_(source), fit_(fit), engine_(engine), devices_(std::move(device_names)) {}
+
+BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {
+  const auto start = std::chrono::steady_clock::now();
+  BatchPart part;
+  Batch b(fit_, engine_, source_.meta().domain);
+  load(b, refs, part);
+  const bool search = fit_.k_min != fit_.k_max;
+  switch (fit_.search) {
+    case SearchStrategy::Restarts:
+      if (search) search_restarts(b);
+      b.final_fits();
+      b.refine(false);
+      break;
+    case SearchStrategy::Smem:
+      if (search) search_smem(b);
+      final_smem(b);
+      break;
+  }
+  b.reduce_k();
+  finish(b, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), part);
+  return part;
+}
+
+void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& part) const {
+  const TableMeta& meta = source_.meta();
+  Hash64 content;
+  for (const SliceRef& ref : refs) {
+    SliceWork w;
+    w.ref = ref;
+    w.full.theta = meta.theta_i;
+    w.full.phi = meta.phi_i;
+    w.full.w = source_.weights(ref);
+    hash_weights(content, w.full.w);
+    w.total = w.full.total();
+    w.pooled = pool_slice(w.full, std::size_t(fit_.search_pool));
+    b.work.push_back(std::move(w));
+  }
+  part.slices_hash = content.hex();
+  const std::size_t n = b.size();
+  b.full_set = make_set(meta.domain, b.work, false);
+  b.chosen.assign(n, fit_.k_min);
+  b.reduced_from.assign(n, 0);
+  b.best.assign(n, Fitted{});
+  b.below.assign(n, Fitted{});
+  b.failure.assign(n, std::string());
+  b.search_rows.assign(n, {});
+}
+
+void BatchFitter::finish(const Batch& b, double seconds, BatchPart& part) const {
+  const TableMeta& meta = source_.meta();
+  part.mixture.domain = meta.domain;
+  part.mixture.azimuthal = meta.azimuthal;
+  for (std::size_t s = 0; s < b.size(); ++s) {
+    const SliceWork& w = b.work[s];
+    Fitted f = b.best[s];
+    const std::string st = status(b, s);
+    if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
+      f.gmm = moment_gaussian(b.full_set.grid, w.full.w);
+      f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
+      f.loglik = 0;
+      f.iterations = 0;
+    }
+    const double theta_o = meta.theta_o[w.ref.t_o], phi_o = meta.phi_o[w.ref.p_o];
+    part.slice_index.push_back(w.ref.index);
+    part.mixture.add_slice(theta_o, phi_o, w.total, f.loglik, f.l1, f.gmm.weight, f.gmm.mean, f.gmm.cov);
+    part.report.push_back({w.ref.index, theta_o, phi_o, f.gmm.k(), f.iterations, f.loglik, f.l1,
+                           seconds / double(b.size()), devices_, st});
+    part.search.insert(part.search.end(), b.search_rows[s].begin(), b.search_rows[s].end());
+    if (st != "ok") log_line("slice " + std::to_string(w.ref.index) + ": " + st);
+  }
+}
+
+std::size_t batch_size(std::size_t planned, const FitSection& fit) {
+  return fit.batch > 0 ? std::size_t(fit.batch) : std::clamp<std::size_t>(planned / 32, 4, 64);
+}
+
+std::vector<std::vector<SliceRef>> split_batches(const std::vector<SliceRef>& plan, std::size_t batch) {
+  std::vector<std::vector<SliceRef>> batches;
+  for (std::size_t b0 = 0; b0 < plan.size(); b0 += batch)
+    batches.emplace_back(plan.begin() + long(b0), plan.begin() + long(std::min(plan.size(), b0 + batch)));
+  return batches;
+}
+
+std::string joined_names(const std::vector<Device>& devices) {
+  std::string n;
+  for (const auto& d : devices) n += (n.empty() ? "" : "+") + d.info().name;
+  return n;
+}
+
+void hash_weights(Hash64& content, const std::vector<double>& w) { content.update(w.data(), w.size() * sizeof(double)); }
+
+SweepResult empty_result(const TableMeta& meta, const FitSection& fit) {
+  SweepResult r;
+  r.mixture.domain = meta.domain;
+  r.mixture.azimuthal = meta.azimuthal;
+  r.mixture.table_source = meta.source;
+  r.mixture.fit_settings = fit_settings_json(fit);
+  r.mixture.table_theta_o = meta.theta_o;
+  r.mixture.table_phi_o = meta.phi_o;
+  return r;
+}
+
+void append_part(SweepResult& result, const BatchPart& part) {
+  const MixtureFile& m = part.mixture;
+  for (std::size_t s = 0; s < m.slices(); ++s) {
+    std::vector<double> w, mean, cov;
+    m.slice_params(s, w, mean, cov);
+    result.mixture.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov);
+  }
+  result.slice_index.insert(result.slice_index.end(), part.slice_index.begin(), part.slice_index.end());
+  result.report.insert(result.report.end(), part.report.begin(), part.report.end());
+  result.search.insert(result.search.end(), part.search.begin(), part.search.end());
+}
+
+}  // namespace bsdfmix

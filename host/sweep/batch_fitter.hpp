@@ -1,0 +1,64 @@
+// The fitter of a sweep's batches, shared by the file sweep (run_sweep, its farm and
+// its workers) and the in-memory entry (fit_slices): a batch's result depends only on
+// its slices and the settings, so every path gives the same mixtures.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "config/config.hpp"
+#include "core/hash.hpp"
+#include "device/device.hpp"
+#include "fit/em.hpp"
+#include "sweep/checkpoint.hpp"
+#include "sweep/fit_slices.hpp"
+#include "sweep/slice_plan.hpp"
+#include "sweep/slice_source.hpp"
+
+namespace bsdfmix {
+
+struct Batch;
+
+class BatchFitter {
+ public:
+  // `source`, `fit` and `engine` must outlive the fitter; `device_names` fills the
+  // report's `device` column.
+  BatchFitter(const SliceSource& source, const FitSection& fit, EmEngine& engine, std::string device_names);
+
+  // Searches the Gaussian count of every slice of `refs` (fit.search), fits the chosen K
+  // thoroughly, stands a moment-matched Gaussian in where every fit failed; the part
+  // holds their mixtures, report and search rows and the weights' content hash.
+  BatchPart fit(const std::vector<SliceRef>& refs);
+
+ private:
+  void load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& part) const;
+  void finish(const Batch& b, double seconds, BatchPart& part) const;
+
+  const SliceSource& source_;
+  const FitSection& fit_;
+  EmEngine& engine_;
+  const std::string devices_;
+};
+
+// Slices per batch of a sweep of `planned` slices: fit.batch, or by default 1/32 of
+// the plan within [4, 64].
+std::size_t batch_size(std::size_t planned, const FitSection& fit);
+
+// The batches of a plan: fixed ranges of `batch` slices, so that a resumed sweep
+// rebuilds exactly the batches it did not commit.
+std::vector<std::vector<SliceRef>> split_batches(const std::vector<SliceRef>& plan, std::size_t batch);
+
+// The devices a sweep runs on, as the report's `device` column names them.
+std::string joined_names(const std::vector<Device>& devices);
+
+// Adds one slice's integrand weights to a content hash (BatchPart::slices_hash is
+// that of its slices, in order).
+void hash_weights(Hash64& content, const std::vector<double>& w);
+
+// A sweep result of `meta` under `fit` with no slices yet: the mixture's header set.
+SweepResult empty_result(const TableMeta& meta, const FitSection& fit);
+// Appends a part's slices and rows (parts in slice order make the result in slice order).
+void append_part(SweepResult& result, const BatchPart& part);
+
+}  // namespace bsdfmix

@@ -1,0 +1,50 @@
+// The in-memory entry to the sweep: a set of slices in, their mixtures and the rows of
+// the fit report and search CSVs out; no files, no checkpoint. run_sweep (sweep/sweep.hpp)
+// fits its batches with the same batch fitter, so both give the same mixtures.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "config/config.hpp"
+#include "device/device.hpp"
+#include "io/mixture_file.hpp"
+#include "sweep/slice_plan.hpp"
+#include "sweep/slice_source.hpp"
+
+namespace bsdfmix {
+
+struct ReportRow {  // one row of the fit report (docs/formats.md, "Fit report")
+  std::size_t slice = 0;
+  double theta_o = 0, phi_o = 0;
+  int k = 0, iterations = 0;
+  double loglik = 0, l1_rel = 0, seconds = 0;
+  std::string device, status;  // status: ok / zero: ... / reduced: ... / failed: ...
+  bool failed() const;
+};
+
+// One row of the Gaussian-count search CSV (docs/formats.md, "Gaussian-count search").
+struct SearchRow {
+  std::size_t slice = 0;
+  int k = 0, restart = 0;
+  double loglik = 0, l1_rel = 0, score = 0;
+  bool chosen = false;
+};
+
+struct SweepResult {
+  MixtureFile mixture;                   // the fitted slices in slice-index order; domain, azimuthal, table_source,
+                                         // fit_settings (fit_settings_json), table_theta_o/phi_o filled
+  std::vector<std::size_t> slice_index;  // table slice index of each mixture slice
+  std::vector<ReportRow> report;         // one per slice, same order
+  std::vector<SearchRow> search;
+  std::size_t failed() const;
+};
+
+// Fits `slices` of `source` (sorted, unique) with the settings of `fit` (its output paths,
+// theta_o and phi_o are not read) on `devices`, in the same batches as run_sweep, so the
+// mixtures are the same as the file sweep's. Prints a progress line labelled `what`.
+SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSection& fit,
+                       const std::vector<Device>& devices, const std::string& what);
+
+}  // namespace bsdfmix

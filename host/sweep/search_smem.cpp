@@ -1,0 +1,183 @@
+// `search: smem`: the walk over K with split-and-merge moves, and its final fits.
+#include <algorithm>
+#include <thread>
+
+#include "core/error.hpp"
+#include "fit/em_internal.hpp"
+#include "fit/scheduler.hpp"
+#include "fit/smem.hpp"
+#include "sweep/batch.hpp"
+#include "sweep/criterion.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+// Candidates a slice walks past its best score before it stops (a heuristic).
+constexpr int kWalkPatience = 2;
+
+std::size_t host_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+
+EmFitter engine_fitter(EmEngine& engine) {
+  return [&engine](const SliceSet& ss, const std::vector<EmTask>& t) { return engine.fit(ss, t); };
+}
+
+}  // namespace
+
+// The walk over K (docs/fitting.md). Every slice of the batch walks the candidate Ks
+// upwards together: the first K starts from k-means++ restarts, each later K from the
+// previous K's fit grown by splitting its worst-fitting components; after EM,
+// split-and-merge rounds move components out of local optima. Each step is a batched
+// engine call over the slices still walking. A slice stops walking once no larger K can
+// win: its best score is at most k_penalty times the next K (l1_rel >= 0), or, with an
+// error target, once a K meets it; and (a heuristic) when its best score has not
+// improved over the last kWalkPatience candidates.
+void search_smem(Batch& b) {
+  const FitSection& fit = b.fit;
+  const std::vector<int>& ks = b.ks;
+  const bool pooled = fit.search_pool > 1;
+  const SliceSet pooled_set = pooled ? b.pooled_set() : SliceSet{};
+  const SliceSet& set = pooled ? pooled_set : b.full_set;
+  const std::size_t n = b.size();
+  const EmFitter fitter = engine_fitter(b.engine);
+  const std::size_t threads = host_threads();
+  const SmemSettings smem;
+  struct Walk {
+    bool active = false;
+    EmResult cur;  // the fit of the last K walked
+    std::vector<Candidate> cands;
+    std::vector<Fitted> per_k;
+    double best_score = 1e300;
+    int since_best = 0;  // candidates walked since the best score last improved
+  };
+  std::vector<Walk> walk(n);
+  for (std::size_t s = 0; s < n; ++s) walk[s].active = !b.zero(s);
+  for (std::size_t ki = 0; ki < ks.size(); ++ki) {
+    const int k = ks[ki];
+    std::vector<std::size_t> live;
+    for (std::size_t s = 0; s < n; ++s)
+      if (walk[s].active) live.push_back(s);
+    if (live.empty()) break;
+    // The start of K for every walking slice (grown on the host, in parallel).
+    std::vector<EmTask> tasks(live.size());
+    run_on_workers(live.size(), std::min(threads, live.size()), [&](std::size_t, std::size_t i) {
+      const std::size_t s = live[i];
+      EmTask t = make_task(s, k, fit.iterations, fit.tolerance, task_seed(fit.seed, b.work[s].ref.index, k, 0));
+      const EmResult& prev = walk[s].cur;
+      if (ki > 0 && prev.ok && prev.gmm.k() < k) {
+        const ComponentScores sc = score_components(set.grid, set.weights[s], prev.gmm, 0);
+        t.init = grow_mixture(prev.gmm, sc, k, em_detail::cov_floor(set.grid, t.settings));
+      } else {
+        t.settings.restarts = fit.restarts;  // no fit to grow: k-means++ restarts
+      }
+      tasks[i] = std::move(t);
+    });
+    const std::vector<EmResult> res = split_merge_fit(fitter, set, tasks, smem);
+    std::vector<Fitted> fitted(live.size());
+    run_on_workers(live.size(), std::min(threads, live.size()),
+                   [&](std::size_t, std::size_t i) { fitted[i] = evaluate(res[i], b.work[live[i]].full); });
+    for (std::size_t i = 0; i < live.size(); ++i) {
+      const std::size_t s = live[i];
+      Walk& wk = walk[s];
+      wk.cur = res[i];
+      const Fitted& f = fitted[i];
+      wk.cands.push_back(Candidate{k, f.ok ? f.l1 : 1e300, f.ok});
+      wk.per_k.push_back(f);
+      if (f.ok && candidate_score(k, f.l1, fit.k_penalty) < wk.best_score) {
+        wk.best_score = candidate_score(k, f.l1, fit.k_penalty);
+        wk.since_best = 0;
+      } else {
+        ++wk.since_best;
+      }
+      if (!fit.error_target && wk.since_best >= kWalkPatience) wk.active = false;
+      b.search_rows[s].push_back(b.search_row(s, k, 0, f));
+      if (fit.error_target ? f.ok && f.l1 <= *fit.error_target
+                           : ki + 1 < ks.size() && wk.best_score <= fit.k_penalty * ks[ki + 1])
+        wk.active = false;
+    }
+  }
+  for (std::size_t s = 0; s < n; ++s) {
+    Walk& wk = walk[s];
+    if (wk.cands.empty()) continue;
+    std::size_t pick = 0;
+    try {
+      pick = choose_candidate(wk.cands, fit.k_penalty, fit.error_target);
+    } catch (const Error&) {
+      pick = 0;  // every candidate failed: the final fits try k_min
+    }
+    b.chosen[s] = wk.cands[pick].k;
+    b.best[s] = wk.per_k[pick];
+    if (pick > 0 && wk.per_k[pick - 1].ok) b.below[s] = wk.per_k[pick - 1];
+  }
+}
+
+// The final fits of the walk: as Batch::final_fits, but restart 0 starts from the
+// search's fit of the chosen K (when K is pinned: k-means++ followed by split-and-merge
+// rounds), and the candidate K just below the chosen one is refitted as long, from its
+// search fit, and chosen instead when its score is now the better one (EM separates
+// overlapping lobes slowly: a search fit of the true K can stop short of it).
+void final_smem(Batch& b) {
+  const FitSection& fit = b.fit;
+  const std::size_t n = b.size();
+  std::vector<EmTask> tasks, first;
+  std::vector<int> role;  // per task: 0 a restart of the chosen K, 1 the K below
+  for (std::size_t s = 0; s < n; ++s) {
+    if (b.zero(s)) continue;
+    for (int r = 0; r < fit.final_restarts; ++r) {
+      EmTask t = make_task(s, b.chosen[s], fit.final_iterations, fit.tolerance,
+                           task_seed(fit.seed, b.work[s].ref.index, b.chosen[s], -1 - r));
+      if (r == 0 && b.best[s].ok && b.best[s].gmm.k() == b.chosen[s]) t.init = b.best[s].gmm;
+      if (r == 0 && fit.k_min == fit.k_max) {
+        first.push_back(std::move(t));
+        continue;
+      }
+      tasks.push_back(std::move(t));
+      role.push_back(0);
+    }
+    if (b.below[s].ok) {
+      EmTask t = make_task(s, b.below[s].gmm.k(), fit.final_iterations, fit.tolerance,
+                           task_seed(fit.seed, b.work[s].ref.index, b.below[s].gmm.k(), -1));
+      t.init = b.below[s].gmm;
+      tasks.push_back(t);
+      role.push_back(1);
+      // And the chosen fit with its two most overlapping components merged (a lobe
+      // the search split in two while it had not yet separated two others).
+      if (b.best[s].ok && b.best[s].gmm.k() == b.below[s].gmm.k() + 1) {
+        const ComponentScores sc = score_components(b.full_set.grid, b.full_set.weights[s], b.best[s].gmm, 1);
+        if (!sc.merge.empty()) {
+          t.init = merge_components(b.best[s].gmm, sc.merge[0].first, sc.merge[0].second);
+          tasks.push_back(std::move(t));
+          role.push_back(1);
+        }
+      }
+    }
+  }
+  if (!first.empty()) {  // pinned K
+    const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, first, SmemSettings{});
+    for (std::size_t i = 0; i < res.size(); ++i) b.offer(first[i].slice, evaluate(res[i], b.work[first[i].slice].full));
+  }
+  if (!tasks.empty()) {
+    const std::vector<EmResult> results = b.engine.fit(b.full_set, tasks);
+    std::vector<Fitted> fitted(results.size());
+    run_on_workers(results.size(), std::min<std::size_t>(results.size(), host_threads()),
+                   [&](std::size_t, std::size_t i) { fitted[i] = evaluate(results[i], b.work[tasks[i].slice].full); });
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      const std::size_t s = tasks[i].slice;
+      if (role[i] == 0) b.offer(s, fitted[i]);
+      else if (fitted[i].ok && fitted[i].l1 < b.below[s].l1) b.below[s] = fitted[i];
+    }
+  }
+  b.refine(true);
+  for (std::size_t s = 0; s < n; ++s) {
+    if (b.below[s].ok && b.best[s].ok) {
+      const std::vector<Candidate> two = {{b.below[s].gmm.k(), b.below[s].l1, true}, {b.chosen[s], b.best[s].l1, true}};
+      if (choose_candidate(two, fit.k_penalty, fit.error_target) == 0) {
+        b.chosen[s] = b.below[s].gmm.k();
+        b.best[s] = b.below[s];
+      }
+    }
+    b.mark_chosen(s);
+  }
+}
+
+}  // namespace bsdfmix

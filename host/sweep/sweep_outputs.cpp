@@ -1,0 +1,147 @@
+// A file sweep's outputs: the mixture file, the CSVs, the summary text, the fingerprint.
+#include "sweep/sweep_outputs.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "core/atomic_file.hpp"
+#include "core/hash.hpp"
+#include "device/program.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+std::string num(double v, const char* f = "%.9g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, std::isfinite(v) ? v : 0.0);
+  return buf;
+}
+
+}  // namespace
+
+std::string report_csv(const std::vector<ReportRow>& rows) {
+  std::ostringstream s;
+  s << "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n";
+  for (const ReportRow& r : rows)
+    s << r.slice << "," << num(r.theta_o) << "," << num(r.phi_o) << "," << r.k << "," << r.iterations << ","
+      << num(r.loglik) << "," << num(r.l1_rel) << "," << num(r.seconds, "%.6f") << "," << r.device << "," << r.status
+      << "\n";
+  return s.str();
+}
+
+std::string search_csv(const std::vector<SearchRow>& rows) {
+  std::ostringstream s;
+  s << "slice,k,restart,loglik,l1_rel,score,chosen\n";
+  for (const SearchRow& r : rows)
+    s << r.slice << "," << r.k << "," << r.restart << "," << num(r.loglik) << "," << num(r.l1_rel) << ","
+      << num(r.score) << "," << (r.chosen ? "1" : "0") << "\n";
+  return s.str();
+}
+
+SweepSummary write_outputs(const SweepResult& result, const std::string& table_path, const TableMeta& meta,
+                           const FitSection& fit) {
+  const MixtureFile& out = result.mixture;
+  write_mixture_file(fit.output, out);
+  write_text_atomic(fit.report, report_csv(result.report));
+  write_text_atomic(fit.search_report, search_csv(result.search));
+
+  SweepSummary sum;
+  sum.slices = out.slices();
+  sum.failed = result.failed();
+  for (std::int32_t k : out.k) sum.k_histogram[k]++;
+  std::vector<double> l1s = out.l1_rel;
+  std::sort(l1s.begin(), l1s.end());
+  if (!l1s.empty()) {
+    sum.l1_median = l1s[l1s.size() / 2];
+    sum.l1_p90 = l1s[std::min(l1s.size() - 1, std::size_t(std::ceil(0.9 * double(l1s.size()))) - 1)];
+    sum.l1_max = l1s.back();
+  }
+  sum.mixture_file_bytes = std::filesystem::file_size(fit.output);
+  sum.mixture_bytes = out.payload_bytes();
+  sum.table_file_bytes = std::filesystem::file_size(table_path);
+  sum.table_slices = meta.theta_o.size() * meta.phi_o.size();
+  sum.table_bytes = std::uint64_t(sum.slices) * meta.cells_per_slice() * sizeof(float);
+  sum.symmetry_factor = meta.azimuthal ? meta.phi_i.size() : 1;
+  sum.full_bytes = sum.table_bytes * sum.symmetry_factor;
+  return sum;
+}
+
+std::string sweep_fingerprint(const std::string& table_path, const TableMeta& meta, const std::vector<SliceRef>& plan,
+                              const FitSection& fit, std::size_t batch, const EmEngine& engine,
+                              const std::vector<Device>& devices) {
+  static const std::string executable = hex64(hash_file("/proc/self/exe"));
+  const std::string em_source = kernel_source("em");
+  std::ostringstream fp;
+  fp << "table " << std::filesystem::absolute(table_path).string() << " size " << std::filesystem::file_size(table_path)
+     << " source " << meta.source << "\nslices";
+  for (const auto& r : plan) fp << ' ' << r.index;
+  fp << "\nsettings " << fit_settings_json(fit) << "\nbatch " << batch << "\nbuild bsdfmix " << BSDFMIX_VERSION
+     << " executable " << executable << " em.cl " << Hash64().update(em_source.data(), em_source.size()).hex()
+     << "\nnumeric path";
+  for (std::size_t d = 0; d < devices.size(); ++d)
+    fp << " [" << devices[d].info().name << " | " << devices[d].info().platform << " | "
+       << devices[d].info().version << " | " << devices[d].info().driver << " | "
+       << (engine.uses_fp64(d) ? "fp64" : "fp32") << "]";
+  fp << "\n";
+  return fp.str();
+}
+
+std::string fit_settings_json(const FitSection& f) {
+  std::ostringstream s;
+  s << "{\"k_min\": " << f.k_min << ", \"k_max\": " << f.k_max << ", \"seed\": " << f.seed
+    << ", \"restarts\": " << f.restarts << ", \"final_restarts\": " << f.final_restarts
+    << ", \"iterations\": " << f.iterations << ", \"final_iterations\": " << f.final_iterations
+    << ", \"tolerance\": " << num(f.tolerance) << ", \"k_penalty\": " << num(f.k_penalty)
+    << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
+    << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << search_name(f.search)
+    << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
+    << ", \"refine_kl\": " << num(f.refine_kl)
+    << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
+  return s.str();
+}
+
+std::string SweepSummary::text() const {
+  auto size = [](double b) {
+    char buf[32];
+    const char* u[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+    int i = 0;
+    while (b >= 1024 && i < 4) b /= 1024, ++i;
+    std::snprintf(buf, sizeof buf, "%.1f %s", b, u[i]);
+    return std::string(buf);
+  };
+  std::ostringstream s;
+  std::size_t total_k = 0;
+  s << "  slices           " << slices << " fitted (" << resumed << " resumed from checkpoint, " << failed
+    << " failed)\n  K per slice     ";
+  for (auto [k, n] : k_histogram) {
+    s << " " << k << "x" << n;
+    total_k += std::size_t(k) * n;
+  }
+  char buf[256];
+  std::snprintf(buf, sizeof buf, " (mean %.1f)\n", slices ? double(total_k) / double(slices) : 0.0);
+  s << buf;
+  std::snprintf(buf, sizeof buf, "  relative L1      median %.2f%%, p90 %.2f%%, max %.2f%%\n", 100 * l1_median,
+                100 * l1_p90, 100 * l1_max);
+  s << buf;
+  auto ratio = [](std::uint64_t a, std::uint64_t b) { return num(double(a) / double(std::max<std::uint64_t>(b, 1)), "%.0f") + "x"; };
+  s << "  mixture          file " << size(double(mixture_file_bytes)) << " on disk, datasets " << size(double(mixture_bytes))
+    << " (padded to the largest K)\n";
+  s << "  table            file " << size(double(table_file_bytes)) << " on disk";
+  if (table_slices == slices) s << " (" << ratio(table_file_bytes, mixture_file_bytes) << " the mixture file)";
+  else s << " holding " << table_slices << " slices";
+  s << ", float32 cells of the fitted slices " << size(double(table_bytes)) << " ("
+    << ratio(table_bytes, mixture_bytes) << " the mixture's datasets)\n";
+  if (symmetry_factor > 1)
+    s << "  symmetry         azimuthal: one stored slice stands for " << symmetry_factor
+      << " phi_o; without it those cells would be " << size(double(full_bytes)) << " ("
+      << ratio(full_bytes, mixture_bytes) << " the mixture's datasets)\n";
+  std::snprintf(buf, sizeof buf, "  wall time        %.1f s on %s\n", seconds, devices.c_str());
+  s << buf;
+  return s.str();
+}
+
+}  // namespace bsdfmix
