@@ -55,7 +55,7 @@ Vec3 vec3(const Ctx& c, const std::string& key, const YAML::Node& n, bool unit) 
   Vec3 v;
   for (std::size_t i = 0; i < 3; ++i) v[i] = number(c, key, n[i], -1e9, 1e9);
   if (unit) {
-    const double l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const double l = std::sqrt(dot(v, v));
     if (!(l > 1e-9)) c.fail(key, n, "the vector is zero");
     for (auto& x : v) x /= l;
   }

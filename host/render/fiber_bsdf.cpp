@@ -15,25 +15,25 @@ constexpr double kUniformPdf = 1 / (4 * kPi);
 
 }  // namespace
 
-FiberFrame::FiberFrame(const V3& tangent, const V3& wo) {
+FiberFrame::FiberFrame(const Vec3& tangent, const Vec3& wo) {
   t = normalized(tangent);
   const double s = std::clamp(dot(wo, t), -1.0, 1.0);
   theta_o = std::asin(s);
-  V3 p{wo[0] - s * t[0], wo[1] - s * t[1], wo[2] - s * t[2]};
+  Vec3 p{wo[0] - s * t[0], wo[1] - s * t[1], wo[2] - s * t[2]};
   if (dot(p, p) < 1e-20) p = std::abs(t[0]) < 0.9 ? cross(t, {1, 0, 0}) : cross(t, {0, 1, 0});
   n = normalized(p);
   b = cross(t, n);
 }
 
-void FiberFrame::to_local(const V3& w, double& theta, double& phi) const {
+void FiberFrame::to_local(const Vec3& w, double& theta, double& phi) const {
   theta = std::asin(std::clamp(dot(w, t), -1.0, 1.0));
   phi = std::atan2(dot(w, b), dot(w, n));
   phi = wrap_phi(phi);
 }
 
-V3 FiberFrame::to_world(double theta, double phi) const {
+Vec3 FiberFrame::to_world(double theta, double phi) const {
   const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
-  V3 w;
+  Vec3 w;
   for (int i = 0; i < 3; ++i) w[i] = st * t[i] + ct * (cp * n[i] + sp * b[i]);
   return w;
 }

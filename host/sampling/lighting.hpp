@@ -4,16 +4,14 @@
 // precision reference. Scenes are parsed from YAML in host/converge/scene.cpp.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
 
 #include "core/domain.hpp"
+#include "core/vec3.hpp"
 
 namespace bsdfmix {
-
-using Vec3 = std::array<double, 3>;
 
 struct LightLobe {
   Vec3 direction{0, 0, 1};  // unit, world space
