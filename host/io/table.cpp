@@ -62,7 +62,7 @@ std::string slice_name(std::size_t t_o, std::size_t p_o) {
 }  // namespace
 
 void validate_meta(const TableMeta& m, const std::string& where) {
-  const double tlo = theta_min(m.domain), thi = theta_max(m.domain);
+  const double tlo = theta_lo(m.domain), thi = theta_hi(m.domain);
   const double st_o = check_uniform(m.theta_o, where, "theta_o");
   check_inside(m.theta_o, 0.0, tlo, thi, where, "theta_o");
   (void)st_o;
@@ -91,9 +91,9 @@ TableMeta make_grid(Domain domain, std::size_t n_theta_o, std::size_t n_phi_o, s
   TableMeta m;
   m.domain = domain;
   m.azimuthal = azimuthal;
-  m.theta_o = uniform_centers(theta_min(domain), theta_max(domain), n_theta_o);
+  m.theta_o = uniform_centers(theta_lo(domain), theta_hi(domain), n_theta_o);
   m.phi_o = azimuthal ? std::vector<double>{0.0} : uniform_centers(-kPi, kPi, n_phi_o);
-  m.theta_i = uniform_centers(theta_min(domain), theta_max(domain), n_theta_i);
+  m.theta_i = uniform_centers(theta_lo(domain), theta_hi(domain), n_theta_i);
   m.phi_i = uniform_centers(-kPi, kPi, n_phi_i);
   return m;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "core/domain.hpp"
 #include "core/error.hpp"
 
 namespace bsdfmix {
@@ -13,7 +14,6 @@ namespace render {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kGoldenAngle = 2.39996322972865332;  // pi (3 - sqrt 5): the sunflower pattern
 constexpr double kMaxSegments = 5e6;                 // beyond this the tracer's memory is the limit
 
