@@ -2,9 +2,9 @@
 #include "config/node.hpp"
 
 #include <cmath>
-#include <sstream>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 
 namespace bsdfmix {
 
@@ -15,11 +15,8 @@ std::string show(const YAML::Node& n) {
   if (n.IsMap()) return "a mapping";
   return "nothing";
 }
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
+// As an ostream writes a double ("%g"; only out-of-range values reach it, never NaN).
+std::string num(double v) { return format_number(v, "%g"); }
 }  // namespace
 
 ConfigNode::ConfigNode(std::string file, std::string path, YAML::Node node)
