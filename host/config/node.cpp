@@ -54,11 +54,6 @@ std::string ConfigNode::str(const std::string& key) const {
   return n.Scalar();
 }
 
-std::optional<std::string> ConfigNode::opt_str(const std::string& key) const {
-  if (!has(key)) return std::nullopt;
-  return str(key);
-}
-
 std::int64_t ConfigNode::integer(const std::string& key, std::int64_t min, std::int64_t max) const {
   const YAML::Node n = raw(key);
   std::int64_t v = 0;
