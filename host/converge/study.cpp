@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -27,11 +26,7 @@ std::string num(double x) { return format_number(x, "%.9g"); }
 // Three significant digits.
 std::string short_num(double x) { return format_number(x, "%.3g"); }
 
-std::string fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
+std::string fixed(double x, int digits) { return format_number(x, ("%." + std::to_string(digits) + "f").c_str()); }
 
 }  // namespace
 

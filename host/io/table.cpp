@@ -2,22 +2,18 @@
 #include "io/table.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "io/h5.hpp"
 
 namespace bsdfmix {
 
 namespace {
 
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+std::string fmt(double v) { return format_number(v, "%.6g"); }
 
 // Uniform spacing within a relative tolerance; returns the step.
 double check_uniform(const std::vector<double>& c, const std::string& where, const std::string& name) {
