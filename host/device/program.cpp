@@ -25,8 +25,9 @@ namespace {
 
 constexpr const char* kCommon = "common";
 
-// Builds `source` (the program `name`) for `device`, cached under `key_name` and the options.
-cl::Program build_cached(const Device& device, const std::string& name, const std::string& key_name,
+// Builds the source of `label` ("kernels/em.cl") for `device`, cached under `key_name` and
+// the options.
+cl::Program build_cached(const Device& device, const std::string& label, const std::string& key_name,
                          const std::string& options, const std::function<std::string()>& source_of) {
   using Key = std::tuple<cl_context, cl_device_id, std::string, std::string>;
   static std::mutex mutex;
@@ -42,7 +43,7 @@ cl::Program build_cached(const Device& device, const std::string& name, const st
   try {
     program = cl::Program(device.context(), source);
   } catch (const cl::Error& e) {
-    throw_device_error(e, "creating program " + name + ".cl");
+    throw_device_error(e, "creating program " + label);
   }
   try {
     program.build(std::vector<cl::Device>{device.cl_device()}, full.c_str());
@@ -54,7 +55,7 @@ cl::Program build_cached(const Device& device, const std::string& name, const st
       log = "(no build log)";
     }
     while (!log.empty() && (log.back() == '\n' || log.back() == '\0')) log.pop_back();
-    throw DeviceError("building kernels/" + name + ".cl for " + device.info().label() +
+    throw DeviceError("building " + label + " for " + device.info().label() +
                       " with options '" + full + "' failed with " + cl_error_name(e.err()) +
                       "; build log:\n" + log);
   }
@@ -97,13 +98,14 @@ std::string device_defines(const DeviceInfo& info) {
 }
 
 cl::Program build_program(const Device& device, const std::string& name, const std::string& options) {
-  return build_cached(device, name, name, options, [&] { return kernel_source(name); });
+  return build_cached(device, "kernels/" + name + ".cl", name, options, [&] { return kernel_source(name); });
 }
 
 cl::Program build_program_text(const Device& device, const std::string& name, const std::string& text,
                                const std::string& options) {
   const std::string key = "text " + name + " " + Hash64().update(text.data(), text.size()).hex();
-  return build_cached(device, name, key, options, [&] { return program_text(name, text); });
+  return build_cached(device, "program " + name + " (kernels/common.cl and its text)", key, options,
+                      [&] { return program_text(name, text); });
 }
 
 void launch(const cl::CommandQueue& queue, const cl::Kernel& kernel, const std::string& name,
