@@ -43,9 +43,14 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real_t;
 #define R(x) (x)
+// kernels/common.cl's phi wrap and lane sums in double: wrap_phi_d, sum_lanes16_d, ..
+BSDFMIX_WRAP_PHI(double, _d, 3.14159265358979323846)
+BSDFMIX_LANE_SUMS(double, _d)
+#define wrap_phi_r wrap_phi_d
 #else
 typedef float real_t;
 #define R(x) (x##f)
+#define wrap_phi_r wrap_phi
 #endif
 
 // Statistics per component and their layout in a partial record of NSTAT values:
@@ -64,7 +69,6 @@ typedef float real_t;
 #define LOG2E_F 1.4426950408889634f
 #define LN2_F 0.6931471805599453f
 #define LN2_R R(0.6931471805599453)
-#define PI_R R(3.141592653589793)
 #define TWO_PI_R R(6.283185307179586)
 
 #if VEC == 16
@@ -94,33 +98,15 @@ typedef float floatv;
 #define AS_VINT CAT(as_, VINT)
 #define AS_VFLOAT CAT(as_float, VEC)
 
-// Sum of the lanes of a vector, each lane converted to real_t first (a tree of
-// vector adds, not a loop over lanes).
+// Sum of the lanes of a vector, each lane converted to real_t first (kernels/common.cl's
+// tree of vector adds, not a loop over lanes).
 inline real_t hsum(floatv v) {
 #if VEC == 1
   return (real_t)v;
 #elif EM_FP64
-#if VEC == 16
-  const double8 a = convert_double8(v.lo) + convert_double8(v.hi);
-  const double4 b = a.lo + a.hi;
-#elif VEC == 8
-  const double4 b = convert_double4(v.lo) + convert_double4(v.hi);
+  return CAT(CAT(sum_lanes, VEC), _d)(CAT(convert_double, VEC)(v));
 #else
-  const double4 b = convert_double4(v);
-#endif
-  const double2 c = b.lo + b.hi;
-  return c.x + c.y;
-#else
-#if VEC == 16
-  const float8 a = v.lo + v.hi;
-  const float4 b = a.lo + a.hi;
-#elif VEC == 8
-  const float4 b = v.lo + v.hi;
-#else
-  const float4 b = v;
-#endif
-  const float2 c = b.lo + b.hi;
-  return c.x + c.y;
+  return CAT(sum_lanes, VEC)(v);
 #endif
 }
 
@@ -136,7 +122,9 @@ inline void cell_coords(uint c, float inv_nphi, float nphi, float theta0, float 
 }
 
 // Nearest-image phi difference, in [-pi, pi], for d in (-2 pi, 2 pi) (both angles
-// wrapped): two compares and two selects, cheaper than a rounding on CPUs.
+// wrapped): two compares and two selects, cheaper than a rounding on CPUs. Not
+// common.cl's wrap_phi: a vector over cells, valid only on (-2 pi, 2 pi), and +-pi both
+// kept (the nearest image of a difference of exactly pi is either).
 inline floatv wrap_diff(floatv d) {
   d = select(d, d - TWO_PI_F, d > PI_F);
   return select(d, d + TWO_PI_F, d < -PI_F);
@@ -360,11 +348,6 @@ inline void floor_covariance(real_t* a, real_t* b, real_t* c, const real_t f) {
   *a = m1 * vx * vx + m2 * vy * vy;
   *b = (m1 - m2) * vx * vy;
   *c = m1 * vy * vy + m2 * vx * vx;
-}
-
-inline real_t wrap_phi_r(real_t x) {
-  real_t r = x - TWO_PI_R * floor((x + PI_R) / TWO_PI_R);
-  return r >= PI_R ? r - TWO_PI_R : r;
 }
 
 // M-step, one work-item per problem: reduces the chunk statistics, tests

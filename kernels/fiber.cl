@@ -9,6 +9,7 @@
 //   fiber_longitudinal: M[b][p][i]      for each theta_i cell i
 //   fiber_combine:      f[b][i][j] = sum_p M[b][p][i] Nbar[b][p][j], times the noise factor
 // Slice s of the table (s = t_o * n_phi_o + p_o) is batch entry b = s - first_slice.
+// philox4x32_10 and wrap_phi: kernels/common.cl.
 
 #ifndef I0_SERIES_TERMS
 #define I0_SERIES_TERMS 30  // power-series terms of I0 below I0_ASYMPTOTIC_FROM
@@ -54,10 +55,6 @@ float fresnel_dielectric(float cos_i, const float eta) {
   return 0.5f * (r_par * r_par + r_perp * r_perp);
 }
 
-float wrap_pi(const float x) {
-  return x - 2.0f * FIBER_PI * floor((x + FIBER_PI) / (2.0f * FIBER_PI));
-}
-
 float trimmed_logistic(const float x, const float s, const float norm) {
   const float e = exp(-fabs(x) / s);
   return e / (s * (1.0f + e) * (1.0f + e) * norm);
@@ -73,20 +70,6 @@ float longitudinal(const float v, const float theta_op_raw, const float theta_i)
   // a - b - 1/v = (cos(theta_i + theta_o') - 1) / v
   const float log_m = log_i0_scaled(a) - 2.0f * sh * sh / v - log(v) - log1p(-exp(-2.0f / v));
   return exp(log_m);
-}
-
-// Philox4x32-10 (Salmon et al. 2011), the generator of Random123's philox4x32.
-uint4 philox4x32_10(uint4 c, uint2 k) {
-  for (int r = 0; r < 10; ++r) {
-    if (r > 0) {
-      k.x += 0x9E3779B9u;
-      k.y += 0xBB67AE85u;
-    }
-    const uint hi0 = mul_hi(0xD2511F53u, c.x), lo0 = 0xD2511F53u * c.x;
-    const uint hi1 = mul_hi(0xCD9E8D57u, c.z), lo1 = 0xCD9E8D57u * c.z;
-    c = (uint4)(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
-  }
-  return c;
 }
 
 // Multiplicative log-normal noise factor of table cell `cell` (mean 1, never negative).
@@ -120,10 +103,10 @@ __kernel void fiber_azimuthal(const FiberParams prm, __global const float* theta
     const float T = exp(-prm.sigma_a * (2.0f * cos_gt / cos_t));
     const float F = fresnel_dielectric(cos_o * sqrt(fmax(0.0f, 1.0f - h * h)), prm.eta);
     const float a0 = F, a1 = (1.0f - F) * (1.0f - F) * T, a2 = a1 * T * F, a3 = a2 * F * T / fmax(1.0f - T * F, 1e-30f);
-    const float n0 = trimmed_logistic(wrap_pi(dphi + 2.0f * gamma_o), prm.s, prm.logistic_norm);
-    const float n1 = trimmed_logistic(wrap_pi(dphi - (2.0f * gamma_t - 2.0f * gamma_o + FIBER_PI)), prm.s,
+    const float n0 = trimmed_logistic(wrap_phi(dphi + 2.0f * gamma_o), prm.s, prm.logistic_norm);
+    const float n1 = trimmed_logistic(wrap_phi(dphi - (2.0f * gamma_t - 2.0f * gamma_o + FIBER_PI)), prm.s,
                                       prm.logistic_norm);
-    const float n2 = trimmed_logistic(wrap_pi(dphi - (4.0f * gamma_t - 2.0f * gamma_o + 2.0f * FIBER_PI)), prm.s,
+    const float n2 = trimmed_logistic(wrap_phi(dphi - (4.0f * gamma_t - 2.0f * gamma_o + 2.0f * FIBER_PI)), prm.s,
                                       prm.logistic_norm);
     acc0 += w * a0 * n0;
     acc1 += w * a1 * n1;

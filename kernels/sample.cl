@@ -8,8 +8,9 @@
 // thesis eq. 3.7) arrives flattened: `q` holds the blend, `comps` the components of its
 // slices one after the other, 16 floats each (see COMP_* below).
 //
-// Random numbers: Philox4x32-10, counter {i lo, i hi, stream, 0}, key {seed lo, seed hi};
-// the same function as bsdfmix::mix::philox4x32, so sample i is the same everywhere.
+// Random numbers: Philox4x32-10 (kernels/common.cl), counter {i lo, i hi, stream, 0}, key
+// {seed lo, seed hi}; the same function as bsdfmix::mix::philox4x32_10, so sample i is the
+// same everywhere.
 //
 // Defines: HEMISPHERE (0: fiber domain, theta in [-pi/2, pi/2], J = cos theta;
 // 1: hemisphere, theta in [0, pi/2], J = sin theta); ESTIMATOR (integrate_chunks only:
@@ -73,32 +74,14 @@
 #define Q_STEP 18
 #define Q_CUM 19
 
-// ---- Philox4x32-10 --------------------------------------------------------------------
-
-uint4 philox4x32(uint4 c, uint2 k) {
-  for (int r = 0; r < 10; ++r) {
-    if (r > 0) {
-      k.x += 0x9E3779B9u;
-      k.y += 0xBB67AE85u;
-    }
-    const uint hi0 = mul_hi(0xD2511F53u, c.x), lo0 = 0xD2511F53u * c.x;
-    const uint hi1 = mul_hi(0xCD9E8D57u, c.z), lo1 = 0xCD9E8D57u * c.z;
-    c = (uint4)(hi1 ^ c.y ^ k.x, lo1, hi0 ^ c.w ^ k.y, lo0);
-  }
-  return c;
-}
+// ---- random numbers (philox4x32_10: kernels/common.cl) ------------------------------------
 
 float4 uniforms4(const ulong index, const uint stream, const uint2 key) {
-  const uint4 r = philox4x32((uint4)((uint)index, (uint)(index >> 32), stream, 0u), key);
+  const uint4 r = philox4x32_10((uint4)((uint)index, (uint)(index >> 32), stream, 0u), key);
   return convert_float4(r >> 8) * (1.0f / 16777216.0f);
 }
 
-// ---- angles --------------------------------------------------------------------------
-
-float wrap_phi(const float phi) {
-  float r = phi - 2.0f * S_PI * floor((phi + S_PI) / (2.0f * S_PI));
-  return r >= S_PI ? -S_PI : r;
-}
+// ---- angles (wrap_phi: kernels/common.cl) ---------------------------------------------
 
 // Polynomials for |a| <= pi/4 (Taylor; error below float rounding).
 float sin_poly(const float a) {
@@ -167,17 +150,6 @@ VF exp2_v(VF x) {
   return select(r, (VF)(0.0f), dead);
 }
 
-float hsum(const VF w) {
-#if PDF_LANES == 16
-  const float8 v = w.lo + w.hi;
-#else
-  const float8 v = w;
-#endif
-  const float4 a = v.lo + v.hi;
-  const float2 b = a.lo + a.hi;
-  return b.x + b.y;
-}
-
 // ---- the mixture ---------------------------------------------------------------------
 
 // Sum over components of w * density, for the pdf (x) and the stand-in (y) at once; phi
@@ -207,7 +179,7 @@ float2 mixture_sums(__global const float* q, __global const VF* pd, const float 
     ap += t;
     af = fma(t, r[6], af);
   }
-  return (float2)(hsum(ap), hsum(af));
+  return (float2)(CAT(sum_lanes, PDF_LANES)(ap), CAT(sum_lanes, PDF_LANES)(af));
 }
 
 bool theta_inside(const float theta) { return theta >= THETA_LO && theta <= THETA_HI; }
@@ -706,7 +678,7 @@ __kernel void integrate_chunks(__global const float* q, __global const float16* 
   int level = 0;
   for (uint k = 0; k < chunk; ++k) {
     const ulong n = (ulong)c * chunk + k;
-    const uint4 bits = philox4x32((uint4)((uint)n, (uint)(n >> 32), stream, r), key);
+    const uint4 bits = philox4x32_10((uint4)((uint)n, (uint)(n >> 32), stream, r), key);
     const float4 u = convert_float4(bits >> 8) * (1.0f / 16777216.0f);
     const float e = estimate(q, comps, pd, geo, f, marg, cond, sc, env, q2, comps2, pd2, ls, u);
     const float y = e - comp;

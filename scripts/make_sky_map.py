@@ -29,7 +29,7 @@ an antialiased edge about one pixel wide.
 
 The whole map is then scaled so that its solid-angle-weighted mean over the sphere is 1.
 
-Layout (the project's reader, host/converge/scene.cpp read_pfm, and
+Layout (the project's reader, host/io/pfm.cpp read_pfm, and
 host/sampling/lighting.cpp radiance_world): "Pf" (greyscale), "W H", "-1.0" (little
 endian), then float32 rows. Image row y covers the polar angle acos(w.z) in
 [pi y / H, pi (y + 1) / H) (row 0 at +z); column x covers the azimuth atan2(w.y, w.x) in
@@ -158,7 +158,7 @@ def write_pfm(path, img):
     tmp = path + ".tmp"
     with open(tmp, "wb") as f:
         f.write(b"Pf\n%d %d\n-1.0\n" % (W, H))
-        # bottom-up, as the project's reader (scene.cpp read_pfm) expects: image row H - 1 first
+        # bottom-up, as the project's reader (io/pfm.cpp read_pfm) expects: image row H - 1 first
         f.write(np.ascontiguousarray(img[::-1, :]).astype("<f4").tobytes())
     os.replace(tmp, path)
 

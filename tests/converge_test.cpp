@@ -21,6 +21,7 @@
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
+#include "io/pfm.hpp"
 #include "io/table.hpp"
 #include "sampling/sampling.hpp"
 

@@ -49,6 +49,7 @@ TEST_CASE("a failed build throws with the build log", "[device]") {
   const fs::path dir = fs::temp_directory_path() / "bsdfmix_device_test";
   fs::create_directories(dir);
   std::ofstream(dir / "broken.cl") << "__kernel void broken(__global float* x) { x[0] = undeclared_name; }\n";
+  std::ofstream(dir / "common.cl") << kernel_file("common");  // put in front of every program
   setenv("BSDFMIX_KERNEL_DIR", dir.c_str(), 1);
   const auto dev = select_devices("0").front();
   try {
@@ -59,7 +60,11 @@ TEST_CASE("a failed build throws with the build log", "[device]") {
     CHECK_THAT(what, Catch::Contains("building kernels/broken.cl"));
     CHECK_THAT(what, Catch::Contains("CL_BUILD_PROGRAM_FAILURE"));
     CHECK_THAT(what, Catch::Contains("undeclared_name"));
+    CHECK_THAT(what, Catch::Contains("broken.cl:1:"));  // the log counts the kernel file's own lines
   }
+  // common.cl comes from the same directory as the program
+  fs::remove(dir / "common.cl");
+  CHECK_THROWS_WITH(build_program(dev, "broken"), Catch::Contains("cannot read kernel source " + (dir / "common.cl").string()));
   CHECK_THROWS_WITH(kernel_source("missing"), Catch::Contains("cannot read kernel source"));
   unsetenv("BSDFMIX_KERNEL_DIR");
   CHECK_THROWS_WITH(kernel_source("missing"), Catch::Contains("no embedded kernel named 'missing'"));

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/vec3.hpp"
 #include "sampling/light_sampler.hpp"
 #include "sampling/lighting.hpp"
 
@@ -32,15 +33,6 @@ namespace {
 const std::uint64_t kSeed = std::getenv("LIGHT_TEST_SEED") ? std::strtoull(std::getenv("LIGHT_TEST_SEED"), nullptr, 10)
                                                             : 20240611ull;
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 normalized(Vec3 v) {
-  const double n = std::sqrt(dot(v, v));
-  for (auto& x : v) x /= n;
-  return v;
-}
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 // Unit direction from z = cos(polar) and azimuth (the env map's and the world bins' frame).
 Vec3 from_z_az(double z, double az) {
   const double r = std::sqrt(std::max(0.0, 1 - z * z));

@@ -168,7 +168,7 @@ TEST_CASE("the ground plane is hit at its height, the normal facing the ray", "[
   REQUIRE(h.kind == HitKind::Ground);
   CHECK(h.t == Approx(2.5).margin(1e-6));
   CHECK(h.position[2] == Approx(-0.5).margin(1e-6));
-  CHECK(h.normal == V3{0, 0, 1});
+  CHECK(h.normal == Vec3{0, 0, 1});
   CHECK(h.fiber == -1);
 
   Ray up;
@@ -177,7 +177,7 @@ TEST_CASE("the ground plane is hit at its height, the normal facing the ray", "[
   h = empty.intersect(up);
   REQUIRE(h.kind == HitKind::Ground);
   CHECK(h.t == Approx(2.5).margin(1e-6));
-  CHECK(h.normal == V3{0, 0, -1});
+  CHECK(h.normal == Vec3{0, 0, -1});
   CHECK(empty.occluded(up));
   up.tfar = 2;
   CHECK_FALSE(empty.occluded(up));
@@ -202,7 +202,7 @@ TEST_CASE("make_cloth lays out yarns, plies and fibers", "[render]") {
   for (const Fiber& f : cloth.fibers) {
     REQUIRE(f.points.size() == std::size_t(steps + 1));
     CHECK(f.radius == p.fiber_radius);
-    for (const V3& q : f.points)
+    for (const Vec3& q : f.points)
       for (int d = 0; d < 3; ++d) {
         CHECK(q[d] - f.radius >= cloth.lo[d]);
         CHECK(q[d] + f.radius <= cloth.hi[d]);
@@ -247,8 +247,8 @@ TEST_CASE("make_cloth crosses yarns over and under in the plain and twill patter
       for (int j = 0; j < yarns; ++j) {
         const bool warp_over = weave == "plain" ? (i + j) % 2 == 0 : ((i + j) / 2) % 2 == 0;
         const std::size_t s = std::size_t(j * p.segments_per_spacing + p.segments_per_spacing / 2);
-        const V3& warp = cloth.fibers[i].points[s];         // warp yarn i at weft j
-        const V3& weft = cloth.fibers[yarns + j].points[std::size_t(i * p.segments_per_spacing + p.segments_per_spacing / 2)];
+        const Vec3& warp = cloth.fibers[i].points[s];         // warp yarn i at weft j
+        const Vec3& weft = cloth.fibers[yarns + j].points[std::size_t(i * p.segments_per_spacing + p.segments_per_spacing / 2)];
         CHECK(warp[2] - offset == Approx(warp_over ? p.yarn_radius : -p.yarn_radius).margin(1e-12));
         CHECK(weft[2] - offset == Approx(warp_over ? -p.yarn_radius : p.yarn_radius).margin(1e-12));
         CHECK(warp[1] == Approx(-0.5 + (i + 0.5) * p.yarn_spacing).margin(1e-12));
@@ -273,8 +273,8 @@ TEST_CASE("make_cloth drapes the patch over a cylinder or a sphere", "[render]")
     double worst = 0;
     for (std::size_t i = 0; i < base.fibers.size(); ++i)
       for (std::size_t k = 0; k < base.fibers[i].points.size(); ++k) {
-        const V3& q = base.fibers[i].points[k];
-        const V3& w = draped.fibers[i].points[k];
+        const Vec3& q = base.fibers[i].points[k];
+        const Vec3& w = draped.fibers[i].points[k];
         // Distance from the cylinder's axis (the sphere's centre) is R + z.
         const double dist = kind == "cylinder" ? std::hypot(w[0], w[2] + R) : std::hypot(w[0], w[1], w[2] + R);
         worst = std::max(worst, std::abs(dist - (R + q[2])));

@@ -35,7 +35,7 @@ void add_sample(CLI::App& app, Common& common) {
     Progress::set_enabled(!common.quiet);
     const double to = degrees ? theta_o * kPi / 180 : theta_o, po = degrees ? phi_o * kPi / 180 : phi_o;
     const MixtureFile mf = read_mixture_file(file);
-    if (!(to >= theta_min(mf.domain) && to <= theta_max(mf.domain)))
+    if (!(to >= theta_lo(mf.domain) && to <= theta_hi(mf.domain)))
       throw ConfigError("sample: --theta-o " + std::to_string(to) + " rad is outside the " + domain_name(mf.domain) +
                         " domain");
     if (!std::isfinite(po)) throw ConfigError("sample: --phi-o must be finite");

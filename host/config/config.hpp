@@ -58,15 +58,12 @@ struct FitSection {
 };
 
 struct ConvergeSection {
-  YAML::Node scene;        // null: constant L_i = 1; a mapping: inline scene
-  std::string scene_file;  // set when the scene came from a file
   std::vector<double> theta_o, phi_o;
   std::int64_t samples_max = 65536;
   int runs = 64;
   std::uint64_t seed = 1;
   std::string csv;
-  // every scene of `scene` (a file, an inline mapping, or a list of them); scene and
-  // scene_file above hold the first
+  // every scene of `scene` (a file, an inline mapping, or a list of them); none: constant L_i = 1
   std::vector<YAML::Node> scenes;
   std::vector<std::string> scene_files;  // "" for an inline scene
   std::string mixture;                   // "" = fit.output

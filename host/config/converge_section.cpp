@@ -41,8 +41,6 @@ ConvergeSection parse_converge(const ConfigNode& n) {
     } else {
       add_scene(n, s, c);
     }
-    c.scene = c.scenes.front();
-    c.scene_file = c.scene_files.front();
   }
   c.theta_o = n.numbers("theta_o");
   c.phi_o = n.numbers("phi_o");

@@ -2,9 +2,9 @@
 #include "config/node.hpp"
 
 #include <cmath>
-#include <sstream>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 
 namespace bsdfmix {
 
@@ -15,11 +15,8 @@ std::string show(const YAML::Node& n) {
   if (n.IsMap()) return "a mapping";
   return "nothing";
 }
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
+// As an ostream writes a double ("%g"; only out-of-range values reach it, never NaN).
+std::string num(double v) { return format_number(v, "%g"); }
 }  // namespace
 
 ConfigNode::ConfigNode(std::string file, std::string path, YAML::Node node)
@@ -55,11 +52,6 @@ std::string ConfigNode::str(const std::string& key) const {
   const YAML::Node n = raw(key);
   if (!n.IsScalar()) fail(key, "expected a string, got " + show(n));
   return n.Scalar();
-}
-
-std::optional<std::string> ConfigNode::opt_str(const std::string& key) const {
-  if (!has(key)) return std::nullopt;
-  return str(key);
 }
 
 std::int64_t ConfigNode::integer(const std::string& key, std::int64_t min, std::int64_t max) const {

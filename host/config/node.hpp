@@ -5,7 +5,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
-#include <optional>
 #include <filesystem>
 #include <set>
 #include <system_error>
@@ -21,7 +20,6 @@ class ConfigNode {
 
   bool has(const std::string& key) const;  // present and not null
   std::string str(const std::string& key) const;
-  std::optional<std::string> opt_str(const std::string& key) const;
   std::int64_t integer(const std::string& key, std::int64_t min, std::int64_t max) const;
   double number(const std::string& key, double min, double max) const;
   bool boolean(const std::string& key) const;

@@ -99,7 +99,7 @@ double stand_in_integral(const Problem& p) {
   const mix::MixtureSet& set = *p.set;
   const Domain d = p.table.domain;
   if (p.light.is_constant()) {
-    const double lo = theta_min(d), hi = theta_max(d);
+    const double lo = theta_lo(d), hi = theta_hi(d);
     double s = 0;
     for (int k = 0; k < p.query.blend.count; ++k) {
       const mix::SliceMixture& sl = set.slices[std::size_t(p.query.blend.slice[k])];

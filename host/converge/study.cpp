@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -14,6 +13,7 @@
 #include "converge/reference.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
 
@@ -21,27 +21,12 @@ namespace bsdfmix {
 
 namespace {
 
-std::string num(double x) {
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  if (std::isnan(x)) return "nan";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.9g", x);
-  return buf;
-}
+std::string num(double x) { return format_number(x, "%.9g"); }
 
 // Three significant digits.
-std::string short_num(double x) {
-  if (!std::isfinite(x)) return num(x);
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
+std::string short_num(double x) { return format_number(x, "%.3g"); }
 
-std::string fixed(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, x);
-  return buf;
-}
+std::string fixed(double x, int digits) { return format_number(x, ("%." + std::to_string(digits) + "f").c_str()); }
 
 }  // namespace
 

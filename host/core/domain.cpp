@@ -15,13 +15,6 @@ Domain parse_domain(const std::string& name, const std::string& where) {
   throw InputError(where + ": unknown domain '" + name + "' (expected fiber or hemisphere)");
 }
 
-double theta_min(Domain d) { return d == Domain::Fiber ? -kPi / 2 : 0.0; }
-double theta_max(Domain) { return kPi / 2; }
-
-double jacobian(Domain d, double theta) {
-  return d == Domain::Fiber ? std::cos(theta) : std::sin(theta);
-}
-
 std::vector<double> uniform_centers(double lo, double hi, std::size_t n) {
   std::vector<double> c(n);
   const double step = (hi - lo) / static_cast<double>(n);
@@ -45,13 +38,6 @@ std::vector<double> integrand_weights(Domain d, const std::vector<double>& theta
     for (std::size_t p = 0; p < np; ++p) w[t * np + p] = static_cast<double>(f[t * np + p]) * g;
   }
   return w;
-}
-
-double wrap_phi(double phi) {
-  double r = std::fmod(phi + kPi, 2 * kPi);
-  if (r < 0) r += 2 * kPi;
-  r -= kPi;
-  return r >= kPi ? -kPi : r;
 }
 
 }  // namespace bsdfmix

@@ -2,26 +2,30 @@
 // "Angular conventions").
 #pragma once
 
+#include <bsdfmix/mixture.hpp>
 #include <cstddef>
 #include <string>
 #include <vector>
 
 namespace bsdfmix {
 
-constexpr double kPi = 3.14159265358979323846;
-
-enum class Domain { Fiber, Hemisphere };
+// From the header (include/bsdfmix/mixture.hpp), the one definition of each: kPi; the
+// Domain enum; the theta range of a domain, theta_lo and theta_hi (fiber [-pi/2, pi/2],
+// hemisphere [0, pi/2]); jacobian, d(omega) = J(theta) dtheta dphi (cos(theta) for
+// fiber, sin(theta) for hemisphere); wrap_phi, phi wrapped into [-pi, pi); bracket, the
+// two cells of a uniform axis around a value.
+using mix::bracket;
+using mix::Bracket;
+using mix::Domain;
+using mix::jacobian;
+using mix::kPi;
+using mix::theta_hi;
+using mix::theta_lo;
+using mix::wrap_phi;
 
 // "fiber" / "hemisphere"; parse_domain throws InputError naming `where` on anything else.
 std::string domain_name(Domain d);
 Domain parse_domain(const std::string& name, const std::string& where);
-
-// The theta range of a domain: fiber [-pi/2, pi/2], hemisphere [0, pi/2].
-double theta_min(Domain d);
-double theta_max(Domain d);
-
-// d(omega) = J(theta) dtheta dphi: cos(theta) for fiber, sin(theta) for hemisphere.
-double jacobian(Domain d, double theta);
 
 // n cell centers splitting [lo, hi] evenly: lo + (i + 1/2) (hi - lo) / n.
 std::vector<double> uniform_centers(double lo, double hi, std::size_t n);
@@ -34,8 +38,5 @@ double axis_step(const std::vector<double>& centers);
 // integral of f over the sphere/hemisphere with L_i = 1.
 std::vector<double> integrand_weights(Domain d, const std::vector<double>& theta_i,
                                       const std::vector<double>& phi_i, const float* f);
-
-// Wraps phi into [-pi, pi).
-double wrap_phi(double phi);
 
 }  // namespace bsdfmix

@@ -19,6 +19,16 @@ class Hash64 {
   std::uint64_t h_ = 0x6a09e667f3bcc908ull, n_ = 0;
 };
 
+// SplitMix64 (Steele et al. 2014): x advanced by the golden-ratio increment, then mixed.
+// The fits derive their seeds from (seed, slice, K, restart) with it and step the
+// initialization's random stream by it (host/fit/em_common.cpp, host/sweep/sweep.cpp).
+inline std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
 // The hash of a whole file's bytes; IoError when it cannot be read.
 std::uint64_t hash_file(const std::string& path);
 

@@ -1,8 +1,10 @@
-// The one compile entry point for OpenCL programs, and checked launches.
+// The one compile entry point for OpenCL programs (kernels/common.cl in front of each),
+// and checked launches.
 #include "device/program.hpp"
 
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 
 namespace bsdfmix {
 
@@ -18,7 +21,52 @@ namespace embedded {
 const std::vector<std::pair<std::string, std::string>>& kernel_sources();
 }
 
-std::string kernel_source(const std::string& name) {
+namespace {
+
+constexpr const char* kCommon = "common";
+
+// Builds the source of `label` ("kernels/em.cl") for `device`, cached under `key_name` and
+// the options.
+cl::Program build_cached(const Device& device, const std::string& label, const std::string& key_name,
+                         const std::string& options, const std::function<std::string()>& source_of) {
+  using Key = std::tuple<cl_context, cl_device_id, std::string, std::string>;
+  static std::mutex mutex;
+  static std::map<Key, cl::Program> cache;
+  const std::string full = "-cl-std=CL1.2" + device_defines(device.info()) + " " + options;
+  const Key key{device.context()(), device.cl_device()(), key_name, full};
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = cache.find(key); it != cache.end()) return it->second;
+  }
+  const std::string source = source_of();
+  cl::Program program;
+  try {
+    program = cl::Program(device.context(), source);
+  } catch (const cl::Error& e) {
+    throw_device_error(e, "creating program " + label);
+  }
+  try {
+    program.build(std::vector<cl::Device>{device.cl_device()}, full.c_str());
+  } catch (const cl::Error& e) {
+    std::string log;
+    try {
+      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device.cl_device());
+    } catch (const cl::Error&) {
+      log = "(no build log)";
+    }
+    while (!log.empty() && (log.back() == '\n' || log.back() == '\0')) log.pop_back();
+    throw DeviceError("building " + label + " for " + device.info().label() +
+                      " with options '" + full + "' failed with " + cl_error_name(e.err()) +
+                      "; build log:\n" + log);
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  cache.emplace(key, program);
+  return program;
+}
+
+}  // namespace
+
+std::string kernel_file(const std::string& name) {
   if (const char* dir = std::getenv("BSDFMIX_KERNEL_DIR"); dir && *dir) {
     const std::string path = std::string(dir) + "/" + name + ".cl";
     std::ifstream f(path, std::ios::binary);
@@ -32,45 +80,32 @@ std::string kernel_source(const std::string& name) {
   throw DeviceError("no embedded kernel named '" + name + "'");
 }
 
+std::string program_text(const std::string& name, const std::string& text) {
+  // "#line 1" restarts the count, so that the build log gives the lines of <name>.cl itself.
+  return kernel_file(kCommon) + "\n#line 1 \"" + name + ".cl\"\n" + text;
+}
+
+std::string kernel_source(const std::string& name) {
+  if (name == kCommon)
+    throw DeviceError("kernels/common.cl is put in front of every program, not built on its own");
+  const std::string own = kernel_file(name);
+  return program_text(name, own);
+}
+
 std::string device_defines(const DeviceInfo& info) {
   return std::string(" -DBSDFMIX_FP64=") + (info.fp64 ? "1" : "0") +
          " -DBSDFMIX_CPU=" + (info.is_cpu() ? "1" : "0");
 }
 
 cl::Program build_program(const Device& device, const std::string& name, const std::string& options) {
-  using Key = std::tuple<cl_context, cl_device_id, std::string, std::string>;
-  static std::mutex mutex;
-  static std::map<Key, cl::Program> cache;
-  const std::string full = "-cl-std=CL1.2" + device_defines(device.info()) + " " + options;
-  const Key key{device.context()(), device.cl_device()(), name, full};
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (auto it = cache.find(key); it != cache.end()) return it->second;
-  }
-  const std::string source = kernel_source(name);
-  cl::Program program;
-  try {
-    program = cl::Program(device.context(), source);
-  } catch (const cl::Error& e) {
-    throw_device_error(e, "creating program " + name + ".cl");
-  }
-  try {
-    program.build(std::vector<cl::Device>{device.cl_device()}, full.c_str());
-  } catch (const cl::Error& e) {
-    std::string log;
-    try {
-      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device.cl_device());
-    } catch (const cl::Error&) {
-      log = "(no build log)";
-    }
-    while (!log.empty() && (log.back() == '\n' || log.back() == '\0')) log.pop_back();
-    throw DeviceError("building kernels/" + name + ".cl for " + device.info().label() +
-                      " with options '" + full + "' failed with " + cl_error_name(e.err()) +
-                      "; build log:\n" + log);
-  }
-  std::lock_guard<std::mutex> lock(mutex);
-  cache.emplace(key, program);
-  return program;
+  return build_cached(device, "kernels/" + name + ".cl", name, options, [&] { return kernel_source(name); });
+}
+
+cl::Program build_program_text(const Device& device, const std::string& name, const std::string& text,
+                               const std::string& options) {
+  const std::string key = "text " + name + " " + Hash64().update(text.data(), text.size()).hex();
+  return build_cached(device, "program " + name + " (kernels/common.cl and its text)", key, options,
+                      [&] { return program_text(name, text); });
 }
 
 void launch(const cl::CommandQueue& queue, const cl::Kernel& kernel, const std::string& name,

@@ -8,15 +8,29 @@
 
 namespace bsdfmix {
 
-// The OpenCL C source of kernels/<name>.cl: embedded at build time, or read from
+// The text of the file kernels/<name>.cl: embedded at build time, or read from
 // $BSDFMIX_KERNEL_DIR/<name>.cl when that variable is set (for kernel development).
+std::string kernel_file(const std::string& name);
+
+// The OpenCL C source of the program kernels/<name>.cl, as build_program compiles it:
+// kernels/common.cl (the primitives every program shares: Philox, the phi wrap, the lane
+// sums), then the file itself, its lines numbered from 1 again. Both files come from the
+// same place (kernel_file). DeviceError for "common", which is no program of its own.
 std::string kernel_source(const std::string& name);
 
-// Builds kernels/<name>.cl for `device` with `options` plus the device defines
-// (BSDFMIX_FP64 = 0/1, BSDFMIX_CPU = 0/1). Cached; thread-safe. On failure throws
+// kernels/common.cl, then `text` (lines numbered as <name>.cl).
+std::string program_text(const std::string& name, const std::string& text);
+
+// Builds kernels/<name>.cl (kernel_source) for `device` with `options` plus the device
+// defines (BSDFMIX_FP64 = 0/1, BSDFMIX_CPU = 0/1). Cached; thread-safe. On failure throws
 // DeviceError carrying the build log.
 cl::Program build_program(const Device& device, const std::string& name,
                           const std::string& options = "");
+
+// The same for a program given as text (program_text(name, text)), named `name` in errors:
+// small kernels of tests and tools that use kernels/common.cl. Cached by the text's hash.
+cl::Program build_program_text(const Device& device, const std::string& name, const std::string& text,
+                               const std::string& options = "");
 
 // The device defines build_program adds.
 std::string device_defines(const DeviceInfo& info);

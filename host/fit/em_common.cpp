@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "fit/em_internal.hpp"
 
 namespace bsdfmix {
@@ -143,17 +144,10 @@ int k_bucket(int k) {
 
 namespace {
 
-std::uint64_t splitmix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
-
 struct Rng {
   std::uint64_t state;
   double uniform() {  // [0, 1)
-    state = splitmix(state);
+    state = splitmix64(state);
     return static_cast<double>(state >> 11) * 0x1.0p-53;
   }
 };
@@ -177,7 +171,7 @@ std::size_t sample(const std::vector<double>& p, double total, Rng& rng) {
 Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t slice, int k,
                int restart, const EmSettings& settings) {
   const std::size_t nt = grid.theta.size(), np = grid.phi.size(), n = nt * np;
-  Rng rng{splitmix(splitmix(splitmix(splitmix(settings.seed) ^ (slice * 0xD6E8FEB86659FD93ULL)) ^
+  Rng rng{splitmix64(splitmix64(splitmix64(splitmix64(settings.seed) ^ (slice * 0xD6E8FEB86659FD93ULL)) ^
                             (static_cast<std::uint64_t>(k) * 0xA0761D6478BD642FULL)) ^
                    (static_cast<std::uint64_t>(restart) * 0xE7037ED1A0B428DBULL))};
   std::vector<double> ct(k), cp(k);

@@ -11,7 +11,7 @@ namespace bsdfmix {
 SliceGrid make_slice_grid(Domain domain, std::size_t n_theta, std::size_t n_phi) {
   SliceGrid g;
   g.domain = domain;
-  g.theta = uniform_centers(theta_min(domain), theta_max(domain), n_theta);
+  g.theta = uniform_centers(theta_lo(domain), theta_hi(domain), n_theta);
   g.phi = uniform_centers(-kPi, kPi, n_phi);
   return g;
 }

@@ -20,7 +20,7 @@ Gmm synthetic_lobes(Domain domain, int lobes, std::uint64_t seed) {
     s ^= s << 17;
     return static_cast<double>(s >> 11) * 0x1.0p-53;
   };
-  const double lo = theta_min(domain), hi = theta_max(domain);
+  const double lo = theta_lo(domain), hi = theta_hi(domain);
   const double span = hi - lo;
   Gmm g;
   double wsum = 0;

@@ -34,11 +34,6 @@ void quiet_errors() {
   std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
 }
 
-bool is_hdf5(const std::string& path) {
-  quiet_errors();
-  return H5Fis_hdf5(path.c_str()) > 0;
-}
-
 namespace {
 
 // The number of attributes of an object (0 when it cannot be read).
@@ -300,13 +295,6 @@ double read_double_attr(hid_t obj, const std::string& name, const std::string& w
   if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0)
     throw InputError(where + ": attribute '" + name + "' is not a number");
   return v;
-}
-
-void write_double_attr(hid_t obj, const std::string& name, double value, const std::string& where) {
-  Handle space(H5Screate(H5S_SCALAR));
-  Handle a(H5Acreate2(obj, name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT));
-  if (!a.valid() || H5Awrite(a.get(), H5T_NATIVE_DOUBLE, &value) < 0)
-    throw IoError(where + ": cannot write attribute '" + name + "'");
 }
 
 std::vector<std::string> attr_names(hid_t obj) {

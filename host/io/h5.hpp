@@ -39,9 +39,6 @@ class Handle {
 // Silences HDF5's own error printing (once per process); we report errors ourselves.
 void quiet_errors();
 
-// True when `path` is an HDF5 file.
-bool is_hdf5(const std::string& path);
-
 Handle open_file(const std::string& path);    // read-only; InputError if missing or not HDF5
 Handle create_file(const std::string& path);  // truncates; IoError on failure
 bool exists(hid_t loc, const std::string& name);
@@ -72,7 +69,6 @@ void write_string_attr(hid_t obj, const std::string& name, const std::string& va
                        const std::string& where);
 // Numeric scalar attributes.
 double read_double_attr(hid_t obj, const std::string& name, const std::string& where);
-void write_double_attr(hid_t obj, const std::string& name, double value, const std::string& where);
 
 // Lists the attribute names of an object.
 std::vector<std::string> attr_names(hid_t obj);

@@ -175,7 +175,7 @@ MixtureFile read_mixture_file(const std::string& path) {
 
 mix::MixtureSet to_mixture_set(const MixtureFile& m) {
   mix::MixtureSet set;
-  set.domain = m.domain == Domain::Fiber ? mix::Domain::Fiber : mix::Domain::Hemisphere;
+  set.domain = m.domain;
   set.azimuthal = m.azimuthal;
   set.grid_theta_o = m.table_theta_o;
   set.grid_phi_o = m.table_phi_o;

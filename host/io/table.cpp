@@ -2,22 +2,18 @@
 #include "io/table.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "io/h5.hpp"
 
 namespace bsdfmix {
 
 namespace {
 
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+std::string fmt(double v) { return format_number(v, "%.6g"); }
 
 // Uniform spacing within a relative tolerance; returns the step.
 double check_uniform(const std::vector<double>& c, const std::string& where, const std::string& name) {
@@ -62,7 +58,7 @@ std::string slice_name(std::size_t t_o, std::size_t p_o) {
 }  // namespace
 
 void validate_meta(const TableMeta& m, const std::string& where) {
-  const double tlo = theta_min(m.domain), thi = theta_max(m.domain);
+  const double tlo = theta_lo(m.domain), thi = theta_hi(m.domain);
   const double st_o = check_uniform(m.theta_o, where, "theta_o");
   check_inside(m.theta_o, 0.0, tlo, thi, where, "theta_o");
   (void)st_o;
@@ -91,9 +87,9 @@ TableMeta make_grid(Domain domain, std::size_t n_theta_o, std::size_t n_phi_o, s
   TableMeta m;
   m.domain = domain;
   m.azimuthal = azimuthal;
-  m.theta_o = uniform_centers(theta_min(domain), theta_max(domain), n_theta_o);
+  m.theta_o = uniform_centers(theta_lo(domain), theta_hi(domain), n_theta_o);
   m.phi_o = azimuthal ? std::vector<double>{0.0} : uniform_centers(-kPi, kPi, n_phi_o);
-  m.theta_i = uniform_centers(theta_min(domain), theta_max(domain), n_theta_i);
+  m.theta_i = uniform_centers(theta_lo(domain), theta_hi(domain), n_theta_i);
   m.phi_i = uniform_centers(-kPi, kPi, n_phi_i);
   return m;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "core/domain.hpp"
 #include "core/error.hpp"
 
 namespace bsdfmix {
@@ -13,7 +14,6 @@ namespace render {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kGoldenAngle = 2.39996322972865332;  // pi (3 - sqrt 5): the sunflower pattern
 constexpr double kMaxSegments = 5e6;                 // beyond this the tracer's memory is the limit
 
@@ -59,7 +59,7 @@ void check(const ClothParams& p, const std::string& where) {
 // The drape: the flat patch bent onto a cylinder (axis y through (0, 0, -R)) or a sphere
 // (centre (0, 0, -R)), z becoming the height above that surface. Lengths along x (and y on
 // the sphere) are kept on the surface z = 0.
-V3 drape(const std::string& kind, double R, const V3& p) {
+Vec3 drape(const std::string& kind, double R, const Vec3& p) {
   if (kind == "cylinder") {
     const double a = p[0] / R;
     return {(R + p[2]) * std::sin(a), p[1], (R + p[2]) * std::cos(a) - R};
@@ -118,7 +118,7 @@ Cloth make_cloth(const ClothParams& p, const std::string& where) {
         const double t = c - j, z0 = crossing_z(j), z1 = crossing_z(j + 1);
         dz = (z1 - z0) * kPi / 2 * std::sin(kPi * t) / p.yarn_spacing;
         const double z = z0 + (z1 - z0) * (1 - std::cos(kPi * t)) / 2;
-        return dir == 0 ? V3{u, across, z} : V3{across, u, z};
+        return dir == 0 ? Vec3{u, across, z} : Vec3{across, u, z};
       };
 
       for (int k = 0; k < p.plies; ++k) {
@@ -134,17 +134,17 @@ Cloth make_cloth(const ClothParams& p, const std::string& where) {
           for (int s = 0; s <= steps; ++s) {
             const double u = -half + p.size * s / steps, arc = u + half;  // arc: distance from the yarn's start
             double dz = 0;
-            const V3 c = centre(u, dz);
+            const Vec3 c = centre(u, dz);
             // Frame: tangent T, normal N in the plane of T and +z, binormal B = T x N.
-            const V3 T = normalized(dir == 0 ? V3{1, 0, dz} : V3{0, 1, dz});
-            const V3 N = normalized({-T[2] * T[0], -T[2] * T[1], 1 - T[2] * T[2]});
-            const V3 B = {T[1] * N[2] - T[2] * N[1], T[2] * N[0] - T[0] * N[2], T[0] * N[1] - T[1] * N[0]};
+            const Vec3 T = normalized(dir == 0 ? Vec3{1, 0, dz} : Vec3{0, 1, dz});
+            const Vec3 N = normalized({-T[2] * T[0], -T[2] * T[1], 1 - T[2] * T[2]});
+            const Vec3 B = {T[1] * N[2] - T[2] * N[1], T[2] * N[0] - T[0] * N[2], T[0] * N[1] - T[1] * N[0]};
             const double theta = 2 * kPi * (static_cast<double>(k) / p.plies + p.ply_twist * arc);
             const double psi = phi + 2 * kPi * p.fiber_twist * arc;
             // Offset: ply centre on a circle of radius rp, fiber about the ply centre.
             const double on = rp * std::cos(theta) + rho * std::cos(psi);
             const double ob = rp * std::sin(theta) + rho * std::sin(psi);
-            const V3 q{c[0] + on * N[0] + ob * B[0], c[1] + on * N[1] + ob * B[1], c[2] + on * N[2] + ob * B[2]};
+            const Vec3 q{c[0] + on * N[0] + ob * B[0], c[1] + on * N[1] + ob * B[1], c[2] + on * N[2] + ob * B[2]};
             fiber.points.push_back(drape(p.drape, p.drape_radius, q));
           }
           cloth.fibers.push_back(std::move(fiber));
@@ -157,7 +157,7 @@ Cloth make_cloth(const ClothParams& p, const std::string& where) {
   cloth.lo = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
   cloth.hi = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   for (const Fiber& f : cloth.fibers)
-    for (const V3& q : f.points)
+    for (const Vec3& q : f.points)
       for (int d = 0; d < 3; ++d) {
         cloth.lo[d] = std::min(cloth.lo[d], q[d] - f.radius);
         cloth.hi[d] = std::max(cloth.hi[d], q[d] + f.radius);

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "render/vec3.hpp"
+#include "core/vec3.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -31,13 +31,13 @@ struct ClothParams {
 };
 
 struct Fiber {
-  std::vector<V3> points;  // control points (polyline)
+  std::vector<Vec3> points;  // control points (polyline)
   double radius = 0;
 };
 
 struct Cloth {
   std::vector<Fiber> fibers;
-  V3 lo{0, 0, 0}, hi{0, 0, 0};  // bounding box of the control points (radius included)
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};  // bounding box of the control points (radius included)
   std::size_t segments() const;
 };
 

@@ -15,25 +15,25 @@ constexpr double kUniformPdf = 1 / (4 * kPi);
 
 }  // namespace
 
-FiberFrame::FiberFrame(const V3& tangent, const V3& wo) {
+FiberFrame::FiberFrame(const Vec3& tangent, const Vec3& wo) {
   t = normalized(tangent);
   const double s = std::clamp(dot(wo, t), -1.0, 1.0);
   theta_o = std::asin(s);
-  V3 p{wo[0] - s * t[0], wo[1] - s * t[1], wo[2] - s * t[2]};
+  Vec3 p{wo[0] - s * t[0], wo[1] - s * t[1], wo[2] - s * t[2]};
   if (dot(p, p) < 1e-20) p = std::abs(t[0]) < 0.9 ? cross(t, {1, 0, 0}) : cross(t, {0, 1, 0});
   n = normalized(p);
   b = cross(t, n);
 }
 
-void FiberFrame::to_local(const V3& w, double& theta, double& phi) const {
+void FiberFrame::to_local(const Vec3& w, double& theta, double& phi) const {
   theta = std::asin(std::clamp(dot(w, t), -1.0, 1.0));
   phi = std::atan2(dot(w, b), dot(w, n));
   phi = wrap_phi(phi);
 }
 
-V3 FiberFrame::to_world(double theta, double phi) const {
+Vec3 FiberFrame::to_world(double theta, double phi) const {
   const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
-  V3 w;
+  Vec3 w;
   for (int i = 0; i < 3; ++i) w[i] = st * t[i] + ct * (cp * n[i] + sp * b[i]);
   return w;
 }
@@ -76,7 +76,7 @@ FiberBsdf::FiberBsdf(const std::string& table_path) {
 }
 
 void FiberBsdf::set_mixture(const mix::MixtureSet& set) {
-  if (set.domain != mix::Domain::Fiber) throw InputError("render: the mixture file is not of a fiber table");
+  if (set.domain != Domain::Fiber) throw InputError("render: the mixture file is not of a fiber table");
   set_ = set;
   has_set_ = !set_.slices.empty();
   fitted_.assign(meta_.theta_o.size(), -1);
@@ -90,19 +90,10 @@ void FiberBsdf::set_mixture(const mix::MixtureSet& set) {
 }
 
 void FiberBsdf::bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const {
-  const std::size_t n = meta_.theta_o.size();
-  const double u = (theta_o - to0_) / dto_;
-  if (n == 1 || u <= 0) {
-    i0 = i1 = 0;
-    w = 0;
-  } else if (u >= double(n - 1)) {
-    i0 = i1 = n - 1;
-    w = 0;
-  } else {
-    i0 = std::size_t(u);
-    i1 = i0 + 1;
-    w = u - double(i0);
-  }
+  const Bracket b = mix::bracket(to0_, dto_, meta_.theta_o.size(), theta_o, false);
+  i0 = b.i0;
+  i1 = b.i1;
+  w = b.f;
 }
 
 double FiberBsdf::cell_f(std::size_t slice, double theta, double phi) const {
@@ -149,12 +140,12 @@ double FiberBsdf::f(FiberF which, double theta_o, double theta, double phi) cons
 
 mix::Sample FiberBsdf::mixture_sample(double theta_o, const double u[4]) const {
   if (bracketed(theta_o)) return set_.sample(theta_o, 0.0, u[0], u[1], u[2], u[3]);
-  return set_.slices[std::size_t(nearest_fitted(theta_o))].sample(mix::Domain::Fiber, u[1], u[2], u[3]);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].sample(Domain::Fiber, u[1], u[2], u[3]);
 }
 
 double FiberBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
   if (bracketed(theta_o)) return set_.pdf_omega(theta_o, 0.0, theta, phi);
-  return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(mix::Domain::Fiber, theta, phi);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(Domain::Fiber, theta, phi);
 }
 
 void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double& theta, double& phi,

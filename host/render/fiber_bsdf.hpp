@@ -68,11 +68,11 @@ class FiberBsdf {
 
 // Fiber frame at a hit: tangent t and the plane of omega_o (phi = 0 along n).
 struct FiberFrame {
-  V3 t, n, b;
+  Vec3 t, n, b;
   double theta_o = 0;
-  FiberFrame(const V3& tangent, const V3& wo);
-  void to_local(const V3& w, double& theta, double& phi) const;
-  V3 to_world(double theta, double phi) const;
+  FiberFrame(const Vec3& tangent, const Vec3& wo);
+  void to_local(const Vec3& w, double& theta, double& phi) const;
+  Vec3 to_world(double theta, double phi) const;
 };
 
 }  // namespace render

@@ -1,4 +1,4 @@
-// Images of `bsdfmix render`: float32 OpenEXR and greyscale PFM, written atomically.
+// Images of `bsdfmix render`: float32 OpenEXR, written atomically, and PFM (host/io/pfm.cpp).
 #include "render/image_io.hpp"
 
 #include <unistd.h>
@@ -9,19 +9,19 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 
-#include <cctype>
 #include <cerrno>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <utility>
 #include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "io/pfm.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -33,12 +33,6 @@ namespace {
 // Largest side accepted when reading: guards against absurd headers.
 constexpr long long kMaxSide = 1 << 20;
 constexpr long long kMaxPixels = 1LL << 30;
-
-// Luminance of an RGB pixel; exact when R = G = B (the images written here).
-float luminance(float r, float g, float b) {
-  if (r == g && g == b) return r;
-  return float(0.2126 * double(r) + 0.7152 * double(g) + 0.0722 * double(b));
-}
 
 void check_writable_image(const std::string& path, const Image& image) {
   if (image.width <= 0 || image.height <= 0)
@@ -81,18 +75,6 @@ void commit(TempGuard& guard, const std::string& path) {
   if (ec) throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
   guard.committed = true;
   fsync_directory(path);
-}
-
-std::uint32_t float_bits(float f) {
-  std::uint32_t u;
-  std::memcpy(&u, &f, 4);
-  return u;
-}
-
-float bits_float(std::uint32_t u) {
-  float f;
-  std::memcpy(&f, &u, 4);
-  return f;
 }
 
 }  // namespace
@@ -163,91 +145,15 @@ Image read_exr(const std::string& path) {
 
 void write_pfm(const std::string& path, const Image& image) {
   check_writable_image(path, image);
-  TempGuard guard{temp_name(path)};
-  {
-    std::ofstream f(guard.temp, std::ios::binary | std::ios::trunc);
-    if (!f) throw IoError(path + ": cannot create " + guard.temp + ": " + std::strerror(errno));
-    f << "Pf\n" << image.width << ' ' << image.height << "\n-1.0\n";
-    std::vector<unsigned char> row(std::size_t(image.width) * 4);
-    for (int y = image.height - 1; y >= 0; --y) {  // PFM: bottom row first
-      for (int x = 0; x < image.width; ++x) {
-        const std::uint32_t u = float_bits(image.at(x, y));
-        for (int k = 0; k < 4; ++k) row[std::size_t(x) * 4 + std::size_t(k)] = (u >> (8 * k)) & 0xff;
-      }
-      f.write(reinterpret_cast<const char*>(row.data()), std::streamsize(row.size()));
-    }
-    f.flush();
-    if (!f) throw IoError(path + ": write failed (disk full?)");
-  }
-  commit(guard, path);
+  bsdfmix::write_pfm(path, image.width, image.height, image.v);
 }
 
 Image read_pfm_image(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw IoError(path + ": cannot open the PFM file: " + std::strerror(errno));
-  // Header: three whitespace-separated tokens after the magic, then one whitespace byte.
-  auto token = [&](const char* what) {
-    std::string t;
-    int c = f.get();
-    while (c != EOF && std::isspace(c)) c = f.get();
-    while (c != EOF && !std::isspace(c) && t.size() < 64) {
-      t.push_back(char(c));
-      c = f.get();
-    }
-    if (t.empty() || c == EOF || !std::isspace(c))
-      throw InputError(path + ": not a PFM file (bad or truncated header at the " + what + ")");
-    return t;
-  };
-  const std::string magic = token("magic");
-  int channels = 0;
-  if (magic == "Pf")
-    channels = 1;
-  else if (magic == "PF")
-    channels = 3;
-  else
-    throw InputError(path + ": not a PFM file (magic is not Pf or PF)");
-  auto integer = [&](const char* what) {
-    const std::string t = token(what);
-    long long v = 0;
-    for (char c : t) {
-      if (c < '0' || c > '9' || v > kMaxSide)
-        throw InputError(path + ": bad PFM " + what + " '" + t + "'");
-      v = v * 10 + (c - '0');
-    }
-    if (v <= 0 || v > kMaxSide) throw InputError(path + ": bad PFM " + what + " '" + t + "'");
-    return v;
-  };
-  const long long w = integer("width"), h = integer("height");
-  if (w * h > kMaxPixels)
-    throw InputError(path + ": PFM too large (" + std::to_string(w) + "x" + std::to_string(h) + ")");
-  const std::string scale_s = token("scale");
-  char* end = nullptr;
-  const double scale = std::strtod(scale_s.c_str(), &end);
-  if (end == scale_s.c_str() || *end != '\0' || scale == 0.0 || !std::isfinite(scale))
-    throw InputError(path + ": bad PFM scale '" + scale_s + "'");
-  const bool little = scale < 0;
-
-  Image image{int(w), int(h)};
-  const std::size_t row_bytes = std::size_t(w) * 4 * std::size_t(channels);
-  std::vector<unsigned char> row(row_bytes);
-  for (long long y = h - 1; y >= 0; --y) {
-    f.read(reinterpret_cast<char*>(row.data()), std::streamsize(row_bytes));
-    if (f.gcount() != std::streamsize(row_bytes))
-      throw InputError(path + ": truncated PFM (" + std::to_string(w) + "x" + std::to_string(h) +
-                       " pixels expected)");
-    for (long long x = 0; x < w; ++x) {
-      float c[3] = {0, 0, 0};
-      for (int k = 0; k < channels; ++k) {
-        const unsigned char* p = row.data() + (std::size_t(x) * std::size_t(channels) + std::size_t(k)) * 4;
-        std::uint32_t u = 0;
-        for (int b = 0; b < 4; ++b) u |= std::uint32_t(p[little ? b : 3 - b]) << (8 * b);
-        c[k] = bits_float(u);
-      }
-      image.at(int(x), int(y)) = channels == 1 ? c[0] : luminance(c[0], c[1], c[2]);
-    }
-  }
-  if (f.peek() != std::char_traits<char>::eof())
-    throw InputError(path + ": trailing bytes after the PFM pixels");
+  PfmImage p = read_pfm(path);
+  Image image;
+  image.width = p.width;
+  image.height = p.height;
+  image.v = std::move(p.luminance);
   return image;
 }
 

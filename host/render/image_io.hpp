@@ -25,7 +25,8 @@ void write_exr(const std::string& path, const Image& image);
 // Reads an EXR written above (or any RGB/Y EXR: luminance 0.2126 R + 0.7152 G + 0.0722 B,
 // or Y); throws IoError/InputError naming the path.
 Image read_exr(const std::string& path);
-// Greyscale PFM ("Pf", little endian, rows bottom to top as the format says).
+// Greyscale PFM ("Pf", little endian, rows bottom to top as the format says) and its
+// reader (PF or Pf): host/io/pfm.hpp's codec, with its checks, for an Image.
 void write_pfm(const std::string& path, const Image& image);
 Image read_pfm_image(const std::string& path);
 

@@ -62,19 +62,19 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
       else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, v.light->pdf(ray.dir));
       break;
     }
-    const V3 wo = neg(ray.dir);
+    const Vec3 wo = neg(ray.dir);
     double u[4];
     const std::uint32_t dim = std::uint32_t(depth) * 4;
     // The vertex: value(w) = f c (fiber: f; ground: albedo / pi cos+), sample, pdf.
     const bool fiber = hit.kind == HitKind::Fiber;
     FiberFrame frame = fiber ? FiberFrame(hit.tangent, wo) : FiberFrame({1, 0, 0}, {0, 0, 1});
-    V3 gn = hit.normal, g1{1, 0, 0}, g2{0, 1, 0};
+    Vec3 gn = hit.normal, g1{1, 0, 0}, g2{0, 1, 0};
     if (!fiber) {
       g1 = normalized(std::abs(gn[0]) < 0.9 ? cross(gn, {1, 0, 0}) : cross(gn, {0, 1, 0}));
       g2 = cross(gn, g1);
     }
     if (fiber && theta_out) theta_out->push_back(frame.theta_o);
-    auto value = [&](const V3& w) {
+    auto value = [&](const Vec3& w) {
       if (fiber) {
         double th, ph;
         frame.to_local(w, th, ph);
@@ -83,7 +83,7 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
       const double c = dot(w, gn);
       return c > 0 ? v.ground_albedo / kPi * c : 0.0;
     };
-    auto pdf_of = [&](const V3& w) {
+    auto pdf_of = [&](const Vec3& w) {
       if (fiber) {
         double th, ph;
         frame.to_local(w, th, ph);
@@ -103,7 +103,7 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
     // next-event estimation
     if (nee) {
       rng.draw(dim + 1, u);
-      const V3 wl = v.light->sample(u[0], u[1], u[2], u[3]);
+      const Vec3 wl = v.light->sample(u[0], u[1], u[2], u[3]);
       const double pl = v.light->pdf(wl);
       const double fv = pl > 0 ? value(wl) : 0.0;
       if (fv > 0) {
@@ -116,7 +116,7 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
     }
     // the next direction
     rng.draw(dim + 2, u);
-    V3 wi;
+    Vec3 wi;
     double pdf = 0;
     if (fiber) {
       double th, ph;
@@ -150,9 +150,9 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
 }  // namespace
 
 Ray camera_ray(const Camera& c, int width, int height, double x, double y) {
-  const V3 f = normalized({c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]});
-  const V3 r = normalized(cross(f, c.up));
-  const V3 up = cross(r, f);
+  const Vec3 f = normalized({c.look_at[0] - c.position[0], c.look_at[1] - c.position[1], c.look_at[2] - c.position[2]});
+  const Vec3 r = normalized(cross(f, c.up));
+  const Vec3 up = cross(r, f);
   const double t = std::tan(0.5 * c.fov_deg * kPi / 180), aspect = double(width) / double(height);
   const double sx = (2 * x / width - 1) * t * aspect, sy = (1 - 2 * y / height) * t;
   Ray ray;

@@ -6,9 +6,13 @@
 #include <filesystem>
 #include <set>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/output_lock.hpp"
 #include "core/progress.hpp"
-#include "sweep/sweep.hpp"
+#include "device/device.hpp"
+#include "sweep/fit_slices.hpp"
+#include "sweep/sweep_outputs.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -33,18 +37,28 @@ MixtureFile render_mixtures(const std::string& table, const FitSection& fit_sect
                             const std::vector<std::size_t>& need, const std::string& device_selector) {
   const TableReader reader(table);
   const TableMeta& meta = reader.meta();
-  FitSection fit = fit_section;
-  fit.theta_o.clear();
-  for (std::size_t i : need) fit.theta_o.push_back(meta.theta_o[i]);
+  const FitSection& fit = fit_section;
+  std::vector<SliceRef> slices;  // the renderer's tables are azimuthal: one phi_o
+  std::vector<double> thetas;
+  for (std::size_t i : need) {
+    slices.push_back({meta.slice_index(i, 0), i, 0});
+    thetas.push_back(meta.theta_o[i]);
+  }
+  const OutputLock lock(fit.output);  // a fit of the same output elsewhere fails here, at once
   if (std::filesystem::exists(fit.output)) {
     // Reused when it holds exactly the slices needed (the sweep stores their grid theta_o),
     // fitted to this table with these settings.
     MixtureFile mf = read_mixture_file(fit.output);
-    if (mf.theta_o == fit.theta_o && mf.table_source == meta.source && mf.fit_settings == fit_settings_json(fit))
+    if (mf.theta_o == thetas && mf.table_source == meta.source && mf.fit_settings == fit_settings_json(fit))
       return mf;
   }
-  run_sweep(table, fit, device_selector);
-  return read_mixture_file(fit.output);
+  for (const auto* out : {&fit.output, &fit.report, &fit.search_report}) prepare_output(*out, 1 << 20);
+  const std::vector<Device> devices = select_devices(device_selector);
+  log_line("render: fitting " + std::to_string(slices.size()) + " slice(s) of " + table + ", K in [" +
+           std::to_string(fit.k_min) + ", " + std::to_string(fit.k_max) + "]");
+  SweepResult result = fit_slices(TableSlices(reader), slices, fit, devices, "fit " + table);
+  write_outputs(result, table, meta, fit);
+  return std::move(result.mixture);
 }
 
 }  // namespace render

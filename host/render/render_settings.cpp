@@ -36,7 +36,7 @@ ConfigNode nested(const RenderSection& s, const ConfigNode& parent, const std::s
   return ConfigNode(parent.file(), parent.path() + "." + key, out);
 }
 
-V3 vec3(const ConfigNode& n, const std::string& key) {
+Vec3 vec3(const ConfigNode& n, const std::string& key) {
   const std::vector<double> v = n.numbers(key);
   if (v.size() != 3) n.fail(key, "expected three numbers [x, y, z]");
   for (double x : v)

@@ -20,7 +20,7 @@ const char* path_estimator_name(PathEstimator e);
 bool uses_light_sampling(PathEstimator e);
 
 struct Camera {
-  V3 position{0, -1.3, 1.1}, look_at{0, 0, 0}, up{0, 0, 1};
+  Vec3 position{0, -1.3, 1.1}, look_at{0, 0, 0}, up{0, 0, 1};
   double fov_deg = 40;  // vertical
 };
 

@@ -82,12 +82,12 @@ struct Tracer::Impl {
   bool bspline() const { return type == CurveType::FlatBSpline || type == CurveType::RoundBSpline; }
 
   // Unit tangent of segment `prim` at curve parameter u (in [0, 1]).
-  V3 tangent(unsigned prim, float u) const {
+  Vec3 tangent(unsigned prim, float u) const {
     const float* p = vertices + 4 * static_cast<std::size_t>(indices[prim]);
     if (!bspline()) return normalized({p[4] - p[0], p[5] - p[1], p[6] - p[2]});
     // Derivative of the uniform cubic B-spline basis over the four control points.
     const double v = u, w[4] = {-(1 - v) * (1 - v) / 2, (3 * v * v - 4 * v) / 2, (-3 * v * v + 2 * v + 1) / 2, v * v / 2};
-    V3 d{0, 0, 0};
+    Vec3 d{0, 0, 0};
     for (int k = 0; k < 4; ++k)
       for (int c = 0; c < 3; ++c) d[c] += w[k] * p[4 * k + c];
     return normalized(d);
@@ -147,17 +147,17 @@ Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type) : 
     m.fiber_of.resize(segment_count);
 
     std::size_t v = 0, s = 0;
-    auto put = [&](const V3& p, double r) {
+    auto put = [&](const Vec3& p, double r) {
       float* o = vb + 4 * v++;
       o[0] = static_cast<float>(p[0]), o[1] = static_cast<float>(p[1]), o[2] = static_cast<float>(p[2]);
       o[3] = static_cast<float>(r);
     };
     for (std::size_t f = 0; f < cloth.fibers.size(); ++f) {
-      const std::vector<V3>& pts = cloth.fibers[f].points;
+      const std::vector<Vec3>& pts = cloth.fibers[f].points;
       const double r = cloth.fibers[f].radius;
       const std::size_t n = pts.size(), first = v;
       if (m.bspline()) put(sub(pts[0], sub(pts[1], pts[0])), r);
-      for (const V3& p : pts) put(p, r);
+      for (const Vec3& p : pts) put(p, r);
       if (m.bspline()) put(sub(pts[n - 1], sub(pts[n - 2], pts[n - 1])), r);
       for (std::size_t k = 0; k + 1 < n; ++k, ++s) {
         ib[s] = static_cast<unsigned>(first + k);

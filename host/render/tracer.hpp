@@ -12,7 +12,7 @@ namespace bsdfmix {
 namespace render {
 
 struct Ray {
-  V3 org{0, 0, 0}, dir{0, 0, 1};  // dir unit
+  Vec3 org{0, 0, 0}, dir{0, 0, 1};  // dir unit
   double tnear = 0, tfar = 1e30;
   // The fiber the ray leaves (-1: none): hits on that fiber closer than `skip` are
   // ignored, so a ray leaving a fiber's ribbon does not hit the same ribbon again.
@@ -25,9 +25,9 @@ enum class HitKind { None, Fiber, Ground };
 struct Hit {
   HitKind kind = HitKind::None;
   double t = 0;
-  V3 position{0, 0, 0};
-  V3 tangent{0, 0, 0};  // fibers: unit curve tangent at the hit
-  V3 normal{0, 0, 0};   // ground: unit normal facing the ray's origin
+  Vec3 position{0, 0, 0};
+  Vec3 tangent{0, 0, 0};  // fibers: unit curve tangent at the hit
+  Vec3 normal{0, 0, 0};   // ground: unit normal facing the ray's origin
   std::int64_t fiber = -1;
 };
 

@@ -11,8 +11,6 @@ namespace bsdfmix {
 
 namespace {
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
 // An orthonormal pair perpendicular to the unit vector n (Duff et al. 2017).
 void basis(const Vec3& n, Vec3& t1, Vec3& t2) {
   const double s = std::copysign(1.0, n[2]);

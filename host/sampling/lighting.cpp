@@ -8,15 +8,6 @@
 
 namespace bsdfmix {
 
-namespace {
-
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
-}  // namespace
-
 Vec3 Lighting::to_world(double theta, double phi) const {
   const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
   const double a = domain == Domain::Fiber ? st : ct, r = domain == Domain::Fiber ? ct : st;

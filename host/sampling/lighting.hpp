@@ -1,19 +1,17 @@
 // Incident lighting L_i of a convergence scene, in the table's angular frame: a constant,
 // lobes (a sun), a sky gradient and a lat-long environment map. The same function runs
 // in kernels/sample.cl (radiance) on the packed floats of pack(); this is its double
-// precision reference. Scenes are parsed from YAML in host/converge/scene.cpp.
+// precision reference. Scenes are parsed from YAML in host/scene/scene.cpp.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
 
 #include "core/domain.hpp"
+#include "core/vec3.hpp"
 
 namespace bsdfmix {
-
-using Vec3 = std::array<double, 3>;
 
 struct LightLobe {
   Vec3 direction{0, 0, 1};  // unit, world space

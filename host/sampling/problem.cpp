@@ -43,7 +43,7 @@ static int block_images(double sigma_c) {
 
 QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit) {
   QueryMixture qm;
-  qm.domain = set.domain == mix::Domain::Fiber ? Domain::Fiber : Domain::Hemisphere;
+  qm.domain = set.domain;
   qm.blend = set.blend(theta_o, phi_o);
   const auto& b = qm.blend;
   qm.q.assign(QueryMixture::kQuery, 0.f);
@@ -115,7 +115,7 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
 
 QueryMixture make_query(const mix::SliceMixture& mixture, Domain domain) {
   mix::MixtureSet one;
-  one.domain = domain == Domain::Fiber ? mix::Domain::Fiber : mix::Domain::Hemisphere;
+  one.domain = domain;
   one.azimuthal = true;
   one.grid_theta_o = {0.0};
   one.grid_phi_o = {0.0};
@@ -130,7 +130,7 @@ QueryMixture make_query(const mix::SliceMixture& mixture, Domain domain) {
 // ---- the table slice --------------------------------------------------------------------
 
 double TableSlice::theta_edge(std::size_t i) const {
-  return std::clamp(th0 + dth * double(i), theta_min(domain), theta_max(domain));
+  return std::clamp(th0 + dth * double(i), theta_lo(domain), theta_hi(domain));
 }
 
 double TableSlice::f_at(double theta, double phi_world) const {
@@ -175,7 +175,7 @@ TableSlice blended_slice(const TableReader& table, const mix::MixtureSet& set, d
   t.dph = axis_step(m.phi_i);
   t.th0 = m.theta_i.front() - t.dth / 2;
   t.ph0 = m.phi_i.front() - t.dph / 2;
-  if ((set.domain == mix::Domain::Fiber) != (m.domain == Domain::Fiber))
+  if (set.domain != m.domain)
     throw InputError(table.path() + ": the table's domain differs from the mixture file's");
   const auto b = set.blend(theta_o, phi_o);
   t.rotate = b.rotate;

@@ -41,9 +41,8 @@ void uniform_draw(Domain d, double u, double v, double& theta, double& phi) {
 
 double uniform_pdf(Domain d) { return d == Domain::Hemisphere ? 1 / (2 * kPi) : 1 / (4 * kPi); }
 double cos_factor(Domain d, double theta) { return d == Domain::Hemisphere ? std::cos(theta) : 1.0; }
-mix::Domain mix_domain(Domain d) { return d == Domain::Fiber ? mix::Domain::Fiber : mix::Domain::Hemisphere; }
 
-bool inside(Domain d, double theta) { return theta >= theta_min(d) && theta <= theta_max(d); }
+bool inside(Domain d, double theta) { return theta >= theta_lo(d) && theta <= theta_hi(d); }
 
 // The table CDF's draw: cell by the 2D CDF, theta inside it with density c J, phi uniform.
 bool cdf_draw(const Problem& p, double u0, double u1, double u2, double u3, double& th, double& ph) {
@@ -135,7 +134,7 @@ void technique_pdfs(const Problem& p, Estimator e, double th, double ph, double*
       pdf[2] = in ? uniform_pdf(d) : 0;
       break;
     case Estimator::MisProduct:
-      pdf[0] = in ? p.product.pdf_omega(mix_domain(d), th, ph) : 0;
+      pdf[0] = in ? p.product.pdf_omega(d, th, ph) : 0;
       pdf[1] = light_pdf(p, th, ph);
       pdf[2] = in ? uniform_pdf(d) : 0;
       break;
@@ -158,7 +157,7 @@ double estimator_pdf(const Problem& p, Estimator e, double th, double ph) {
              (1 - p.mis.uniform_fraction) * p.set->pdf_omega(p.theta_o, p.phi_o, th, ph);
     case Estimator::CdfTab: return cdf_pdf(p, th, ph);
     case Estimator::Light: return light_pdf(p, th, ph);
-    case Estimator::Product: return p.has_product ? p.product.pdf_omega(mix_domain(d), th, ph) : 0;
+    case Estimator::Product: return p.has_product ? p.product.pdf_omega(d, th, ph) : 0;
     case Estimator::MisLightCdf:
     case Estimator::MisLightGmm:
     case Estimator::MisProduct: {
@@ -201,7 +200,7 @@ double estimate_cpu(const Problem& p, Estimator e, const double u[4]) {
         uniform_draw(d, u[2], u[3], th, ph);
       } else {
         const mix::Sample s = set.sample(to, po, (u[0] - a) / (1 - a), u[1], u[2], u[3]);
-        if (!(s.theta >= theta_min(d) && s.theta <= theta_max(d))) return 0;
+        if (!(s.theta >= theta_lo(d) && s.theta <= theta_hi(d))) return 0;
         th = s.theta;
         ph = s.phi;
       }
@@ -232,7 +231,7 @@ double estimate_cpu(const Problem& p, Estimator e, const double u[4]) {
     }
     case Estimator::Product: {
       if (!p.has_product) return 0;
-      const mix::Sample s = p.product.sample(mix_domain(d), u[1], u[2], u[3]);
+      const mix::Sample s = p.product.sample(d, u[1], u[2], u[3]);
       if (!s.valid) return 0;
       const double f = p.table.f_at(s.theta, s.phi);
       if (f == 0) return 0;
@@ -263,7 +262,7 @@ double estimate_cpu(const Problem& p, Estimator e, const double u[4]) {
         th = s.theta;
         ph = s.phi;
       } else {
-        const mix::Sample s = p.product.sample(mix_domain(d), u[1], u[2], u[3]);
+        const mix::Sample s = p.product.sample(d, u[1], u[2], u[3]);
         th = s.theta;
         ph = s.phi;
       }

@@ -1,4 +1,4 @@
-// The lighting's mixture: cell weights, the pseudo-table the sweep fits, the cache.
+// The lighting's mixture: cell weights, fitted in memory by the sweep, and the cache.
 #include "scene/light_mixture.hpp"
 
 #include <algorithm>
@@ -12,6 +12,9 @@
 #include "core/hash.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
+#include "device/device.hpp"
+#include "sweep/fit_slices.hpp"
+#include "sweep/slice_source.hpp"
 #include "sweep/sweep.hpp"
 
 namespace bsdfmix {
@@ -37,6 +40,37 @@ std::vector<double> lighting_cell_weights(const Lighting& light, const TableMeta
   return w;
 }
 
+namespace {
+
+// The lighting's cells as the one slice a sweep fits, on the table's grid (one omega_o).
+// The sweep's weights are f c J x cell area; a table holds f as float32, and so do these
+// cells: f = float(L cell integral / (c J x cell area)), so that the lighting is fitted at
+// a table's precision and its mixtures are those a table of the same cells gives.
+class LightingSlices final : public SliceSource {
+ public:
+  LightingSlices(const Lighting& light, const TableMeta& grid, const std::string& name) : meta_(grid) {
+    meta_.azimuthal = true;
+    meta_.theta_o = {grid.theta_o.empty() ? 0.0 : grid.theta_o.front()};
+    meta_.phi_o = {0.0};
+    meta_.rgb = false;
+    meta_.source = "{\"lighting\": \"" + name + "\", \"weights\": \"L_i dtheta dphi / (c J dtheta dphi)\"}";
+    const std::vector<double> w = lighting_cell_weights(light, meta_);
+    const std::vector<float> ones(w.size(), 1.f);
+    const std::vector<double> g = integrand_weights(meta_.domain, meta_.theta_i, meta_.phi_i, ones.data());
+    std::vector<float> f(w.size());
+    for (std::size_t c = 0; c < w.size(); ++c) f[c] = g[c] > 0 ? float(w[c] / g[c]) : 0.f;
+    weights_ = integrand_weights(meta_.domain, meta_.theta_i, meta_.phi_i, f.data());
+  }
+  const TableMeta& meta() const override { return meta_; }
+  std::vector<double> weights(const SliceRef&) const override { return weights_; }
+
+ private:
+  TableMeta meta_;
+  std::vector<double> weights_;
+};
+
+}  // namespace
+
 LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSection& fit,
                               const std::string& cache_dir, const std::string& device_selector) {
   // The cache key: everything the fit depends on.
@@ -58,35 +92,13 @@ LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, cons
   out.path = stem + ".h5";
   if (!std::filesystem::exists(out.path)) {
     std::filesystem::create_directories(cache_dir);
-    // The sweep fits weights f c J x cell area: a pseudo-table f = w / (c J area) gives it
-    // exactly the lighting's cell integrals.
-    TableMeta meta = grid;
-    meta.azimuthal = true;
-    meta.theta_o = {grid.theta_o.empty() ? 0.0 : grid.theta_o.front()};
-    meta.phi_o = {0.0};
-    meta.rgb = false;
-    meta.source = "{\"lighting\": \"" + name + "\", \"weights\": \"L_i dtheta dphi / (c J dtheta dphi)\"}";
-    const std::vector<double> w = lighting_cell_weights(light, meta);
-    const std::size_t np = meta.phi_i.size();
-    const double area = axis_step(meta.theta_i) * axis_step(meta.phi_i);
-    std::vector<float> f(w.size());
-    for (std::size_t i = 0; i < meta.theta_i.size(); ++i) {
-      double g = jacobian(meta.domain, meta.theta_i[i]) * area;
-      if (meta.domain == Domain::Hemisphere) g *= std::cos(meta.theta_i[i]);
-      for (std::size_t j = 0; j < np; ++j) f[i * np + j] = g > 0 ? float(w[i * np + j] / g) : 0.f;
-    }
-    const std::string table = stem + ".table.h5";
-    write_table(table, meta, f);
-    FitSection lf = fit;
-    lf.output = out.path;
-    lf.report = stem + "_fit.csv";
-    lf.search_report = stem + "_search.csv";
-    lf.theta_o.clear();
-    lf.phi_o.clear();
     log_line("converge: fitting the lighting of scene '" + light.name + "' (" + out.path + ")");
     const auto t0 = std::chrono::steady_clock::now();
-    run_sweep(table, lf, device_selector);
+    const LightingSlices cells(light, grid, name);
+    SweepResult fitted =
+        fit_slices(cells, {SliceRef{0, 0, 0}}, fit, select_devices(device_selector), "fit the lighting '" + name + "'");
     out.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    write_mixture_file(out.path, fitted.mixture);
     write_text_atomic(stem + "_seconds.txt", std::to_string(out.fit_seconds) + "\n");
   } else {
     out.cached = true;

@@ -1,16 +1,12 @@
-// Convergence scenes: YAML parsing with errors naming file and key, and PFM images.
+// Scenes of the convergence study and the renderer: YAML parsing with errors naming file and key.
 #include "scene/scene.hpp"
 
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <set>
-#include <sstream>
 
-#include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "io/pfm.hpp"
 
 namespace bsdfmix {
 
@@ -55,7 +51,7 @@ Vec3 vec3(const Ctx& c, const std::string& key, const YAML::Node& n, bool unit) 
   Vec3 v;
   for (std::size_t i = 0; i < 3; ++i) v[i] = number(c, key, n[i], -1e9, 1e9);
   if (unit) {
-    const double l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const double l = std::sqrt(dot(v, v));
     if (!(l > 1e-9)) c.fail(key, n, "the vector is zero");
     for (auto& x : v) x /= l;
   }
@@ -131,7 +127,7 @@ Lighting parse_scene(const YAML::Node& node, const std::string& file, const std:
     PfmImage img;
     try {
       img = read_pfm(path);
-    } catch (const InputError& err) {
+    } catch (const Error& err) {
       c.fail("envmap.file", e["file"], err.what());
     }
     l.env_width = img.width;
@@ -140,59 +136,6 @@ Lighting parse_scene(const YAML::Node& node, const std::string& file, const std:
     l.env_scale = e["scale"] ? number(c, "envmap.scale", e["scale"], 0, 1e12) : 1.0;
   }
   return l;
-}
-
-PfmImage read_pfm(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot read PFM image");
-  std::string magic;
-  in >> magic;
-  if (magic != "PF" && magic != "Pf") throw InputError(path + ": not a PFM image (header '" + magic.substr(0, 8) + "', expected PF or Pf)");
-  const int channels = magic == "PF" ? 3 : 1;
-  long w = 0, h = 0;
-  double scale = 0;
-  if (!(in >> w >> h >> scale)) throw InputError(path + ": PFM header: expected width, height and scale");
-  if (w < 1 || h < 1 || w > 65536 || h > 65536) throw InputError(path + ": PFM size " + std::to_string(w) + " x " + std::to_string(h) + " out of range");
-  if (scale == 0 || !std::isfinite(scale)) throw InputError(path + ": PFM scale must be non-zero");
-  in.get();  // the single whitespace byte after the header
-  const std::size_t n = std::size_t(w) * std::size_t(h) * std::size_t(channels);
-  std::vector<float> raw(n);
-  in.read(reinterpret_cast<char*>(raw.data()), std::streamsize(n * sizeof(float)));
-  if (std::size_t(in.gcount()) != n * sizeof(float))
-    throw InputError(path + ": PFM data truncated (" + std::to_string(in.gcount()) + " of " +
-                     std::to_string(n * sizeof(float)) + " bytes)");
-  const std::uint16_t probe = 1;
-  const bool host_little = *reinterpret_cast<const std::uint8_t*>(&probe) == 1;
-  if ((scale < 0) != host_little)
-    for (auto& v : raw) {
-      std::uint32_t x;
-      std::memcpy(&x, &v, 4);
-      x = (x >> 24) | ((x >> 8) & 0xff00u) | ((x << 8) & 0xff0000u) | (x << 24);
-      std::memcpy(&v, &x, 4);
-    }
-  PfmImage img;
-  img.width = int(w);
-  img.height = int(h);
-  img.luminance.resize(std::size_t(w) * std::size_t(h));
-  for (long y = 0; y < h; ++y)
-    for (long x = 0; x < w; ++x) {
-      const float* p = &raw[(std::size_t(h - 1 - y) * std::size_t(w) + std::size_t(x)) * std::size_t(channels)];  // PFM rows bottom-up
-      const float v = channels == 3 ? 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2] : p[0];
-      if (!std::isfinite(v) || v < 0)
-        throw InputError(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is negative or not finite");
-      img.luminance[std::size_t(y) * std::size_t(w) + std::size_t(x)] = v;
-    }
-  return img;
-}
-
-void write_pfm(const std::string& path, const PfmImage& image) {
-  std::ostringstream s;
-  s << "Pf\n" << image.width << " " << image.height << "\n-1.0\n";
-  std::string text = s.str();
-  for (int y = image.height - 1; y >= 0; --y)
-    text.append(reinterpret_cast<const char*>(&image.luminance[std::size_t(y) * std::size_t(image.width)]),
-                std::size_t(image.width) * sizeof(float));
-  write_text_atomic(path, text);
 }
 
 }  // namespace bsdfmix

@@ -1,31 +1,20 @@
 // Which slices a sweep fits.
 #include "sweep/slice_plan.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <set>
+
+#include "core/domain.hpp"
 
 namespace bsdfmix {
 
 namespace {
 
-// The axis cells around x (clamped at the ends; periodic axes wrap).
+// The axis cells around x (bracket: clamped at the ends, periodic axes wrap); on a
+// clamped axis one cell when x is at its center.
 std::vector<std::size_t> around(const std::vector<double>& axis, double x, bool periodic) {
-  const std::size_t n = axis.size();
-  if (n == 1) return {0};
-  const double step = axis_step(axis);
-  double u = (x - axis.front()) / step;
-  if (periodic) {
-    u = std::fmod(u, double(n));
-    if (u < 0) u += double(n);
-    const std::size_t i0 = std::min(static_cast<std::size_t>(u), n - 1);
-    return {i0, (i0 + 1) % n};
-  }
-  if (u <= 0) return {0};
-  if (u >= double(n - 1)) return {n - 1};
-  const std::size_t i0 = static_cast<std::size_t>(u);
-  if (u == double(i0)) return {i0};
-  return {i0, i0 + 1};
+  const Bracket b = bracket(axis, x, periodic);
+  if (b.i1 == b.i0 || (!periodic && b.f == 0)) return {b.i0};
+  return {b.i0, b.i1};
 }
 
 }  // namespace

@@ -7,12 +7,12 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 
 #include "core/domain.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/progress.hpp"
 #include "device/program.hpp"
 #include "tables/fiber_presets.hpp"
@@ -30,11 +30,9 @@ struct KernelParams {
 static_assert(sizeof(KernelParams) == 12 * sizeof(cl_float), "KernelParams must match kernels/fiber.cl");
 
 std::string fmt(double x) {
-  // The shortest of %.15g / %.17g that reads back exactly.
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.15g", x);
-  if (std::strtod(buf, nullptr) != x) std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
+  // The shorter of %.15g / %.17g that reads back exactly.
+  const std::string s = format_number(x, "%.15g");
+  return std::strtod(s.c_str(), nullptr) == x ? s : format_number(x, "%.17g");
 }
 
 constexpr std::uint32_t kNoiseStream = 0x66696265u;  // "fibe": third counter word

@@ -55,12 +55,6 @@ double trimmed_logistic(double x, double s) {
   return logistic / norm;
 }
 
-double wrap_pi(double x) {
-  x = std::fmod(x + kPi, 2 * kPi);
-  if (x < 0) x += 2 * kPi;
-  return x - kPi;
-}
-
 // Legendre polynomial P_n(x) and its derivative.
 void legendre(std::size_t n, double x, double& p, double& dp) {
   double p0 = 1, p1 = x;
@@ -190,7 +184,7 @@ double FiberModel::azimuthal(int p, double theta_o, double h, double phi) const 
   const double etap = std::sqrt(eta * eta - sin_o * sin_o) / cos_o;
   const double gamma_o = safe_asin(h), gamma_t = safe_asin(h / etap);
   const double center = 2 * p * gamma_t - 2 * gamma_o + p * kPi;
-  return trimmed_logistic(wrap_pi(phi - center), s_);
+  return trimmed_logistic(wrap_phi(phi - center), s_);
 }
 
 double FiberModel::f_at_h(double theta_o, double phi_o, double theta_i, double phi_i, double h) const {

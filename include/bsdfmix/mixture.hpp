@@ -37,6 +37,44 @@ inline double wrap_phi(double phi) {
   return r >= kPi ? -kPi : r;
 }
 
+// The two cells of a uniform axis around x and the weight toward the second, f in [0, 1]:
+// x = (1 - f) c[i0] + f c[i1] for the cell centers c[i] = first + i step, i = 0 .. n - 1.
+// A clamped axis (periodic false) holds its end cell beyond either end (i0 = i1, f = 0);
+// a periodic one repeats every n cells (i1 = (i0 + 1) % n). One cell: (0, 0, 0).
+struct Bracket {
+  std::size_t i0 = 0, i1 = 0;
+  double f = 0;
+};
+
+inline Bracket bracket(double first, double step, std::size_t n, double x, bool periodic) {
+  Bracket b;
+  if (n <= 1) return b;
+  double u = (x - first) / step;
+  if (periodic) {
+    u = std::fmod(u, double(n));
+    if (u < 0) u += double(n);
+    b.i0 = std::min(static_cast<std::size_t>(u), n - 1);
+    b.i1 = (b.i0 + 1) % n;
+    b.f = u - double(b.i0);
+  } else if (u <= 0) {
+    b.i0 = b.i1 = 0;
+  } else if (u >= double(n - 1)) {
+    b.i0 = b.i1 = n - 1;
+  } else {
+    b.i0 = static_cast<std::size_t>(u);
+    b.i1 = b.i0 + 1;
+    b.f = u - double(b.i0);
+  }
+  return b;
+}
+
+// The same on an axis given by its (uniformly spaced) cell centers.
+inline Bracket bracket(const std::vector<double>& axis, double x, bool periodic) {
+  const std::size_t n = axis.size();
+  if (n <= 1) return {};
+  return bracket(axis.front(), (axis.back() - axis.front()) / double(n - 1), n, x, periodic);
+}
+
 // One 2D Gaussian with precomputed inverse, normalization and Cholesky factor.
 struct Gaussian {
   double weight = 0, mu_t = 0, mu_p = 0;
@@ -298,16 +336,13 @@ class MixtureSet {
 
   Blend blend(double theta_o, double phi_o) const {
     Blend b;
-    std::size_t t0, t1;
-    double ft;
-    bracket(grid_theta_o, theta_o, false, t0, t1, ft);
-    std::size_t p0 = 0, p1 = 0;
-    double fp = 0;
+    const Bracket t = bracket(grid_theta_o, theta_o, false);
+    Bracket p;
     if (azimuthal) b.rotate = phi_o;
-    else bracket(grid_phi_o, wrap_phi(phi_o), true, p0, p1, fp);
+    else p = bracket(grid_phi_o, wrap_phi(phi_o), true);
     const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
-    const std::size_t ts[2] = {t0, t1}, ps[2] = {p0, p1};
-    const double wt[2] = {1 - ft, ft}, wp[2] = {1 - fp, fp};
+    const std::size_t ts[2] = {t.i0, t.i1}, ps[2] = {p.i0, p.i1};
+    const double wt[2] = {1 - t.f, t.f}, wp[2] = {1 - p.f, p.f};
     double total = 0;
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < (azimuthal ? 1 : 2); ++j) {
@@ -423,38 +458,6 @@ class MixtureSet {
     for (std::size_t i = 1; i < axis.size(); ++i)
       if (std::abs(axis[i] - x) < std::abs(axis[best] - x)) best = i;
     return best;
-  }
-
-  // The two axis cells around x and the fraction toward the second; periodic axes wrap.
-  static void bracket(const std::vector<double>& axis, double x, bool periodic, std::size_t& i0,
-                      std::size_t& i1, double& f) {
-    const std::size_t n = axis.size();
-    if (n == 1) {
-      i0 = i1 = 0;
-      f = 0;
-      return;
-    }
-    const double step = (axis.back() - axis.front()) / double(n - 1);
-    double u = (x - axis.front()) / step;
-    if (periodic) {
-      u = std::fmod(u, double(n));
-      if (u < 0) u += double(n);
-      i0 = std::min(static_cast<std::size_t>(u), n - 1);
-      i1 = (i0 + 1) % n;
-      f = u - double(i0);
-      return;
-    }
-    if (u <= 0) {
-      i0 = i1 = 0;
-      f = 0;
-    } else if (u >= double(n - 1)) {
-      i0 = i1 = n - 1;
-      f = 0;
-    } else {
-      i0 = static_cast<std::size_t>(u);
-      i1 = i0 + 1;
-      f = u - double(i0);
-    }
   }
 };
 
