@@ -74,7 +74,7 @@ struct ConvergeSection {
   // Sampling with the lighting (docs/sampling.md): MIS fractions and heuristic, the
   // product's pruning, where the lighting mixtures are cached, the lighting tail CSV.
   double light_fraction = 0.5, product_fraction = 0.8, product_light = 0.1;
-  bool product_auto = true;  // product_fraction: auto (converge/reference.hpp, tune_product_fractions)
+  bool product_auto = true;  // product_fraction: auto (converge/quadrature.hpp, tune_product_fractions)
   int product_components = 128;
   bool power_heuristic = false;
   std::string light_mixture_dir;  // "" = <csv dir>/light_mixtures

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "scene/light_mixture.hpp"
-#include "converge/reference.hpp"
+#include "converge/quadrature.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
@@ -165,7 +165,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
                  short_num(1 - tu.product_fraction - tu.product_light) + " (predicted variance per sample " +
                  short_num(tu.relvar) + ", largest f/pdf " + short_num(tu.max_weight) + ")");
       }
-      const double ref = reference_integral(p);
+      const double ref = table_integral(p);
       if (!(ref > 0) || !std::isfinite(ref))
         throw InputError("converge: the reference integral at theta_o " + num(theta_o) + " in scene '" + light.name +
                          "' is " + num(ref) + " (the lighting or the table slice is zero)");

@@ -2,22 +2,16 @@
 #include "render/comparisons.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <map>
 
+#include "core/format.hpp"
 #include "core/progress.hpp"
-#include "render/reference_image.hpp"
+#include "render/converged_image.hpp"
 
 namespace bsdfmix {
 namespace render {
 
 namespace {
-
-std::string fixed(double x, const char* f) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, x);
-  return b;
-}
 
 double rays_per_second(const RenderStats& st) { return double(st.rays) / std::max(st.seconds, 1e-9); }
 
@@ -50,8 +44,8 @@ class PassRunner {
       return budget > 0 ? sec < budget : true;
     });
     prog.finish();
-    log_line("render: " + what + ": " + std::to_string(st.spp) + " spp in " + fixed(st.seconds, "%.1f") + " s, " +
-             fixed(rays_per_second(st) / 1e6, "%.2f") + " M rays/s");
+    log_line("render: " + what + ": " + std::to_string(st.spp) + " spp in " + format_number(st.seconds, "%.1f") + " s, " +
+             format_number(rays_per_second(st) / 1e6, "%.2f") + " M rays/s");
     return {mean_image(sum, st.spp, view_.width, view_.height), st};
   }
 
@@ -105,7 +99,7 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   out.equal_time_seconds = budget;
   for (const PathEstimator e : s.estimators) {
     const std::string name = path_estimator_name(e);
-    auto [im, st] = passes.run(e, FiberF::Table, 0, budget, name + " (" + fixed(budget, "%.1f") + " s)", nullptr);
+    auto [im, st] = passes.run(e, FiberF::Table, 0, budget, name + " (" + format_number(budget, "%.1f") + " s)", nullptr);
     save_image(s.output, name + "_time", im);
     out.rows.push_back({name, "equal_time", name + "_time.exr", st.spp, st.seconds, rays_per_second(st),
                         relative_mse(im, reference)});
@@ -129,10 +123,10 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   out.stand_in_mean = ma > 0 ? mb / ma - 1 : 0;
   out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), relative_mse(a, reference)});
   out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), relative_mse(b, reference)});
-  log_line("render: the stand-in image differs from the table image by " + fixed(100 * out.stand_in_difference, "%.2f") +
-           " % per pixel, " + fixed(100 * out.stand_in_difference_4x4, "%.2f") +
+  log_line("render: the stand-in image differs from the table image by " + format_number(100 * out.stand_in_difference, "%.2f") +
+           " % per pixel, " + format_number(100 * out.stand_in_difference_4x4, "%.2f") +
            " % over 4 x 4 blocks (the table image's own noise against the reference there: " +
-           fixed(100 * out.table_noise_4x4, "%.2f") + " %); image means " + fixed(100 * out.stand_in_mean, "%+.2f") + " %");
+           format_number(100 * out.table_noise_4x4, "%.2f") + " %); image means " + format_number(100 * out.stand_in_mean, "%+.2f") + " %");
   return out;
 }
 

@@ -20,11 +20,10 @@ namespace render {
 std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta& meta, const std::string& where) {
   const std::vector<double> thetas = collect_theta_o(prepass, 2);
   std::set<std::size_t> need;
-  const double dto = meta.theta_o.size() > 1 ? axis_step(meta.theta_o) : 1.0;
   for (const double t : thetas) {
-    const double u = std::clamp((t - meta.theta_o.front()) / dto, 0.0, double(meta.theta_o.size() - 1));
-    need.insert(std::size_t(std::floor(u)));
-    need.insert(std::min(std::size_t(std::ceil(u)), meta.theta_o.size() - 1));
+    const Bracket b = bracket(meta.theta_o, t, false);
+    need.insert(b.i0);
+    if (b.f > 0) need.insert(b.i1);
   }
   if (need.empty()) throw InputError(where + ": render: no fiber is visible from the camera (check camera and cloth)");
   log_line("render: the pre-pass (" + std::to_string(prepass.width) + " x " + std::to_string(prepass.height) + ", " +

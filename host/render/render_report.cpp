@@ -1,10 +1,10 @@
 // render.csv and render.json.
 #include "render/render_report.hpp"
 
-#include <cstdio>
 #include <sstream>
 
 #include "core/atomic_file.hpp"
+#include "core/format.hpp"
 #include "core/progress.hpp"
 
 namespace bsdfmix {
@@ -12,11 +12,7 @@ namespace render {
 
 namespace {
 
-std::string num(double x, const char* f = "%.6g") {
-  char b[64];
-  std::snprintf(b, sizeof b, f, x);
-  return b;
-}
+std::string num(double x, const char* f = "%.6g") { return format_number(x, f); }
 
 }  // namespace
 

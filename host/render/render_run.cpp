@@ -9,7 +9,7 @@
 #include "core/progress.hpp"
 #include "core/scripts.hpp"
 #include "render/comparisons.hpp"
-#include "render/reference_image.hpp"
+#include "render/converged_image.hpp"
 #include "render/render_mixtures.hpp"
 #include "render/render_report.hpp"
 #include "render/render_scene.hpp"
@@ -45,9 +45,9 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   const MixtureFile mixtures = render_mixtures(config.table, *config.fit, need, device_selector);
   bsdf.set_mixture(to_mixture_set(mixtures));
 
-  // 3. The reference (cached under its key); 4. the comparisons against it.
-  const Image reference = reference_image(scene.view(), s, scene_key(s, config.table));
-  const Comparisons comparisons = run_comparisons(scene.view(), s, reference);
+  // 3. The converged image (cached under its key); 4. the comparisons against it.
+  const Image converged = converged_image(scene.view(), s, scene_key(s, config.table));
+  const Comparisons comparisons = run_comparisons(scene.view(), s, converged);
 
   // 5. The report and the figures.
   RenderFacts facts;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <thread>
 
+#include "core/hash.hpp"
 #include "core/progress.hpp"
 #include "fit/em_internal.hpp"
 #include "fit/moment_gaussian.hpp"
@@ -18,13 +19,6 @@
 namespace bsdfmix {
 
 namespace {
-
-std::uint64_t splitmix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 SliceSet make_set(Domain domain, const std::vector<SliceWork>& work, bool pooled) {
   SliceSet set;
@@ -57,7 +51,7 @@ std::string status(const Batch& b, std::size_t s) {
 }  // namespace
 
 std::uint64_t task_seed(std::uint64_t seed, std::size_t slice, int k, int restart) {
-  return splitmix(splitmix(splitmix(seed) ^ slice) ^ (std::uint64_t(k) << 32 | std::uint32_t(restart)));
+  return splitmix64(splitmix64(splitmix64(seed) ^ slice) ^ (std::uint64_t(k) << 32 | std::uint32_t(restart)));
 }
 
 EmTask make_task(std::size_t slice, int k, int iterations, double tolerance, std::uint64_t seed) {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/atomic_file.hpp"
+#include "core/format.hpp"
 #include "core/hash.hpp"
 #include "device/program.hpp"
 
@@ -15,11 +16,8 @@ namespace bsdfmix {
 
 namespace {
 
-std::string num(double v, const char* f = "%.9g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, std::isfinite(v) ? v : 0.0);
-  return buf;
-}
+// A CSV or JSON number: non-finite values (a failed fit's) are written as 0.
+std::string num(double v, const char* f = "%.9g") { return format_number(std::isfinite(v) ? v : 0.0, f); }
 
 }  // namespace
 

@@ -1,7 +1,6 @@
-// The render's converged reference: cached under its key, checkpointed as it goes.
-#include "render/reference_image.hpp"
+// The render's converged image (its reference): cached under its key, checkpointed as it goes.
+#include "render/converged_image.hpp"
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -9,6 +8,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
+#include "core/format.hpp"
 #include "core/progress.hpp"
 #include "io/h5.hpp"
 
@@ -18,12 +18,6 @@ namespace render {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string fixed(double x, const char* f) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, x);
-  return b;
-}
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -106,7 +100,7 @@ void save_image(const std::string& dir, const std::string& stem, const Image& im
   write_pfm((fs::path(dir) / (stem + ".pfm")).string(), image);
 }
 
-Image reference_image(const SceneView& view, const RenderSettings& s, const std::string& key) {
+Image converged_image(const SceneView& view, const RenderSettings& s, const std::string& key) {
   const std::string key_path = (fs::path(s.output) / "reference.key").string();
   const std::string pfm = (fs::path(s.output) / "reference.pfm").string();
   if (fs::exists(key_path) && fs::exists(pfm) && slurp(key_path) == key) {
@@ -136,7 +130,7 @@ Image reference_image(const SceneView& view, const RenderSettings& s, const std:
       });
   prog.finish();
   log_line("render: reference: " + std::to_string(s.reference_spp) + " spp (" + std::to_string(st.spp) + " in " +
-           fixed(st.seconds, "%.1f") + " s, " + fixed(double(st.rays) / std::max(st.seconds, 1e-9) / 1e6, "%.2f") +
+           format_number(st.seconds, "%.1f") + " s, " + format_number(double(st.rays) / std::max(st.seconds, 1e-9) / 1e6, "%.2f") +
            " M rays/s)");
   const Image reference = mean_image(p.sum, s.reference_spp, s.width, s.height);
   save_image(s.output, "reference", reference);

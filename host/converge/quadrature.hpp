@@ -1,4 +1,5 @@
-// Quadrature references of the convergence study and the per-slice tail-risk diagnostic.
+// The convergence study's exact integrals by quadrature (what each estimator converges to;
+// the CSVs' `reference` column) and the per-slice tail-risk diagnostic.
 #pragma once
 
 #include <vector>
@@ -12,7 +13,7 @@ void gauss_legendre(int n, std::vector<double>& nodes, std::vector<double>& weig
 
 // The integral of L_i f c d(omega) with the table as f (piecewise constant over its
 // cells): exact cell Jacobian integrals for constant L, sub-cell Gauss-Legendre otherwise.
-double reference_integral(const Problem& p);
+double table_integral(const Problem& p);
 
 // The same with the mixture stand-in as f: what us_gmm and is_gmm converge to. Exact
 // (normal CDFs of the theta marginals) for constant L, quadrature otherwise.

@@ -1,4 +1,5 @@
-// The converged reference image of a render (docs/render.md, "Outputs"): the table as f,
+// The converged image of a render, the reference of its comparisons (docs/render.md,
+// "Outputs"; reference.exr): the table as f,
 // the reference estimator at reference_spp. Cached in the output directory under its key
 // (everything its pixels depend on), and checkpointed every 1/16 of its passes, so that a
 // killed render resumes to the same image an uninterrupted one makes.
@@ -14,10 +15,10 @@ namespace render {
 // Everything a render's pixels depend on but the estimator and the sample count.
 std::string scene_key(const RenderSettings& s, const std::string& table);
 
-// The reference: read from <output>/reference.pfm when <output>/reference.key holds `key`,
+// The converged image: read from <output>/reference.pfm when <output>/reference.key holds `key`,
 // else rendered (resuming from <output>/reference.partial.h5 when it was made under the
 // same key) and written as reference.exr, reference.pfm and reference.key.
-Image reference_image(const SceneView& view, const RenderSettings& s, const std::string& key);
+Image converged_image(const SceneView& view, const RenderSettings& s, const std::string& key);
 
 // Sums of `passes` passes over a width x height image as an image (the mean per pixel).
 Image mean_image(const std::vector<double>& sum, int passes, int width, int height);

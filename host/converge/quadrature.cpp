@@ -1,5 +1,5 @@
-// Quadrature references and the tail-risk diagnostic.
-#include "converge/reference.hpp"
+// The study's exact integrals by quadrature, and the tail-risk diagnostic.
+#include "converge/quadrature.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -80,7 +80,7 @@ double cell_quadrature(const TableSlice& t, int n, bool skip_zero_f, Fn fn) {
 
 }  // namespace
 
-double reference_integral(const Problem& p) {
+double table_integral(const Problem& p) {
   const TableSlice& t = p.table;
   if (p.light.is_constant()) {
     double s = 0;
