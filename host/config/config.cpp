@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 
 namespace bsdfmix {
@@ -90,11 +91,9 @@ std::string device_for(const Config& config, const std::string& cli_selector) {
 }
 
 Config load_config(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw ConfigError(path + ": cannot read config file (missing or not readable)");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return parse_config(ss.str(), path);
+  const std::optional<std::string> text = read_text(path);
+  if (!text) throw ConfigError(path + ": cannot read config file (missing or not readable)");
+  return parse_config(*text, path);
 }
 
 }  // namespace bsdfmix

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "core/error.hpp"
 
@@ -78,6 +79,14 @@ void write_text_atomic(const std::string& path, const std::string& text) {
     if (!f) throw IoError(path + ": write failed");
   }
   out.commit();
+}
+
+std::optional<std::string> read_text(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return std::nullopt;
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
 }
 
 }  // namespace bsdfmix

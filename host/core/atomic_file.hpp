@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace bsdfmix {
@@ -35,5 +36,8 @@ void fsync_directory(const std::string& path);
 
 // Writes `text` to `path` atomically.
 void write_text_atomic(const std::string& path, const std::string& text);
+
+// The whole of a file as bytes; nullopt when it cannot be opened.
+std::optional<std::string> read_text(const std::string& path);
 
 }  // namespace bsdfmix

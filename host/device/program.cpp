@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/hash.hpp"
 
@@ -69,11 +70,9 @@ cl::Program build_cached(const Device& device, const std::string& label, const s
 std::string kernel_file(const std::string& name) {
   if (const char* dir = std::getenv("BSDFMIX_KERNEL_DIR"); dir && *dir) {
     const std::string path = std::string(dir) + "/" + name + ".cl";
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw DeviceError("BSDFMIX_KERNEL_DIR: cannot read kernel source " + path);
-    std::ostringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
+    const std::optional<std::string> text = read_text(path);
+    if (!text) throw DeviceError("BSDFMIX_KERNEL_DIR: cannot read kernel source " + path);
+    return *text;
   }
   for (const auto& [stem, text] : embedded::kernel_sources())
     if (stem == name) return text;

@@ -19,13 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // The checkpoint of an unfinished reference: an HDF5 file (the sweep's parts are HDF5
 // too) holding the per-pixel sums of the first `passes` passes, the key they were made
 // under, written atomically. Read back only under the same key and size.
@@ -103,7 +96,7 @@ void save_image(const std::string& dir, const std::string& stem, const Image& im
 Image converged_image(const SceneView& view, const RenderSettings& s, const std::string& key) {
   const std::string key_path = (fs::path(s.output) / "reference.key").string();
   const std::string pfm = (fs::path(s.output) / "reference.pfm").string();
-  if (fs::exists(key_path) && fs::exists(pfm) && slurp(key_path) == key) {
+  if (fs::exists(pfm) && read_text(key_path) == key) {
     log_line("render: reference read from " + pfm);
     return read_pfm_image(pfm);
   }

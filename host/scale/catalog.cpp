@@ -140,11 +140,9 @@ Catalog parse_catalog(const std::string& text, const std::string& name) {
 }
 
 Catalog load_catalog(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw ConfigError(path + ": cannot read catalog file (missing or not readable)");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return parse_catalog(ss.str(), path);
+  const std::optional<std::string> text = read_text(path);
+  if (!text) throw ConfigError(path + ": cannot read catalog file (missing or not readable)");
+  return parse_catalog(*text, path);
 }
 
 void run_catalog(const Catalog& cat, const std::string& device_selector, MpiFarm* farm) {

@@ -19,13 +19,6 @@ namespace {
 
 const char* kFingerprintFile = "fingerprint.txt";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 // The rows of a part travel as compound datasets of /mixture, one record per row.
 struct ReportRecord {
   std::uint64_t slice;
@@ -169,7 +162,7 @@ Checkpoint::Checkpoint(const std::string& output, const std::string& fingerprint
   const fs::path dir(dir_);
   if (fs::exists(dir)) {
     const fs::path fp = dir / kFingerprintFile;
-    if (!fs::exists(fp) || slurp(fp) != fingerprint_)
+    if (read_text(fp.string()).value_or("") != fingerprint_)
       discard("made with another table, other settings, another build or another numeric path");
   }
   if (!fs::exists(dir)) return;  // created by the first commit: a failed run leaves nothing
