@@ -22,6 +22,13 @@ std::vector<double> uniform_centers(double lo, double hi, std::size_t n) {
   return c;
 }
 
+std::size_t nearest_center(const std::vector<double>& axis, double x) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < axis.size(); ++i)
+    if (std::abs(axis[i] - x) < std::abs(axis[best] - x)) best = i;
+  return best;
+}
+
 double axis_step(const std::vector<double>& centers) {
   if (centers.size() < 2) return 2 * kPi;
   return (centers.back() - centers.front()) / static_cast<double>(centers.size() - 1);

@@ -30,6 +30,9 @@ Domain parse_domain(const std::string& name, const std::string& where);
 // n cell centers splitting [lo, hi] evenly: lo + (i + 1/2) (hi - lo) / n.
 std::vector<double> uniform_centers(double lo, double hi, std::size_t n);
 
+// The index of the center of `axis` nearest x (the first of a tie; 0 for an empty axis).
+std::size_t nearest_center(const std::vector<double>& axis, double x);
+
 // Spacing of a uniform axis of centers (2 pi for a single phi_o center).
 double axis_step(const std::vector<double>& centers);
 

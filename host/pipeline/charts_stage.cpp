@@ -25,15 +25,9 @@ struct FittedSlice {
 // is found from its (theta_o, phi_o) on the table's grid.
 std::vector<FittedSlice> fitted_slices(const std::string& mixture, const TableMeta& meta) {
   const MixtureFile m = read_mixture_file(mixture);
-  auto nearest = [](const std::vector<double>& axis, double x) {
-    std::size_t best = 0;
-    for (std::size_t i = 1; i < axis.size(); ++i)
-      if (std::abs(axis[i] - x) < std::abs(axis[best] - x)) best = i;
-    return best;
-  };
   std::vector<FittedSlice> slices;
   for (std::size_t s = 0; s < m.slices(); ++s)
-    slices.push_back({meta.slice_index(nearest(meta.theta_o, m.theta_o[s]), nearest(meta.phi_o, m.phi_o[s])), m.k[s]});
+    slices.push_back({meta.slice_index(nearest_center(meta.theta_o, m.theta_o[s]), nearest_center(meta.phi_o, m.phi_o[s])), m.k[s]});
   return slices;
 }
 

@@ -154,17 +154,6 @@ double TableSlice::cell_solid_angle(std::size_t i) const {
   return (std::cos(a) - std::cos(b)) * dph;
 }
 
-namespace {
-
-std::size_t nearest(const std::vector<double>& axis, double x) {
-  std::size_t best = 0;
-  for (std::size_t i = 1; i < axis.size(); ++i)
-    if (std::abs(axis[i] - x) < std::abs(axis[best] - x)) best = i;
-  return best;
-}
-
-}  // namespace
-
 TableSlice blended_slice(const TableReader& table, const mix::MixtureSet& set, double theta_o, double phi_o) {
   const TableMeta& m = table.meta();
   TableSlice t;
@@ -182,7 +171,7 @@ TableSlice blended_slice(const TableReader& table, const mix::MixtureSet& set, d
   std::vector<double> acc(t.n_theta * t.n_phi, 0.0);
   for (int k = 0; k < b.count; ++k) {
     const mix::SliceMixture& s = set.slices[std::size_t(b.slice[k])];
-    const std::size_t to = nearest(m.theta_o, s.theta_o), po = nearest(m.phi_o, s.phi_o);
+    const std::size_t to = nearest_center(m.theta_o, s.theta_o), po = nearest_center(m.phi_o, s.phi_o);
     const std::vector<float> f = table.read_slice(to, po);
     for (std::size_t c = 0; c < acc.size(); ++c) acc[c] += b.weight[k] * double(f[c]);
   }
