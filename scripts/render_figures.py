@@ -9,9 +9,13 @@ beside it) and D/render.json (scene, fiber, width, height, table_bytes, mixture_
 full_table_bytes, slices_needed, slices_total, equal_time_seconds, reference). Writes, all
 PNG at 150 dpi:
 
-  <image stem>.png     beside every image's PFM: 8-bit greyscale, v = 1 - exp(-exposure x),
-                       sRGB-encoded; one exposure per scene (the reference's 99.5th
-                       percentile maps to 0.9), so the images of a scene compare
+  <image stem>.png     beside every image's PFM: 8-bit sRGB color, each channel
+                       v = 1 - exp(-exposure x), sRGB-encoded; one exposure per scene, set
+                       for the cloth: the 99th percentile of the reference's luminance over
+                       the pixels whose primary ray meets a fiber (D/cloth_mask.pfm; every
+                       pixel when it is missing) maps to 0.85, so the cloth is neither dark
+                       nor white, the bright ground and sky may clip, and the images of a
+                       scene compare
   OUT/figure_sheet.png one column per estimator (CSV order) plus the reference: the
                        equal-spp images, their per-pixel relative squared error
                        (img - ref)^2 / (ref^2 + eps), eps = 1e-2 mean(ref)^2 (the eps of
@@ -58,7 +62,7 @@ def fail(msg):
 # ---------------------------------------------------------------------------- inputs
 
 def read_pfm(path):
-    """A PFM as a float64 array, row 0 at the top ("PF": luminance of R, G, B)."""
+    """A PFM as a float64 [h, w, 3] array, row 0 at the top (a grey "Pf": R = G = B)."""
     try:
         with open(path, "rb") as f:
             data = f.read()
@@ -91,8 +95,13 @@ def read_pfm(path):
     a = np.frombuffer(data, dtype="<f4" if scale < 0 else ">f4", count=n, offset=pos).astype(np.float64)
     a = a.reshape(h, w, ch)[::-1]  # stored bottom row first
     if ch == 3:
-        return 0.2126 * a[..., 0] + 0.7152 * a[..., 1] + 0.0722 * a[..., 2]
-    return a[..., 0].copy()
+        return a.copy()
+    return np.repeat(a[..., :1], 3, axis=2)
+
+
+def luminance(a):
+    """Y of a [h, w, 3] linear Rec. 709 image."""
+    return 0.2126 * a[..., 0] + 0.7152 * a[..., 1] + 0.0722 * a[..., 2]
 
 
 def read_inputs(d):
@@ -149,24 +158,31 @@ def pfm_of(d, image):
 # ---------------------------------------------------------------------------- images
 
 def rel_sq_error(img, ref):
+    """Per pixel, the relative squared error averaged over the channels (bsdfmix's
+    relative_mse is its mean)."""
     eps = 1e-2 * float(np.mean(ref)) ** 2
     d = img - ref
     den = ref * ref + eps
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.where(d == 0, 0.0, d * d / den)
-    return e
+    return e.mean(axis=2)
 
 
 def rel_mse(img, ref):
     return float(np.mean(rel_sq_error(img, ref)))
 
 
-def exposure_for(ref):
-    v = ref[np.isfinite(ref)]
-    p = float(np.percentile(v, 99.5)) if v.size else 0.0
+def exposure_for(ref, mask=None):
+    """The exposure that maps the 99th percentile of the luminance over `mask` (the cloth's
+    pixels; all when None or empty) to 0.85."""
+    y = luminance(ref)
+    if mask is not None and mask.shape == y.shape and np.any(mask):
+        y = y[mask]
+    v = y[np.isfinite(y)]
+    p = float(np.percentile(v, 99.0)) if v.size else 0.0
     if not p > 0:
         p = float(v.max()) if v.size and v.max() > 0 else 1.0
-    return math.log(10.0) / p  # 1 - exp(-k p) = 0.9
+    return -math.log(1.0 - 0.85) / p  # 1 - exp(-k p) = 0.85
 
 
 def tone_map(img, exposure):
@@ -177,17 +193,17 @@ def tone_map(img, exposure):
     return np.clip(v, 0.0, 1.0)
 
 
-def write_grey_png(path, v):
-    """8-bit greyscale PNG of v in [0, 1], 150 dpi."""
+def write_rgb_png(path, v):
+    """8-bit RGB PNG of v [h, w, 3] in [0, 1], 150 dpi."""
     a = np.round(v * 255.0).astype(np.uint8)
-    h, w = a.shape
+    h, w = a.shape[:2]
     raw = b"".join(b"\x00" + a[y].tobytes() for y in range(h))
 
     def chunk(kind, body):
         return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xffffffff)
 
     ppm = int(round(DPI / 0.0254))
-    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
            + chunk(b"pHYs", struct.pack(">IIB", ppm, ppm, 1))
            + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
     tmp = path + ".partial-%d" % os.getpid()
@@ -253,7 +269,7 @@ def figure_sheet(rows, images, ref, ref_row, meta, exposure, out):
     ests = estimators_in_order(rows, set(modes))
     ncol = len(ests) + 1
     nrow = 2 * len(modes)
-    h, w = ref.shape
+    h, w = ref.shape[:2]
     pw, ph = panel_size(w, h)
     title_h = 0.5
     fig_w = ncol * (pw + 0.25) + 1.35
@@ -279,7 +295,7 @@ def figure_sheet(rows, images, ref, ref_row, meta, exposure, out):
                 ax.set_xticks([])
                 ax.set_yticks([])
             if c == ncol - 1:  # the reference column
-                ax_img.imshow(ref_tm, cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+                ax_img.imshow(ref_tm, interpolation="nearest")
                 t = "reference"
                 if ref_row is not None and ref_row["spp"] is not None:
                     t += "\n%s spp" % fmt_spp(ref_row["spp"])
@@ -289,7 +305,7 @@ def figure_sheet(rows, images, ref, ref_row, meta, exposure, out):
             r = by_est.get(ests[c])
             if r is None:  # frameless but not axis("off"): the row labels of column 0 stay
                 for ax in (ax_img, ax_err):
-                    ax.imshow(np.full(ref.shape, np.nan), cmap="gray", vmin=0, vmax=1)  # same box
+                    ax.imshow(np.full(ref.shape[:2], np.nan), cmap="gray", vmin=0, vmax=1)  # same box
                     for sp in ax.spines.values():
                         sp.set_visible(False)
                 ax_img.text(0.5, 0.5, "%s\n(no %s row)" % (ests[c], mode), ha="center", va="center",
@@ -298,7 +314,7 @@ def figure_sheet(rows, images, ref, ref_row, meta, exposure, out):
             img = images[r["image"]]
             e = rel_sq_error(img, ref)
             mse = r["rel_mse"] if r["rel_mse"] is not None else float(np.mean(e))
-            ax_img.imshow(tone_map(img, exposure), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+            ax_img.imshow(tone_map(img, exposure), interpolation="nearest")
             if mode == "equal_spp":
                 t = "%s\n%s spp, rel MSE %.3g" % (r["estimator"], fmt_spp(r["spp"]), mse)
             else:
@@ -376,9 +392,9 @@ def stand_in(rows, images, meta, exposure, out):
         fail("%s is %dx%d but %s is %dx%d" % (s_row["image"], s.shape[1], s.shape[0],
                                              t_row["image"], t.shape[1], t.shape[0]))
     diff = np.abs(s - t) / (np.abs(t) + 0.1 * abs(float(np.mean(t))))
-    diff = np.where(s == t, 0.0, diff)
+    diff = np.where(s == t, 0.0, diff).mean(axis=2)
     mean_diff = float(np.mean(diff))
-    h, w = t.shape
+    h, w = t.shape[:2]
     pw, ph = panel_size(w, h)
     fig_w, fig_h = 3 * (pw + 0.3) + 1.0, ph + 1.05
     fig = plt.figure(figsize=(fig_w, fig_h))
@@ -389,11 +405,11 @@ def stand_in(rows, images, meta, exposure, out):
         ax.set_xticks([])
         ax.set_yticks([])
     tb_bytes, mix_bytes, full = int(meta["table_bytes"]), int(meta["mixture_bytes"]), int(meta["full_table_bytes"])
-    axes[0].imshow(tone_map(t, exposure), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+    axes[0].imshow(tone_map(t, exposure), interpolation="nearest")
     axes[0].set_title("table (%s)\n%s in %s/%s slices\n(full table %s)"
                       % (t_row["estimator"], fmt_bytes(tb_bytes), meta["slices_needed"],
                          meta["slices_total"], fmt_bytes(full)), fontsize=8)
-    axes[1].imshow(tone_map(s, exposure), cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+    axes[1].imshow(tone_map(s, exposure), interpolation="nearest")
     ratio = ("{:,.0f}x".format(full / mix_bytes) if full >= 100 * mix_bytes else "%.3gx" % (full / mix_bytes)) \
         if mix_bytes > 0 else "?"
     ratio += " smaller than the full table"
@@ -446,15 +462,17 @@ def main():
             fail("%s is %dx%d but the reference %s is %dx%d"
                  % (name, img.shape[1], img.shape[0], ref_name, ref.shape[1], ref.shape[0]))
 
-    # Tone-mapped images beside their PFMs; one exposure per scene from its reference.
-    exposure = exposure_for(ref)
+    # Tone-mapped images beside their PFMs; one exposure per scene, for the cloth of its reference.
+    mask_path = os.path.join(d, "cloth_mask.pfm")
+    mask = luminance(read_pfm(mask_path)) > 0.5 if os.path.exists(mask_path) else None
+    exposure = exposure_for(ref, mask)
     scene_exposure = {}
     for r in ref_rows:
-        scene_exposure.setdefault(r["scene"], exposure_for(images[r["image"]]))
+        scene_exposure.setdefault(r["scene"], exposure_for(images[r["image"]], mask))
     for name in images:
         scene = next((r["scene"] for r in rows if r["image"] == name), meta["scene"])
         p = os.path.splitext(pfm_of(d, name))[0] + ".png"
-        write_grey_png(p, tone_map(images[name], scene_exposure.get(scene, exposure)))
+        write_rgb_png(p, tone_map(images[name], scene_exposure.get(scene, exposure)))
         print(p)
 
     try:

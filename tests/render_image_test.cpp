@@ -139,31 +139,50 @@ TEST_CASE("PFM round trips are bit-exact for non-square images", "[render][image
   }
 }
 
-TEST_CASE("the PFM stores the bottom row first, little endian", "[render][image]") {
+TEST_CASE("the PFM stores the bottom row first, little endian, R G B interleaved", "[render][image]") {
   Image im(5, 3);
   for (int y = 0; y < 3; ++y)
-    for (int x = 0; x < 5; ++x) im.at(x, y) = float(10 * y + x) + 0.5f;
+    for (int x = 0; x < 5; ++x)
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = float(100 * c + 10 * y + x) + 0.5f;
   const std::string p = temp_path("rows.pfm");
   write_pfm(p, im);
   const std::string bytes = slurp(p);
-  const std::string header = "Pf\n5 3\n-1.0\n";
-  REQUIRE(bytes.size() == header.size() + 5 * 3 * 4);
+  const std::string header = "PF\n5 3\n-1.0\n";
+  REQUIRE(bytes.size() == header.size() + 5 * 3 * 3 * 4);
   CHECK(bytes.substr(0, header.size()) == header);
   for (int row = 0; row < 3; ++row) {
     const int y = 2 - row;  // stored row 0 is image row height-1
-    for (int x = 0; x < 5; ++x) {
-      const std::size_t at = header.size() + std::size_t(row * 5 + x) * 4;
-      std::uint32_t u = 0;
-      for (int k = 0; k < 4; ++k)
-        u |= std::uint32_t(static_cast<unsigned char>(bytes[at + std::size_t(k)])) << (8 * k);
-      float f;
-      std::memcpy(&f, &u, 4);
-      CHECK(f == im.at(x, y));
-    }
+    for (int x = 0; x < 5; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const std::size_t at = header.size() + (std::size_t(row * 5 + x) * 3 + std::size_t(c)) * 4;
+        std::uint32_t u = 0;
+        for (int k = 0; k < 4; ++k)
+          u |= std::uint32_t(static_cast<unsigned char>(bytes[at + std::size_t(k)])) << (8 * k);
+        float f;
+        std::memcpy(&f, &u, 4);
+        CHECK(f == im.at(x, y, c));
+      }
   }
 }
 
-TEST_CASE("a 3-channel PF file reads as luminance", "[render][image]") {
+TEST_CASE("a grey Pf file reads as R = G = B", "[render][image]") {
+  std::string bytes = "Pf\n2 1\n-1.0\n";
+  for (float f : {0.25f, 3.f}) {
+    std::uint32_t u;
+    std::memcpy(&u, &f, 4);
+    for (int k = 0; k < 4; ++k) bytes.push_back(char((u >> (8 * k)) & 0xff));
+  }
+  const std::string p = temp_path("grey.pfm");
+  spit(p, bytes);
+  const Image im = read_pfm_image(p);
+  REQUIRE(im.width == 2);
+  for (int c = 0; c < 3; ++c) {
+    CHECK(im.at(0, 0, c) == 0.25f);
+    CHECK(im.at(1, 0, c) == 3.f);
+  }
+}
+
+TEST_CASE("a 3-channel PF file reads its channels", "[render][image]") {
   // 2x1, big endian (positive scale): (1, 1, 1) and (1, 0, 0).
   std::string bytes = "PF\n2 1\n1.0\n";
   auto put_be = [&](float f) {
@@ -177,23 +196,29 @@ TEST_CASE("a 3-channel PF file reads as luminance", "[render][image]") {
   const Image im = read_pfm_image(p);
   REQUIRE(im.width == 2);
   REQUIRE(im.height == 1);
-  CHECK(im.at(0, 0) == 1.f);
-  CHECK(im.at(1, 0) == Approx(0.2126f));
+  for (int c = 0; c < 3; ++c) CHECK(im.at(0, 0, c) == 1.f);
+  CHECK(im.at(1, 0, 0) == 1.f);
+  CHECK(im.at(1, 0, 1) == 0.f);
+  CHECK(im.at(1, 0, 2) == 0.f);
 }
 
-TEST_CASE("EXRs of other writers read as luminance or Y", "[render][image]") {
+TEST_CASE("EXRs of other writers read as RGB, or Y as grey", "[render][image]") {
   const std::string rgb = temp_path("other_rgb.exr"), y = temp_path("other_y.exr"), a = temp_path("other_a.exr");
   write_channels(rgb, 4, 2, {"B", "G", "R"},
                  [](std::size_t c, int x, int) { return c == 0 ? 1.f : c == 1 ? 2.f : float(x); });
   const Image im = read_exr(rgb);
   REQUIRE(im.width == 4);
   REQUIRE(im.height == 2);
-  for (int x = 0; x < 4; ++x) CHECK(im.at(x, 1) == Approx(0.2126 * x + 0.7152 * 2 + 0.0722 * 1));
+  for (int x = 0; x < 4; ++x) {
+    CHECK(im.at(x, 1, 0) == float(x));
+    CHECK(im.at(x, 1, 1) == 2.f);
+    CHECK(im.at(x, 1, 2) == 1.f);
+  }
   write_channels(y, 3, 5, {"Y"}, [](std::size_t, int x, int yy) { return float(x + 10 * yy); });
   const Image iy = read_exr(y);
   REQUIRE(iy.width == 3);
   REQUIRE(iy.height == 5);
-  CHECK(iy.at(2, 4) == 42.f);
+  for (int c = 0; c < 3; ++c) CHECK(iy.at(2, 4, c) == 42.f);
   write_channels(a, 2, 2, {"A"}, [](std::size_t, int, int) { return 1.f; });
   const std::string msg = error_of([&] { read_exr(a); });
   CHECK_THAT(msg, Catch::Contains(a) && Catch::Contains("channels"));
@@ -289,8 +314,9 @@ TEST_CASE("reading garbage, truncated or missing files throws naming the path", 
 TEST_CASE("relative_mse follows its formula", "[render][image]") {
   Image ref(4, 3);
   for (int y = 0; y < 3; ++y)
-    for (int x = 0; x < 4; ++x) ref.at(x, y) = 0.1f + float(x * y);
-  ref.at(0, 0) = 0.f;  // a dark pixel: eps keeps it finite
+    for (int x = 0; x < 4; ++x)
+      for (int c = 0; c < 3; ++c) ref.at(x, y, c) = 0.1f + float(x * y) + 0.5f * float(c);
+  ref.set_grey(0, 0, 0.f);  // a dark pixel: eps keeps it finite
   CHECK(relative_mse(ref, ref) == 0.0);
 
   Image twice = ref;
@@ -317,7 +343,7 @@ TEST_CASE("relative_mse follows its formula", "[render][image]") {
 
   // An all-zero reference: no NaN for equal pixels.
   Image zero(2, 2), one(2, 2);
-  one.v.assign(4, 1.f);
+  one.v.assign(12, 1.f);
   CHECK(relative_mse(zero, zero) == 0.0);
   CHECK(std::isinf(relative_mse(one, zero)));
 

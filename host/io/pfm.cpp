@@ -84,6 +84,7 @@ PfmImage read_pfm(const std::string& path) {
   img.width = int(w);
   img.height = int(h);
   img.luminance.resize(std::size_t(w) * std::size_t(h));
+  img.rgb.resize(3 * img.luminance.size());
   const std::size_t row_bytes = std::size_t(w) * 4 * std::size_t(channels);
   std::vector<unsigned char> row(row_bytes);
   for (long long y = h - 1; y >= 0; --y) {  // the file's first row is the image's last
@@ -102,21 +103,25 @@ PfmImage read_pfm(const std::string& path) {
           throw InputError(path + ": pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                            ") is negative or not finite");
       }
-      img.luminance[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
-          channels == 1 ? c[0] : luminance(c[0], c[1], c[2]);
+      const std::size_t at = std::size_t(y) * std::size_t(w) + std::size_t(x);
+      img.luminance[at] = channels == 1 ? c[0] : luminance(c[0], c[1], c[2]);
+      for (int k = 0; k < 3; ++k) img.rgb[3 * at + std::size_t(k)] = c[channels == 1 ? 0 : k];
     }
   }
   if (f.peek() != std::char_traits<char>::eof()) throw InputError(path + ": trailing bytes after the PFM pixels");
   return img;
 }
 
-void write_pfm(const std::string& path, int width, int height, const std::vector<float>& values) {
+void write_pfm(const std::string& path, int width, int height, const std::vector<float>& values, int channels) {
+  if (channels != 1 && channels != 3)
+    throw InputError(path + ": a PFM holds 1 or 3 channels, not " + std::to_string(channels));
   if (width <= 0 || height <= 0)
     throw InputError(path + ": cannot write an empty image (" + std::to_string(width) + "x" +
                      std::to_string(height) + ")");
-  if (values.size() != std::size_t(width) * std::size_t(height))
+  const std::size_t nc = std::size_t(channels);
+  if (values.size() != std::size_t(width) * std::size_t(height) * nc)
     throw InputError(path + ": image holds " + std::to_string(values.size()) + " values, not " +
-                     std::to_string(width) + "x" + std::to_string(height));
+                     std::to_string(width) + "x" + std::to_string(height) + (channels == 3 ? "x3" : ""));
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   if (dir.empty()) dir = ".";
   std::error_code ec;
@@ -126,12 +131,13 @@ void write_pfm(const std::string& path, int width, int height, const std::vector
   {
     std::ofstream f(out.temp_path(), std::ios::binary | std::ios::trunc);
     if (!f) throw IoError(path + ": cannot create " + out.temp_path() + ": " + std::strerror(errno));
-    f << "Pf\n" << width << ' ' << height << "\n-1.0\n";
-    std::vector<unsigned char> row(std::size_t(width) * 4);
+    f << (channels == 3 ? "PF\n" : "Pf\n") << width << ' ' << height << "\n-1.0\n";
+    const std::size_t per_row = std::size_t(width) * nc;
+    std::vector<unsigned char> row(per_row * 4);
     for (int y = height - 1; y >= 0; --y) {  // bottom row first
-      for (int x = 0; x < width; ++x) {
-        const std::uint32_t u = float_bits(values[std::size_t(y) * std::size_t(width) + std::size_t(x)]);
-        for (int k = 0; k < 4; ++k) row[std::size_t(x) * 4 + std::size_t(k)] = (u >> (8 * k)) & 0xff;
+      for (std::size_t i = 0; i < per_row; ++i) {
+        const std::uint32_t u = float_bits(values[std::size_t(y) * per_row + i]);
+        for (int k = 0; k < 4; ++k) row[i * 4 + std::size_t(k)] = (u >> (8 * k)) & 0xff;
       }
       f.write(reinterpret_cast<const char*>(row.data()), std::streamsize(row.size()));
     }

@@ -66,14 +66,16 @@ double image_difference(const Image& a, const Image& b, int block) {
   double d = 0, t = 0;
   for (int y0 = 0; y0 + block <= a.height; y0 += block)
     for (int x0 = 0; x0 + block <= a.width; x0 += block) {
-      double sa = 0, sb = 0;
-      for (int y = y0; y < y0 + block; ++y)
-        for (int x = x0; x < x0 + block; ++x) {
-          sa += a.at(x, y);
-          sb += b.at(x, y);
-        }
-      d += std::abs(sa - sb);
-      t += std::abs(sb);
+      for (int c = 0; c < 3; ++c) {
+        double sa = 0, sb = 0;
+        for (int y = y0; y < y0 + block; ++y)
+          for (int x = x0; x < x0 + block; ++x) {
+            sa += a.at(x, y, c);
+            sb += b.at(x, y, c);
+          }
+        d += std::abs(sa - sb);
+        t += std::abs(sb);
+      }
     }
   return t > 0 ? d / t : 0;
 }
@@ -115,18 +117,23 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   out.stand_in_difference = image_difference(b, a, 1);
   out.stand_in_difference_4x4 = image_difference(b, a, 4);
   out.table_noise_4x4 = image_difference(a, reference, 4);
-  double ma = 0, mb = 0;
+  double ma[3] = {0, 0, 0}, mb[3] = {0, 0, 0};
   for (std::size_t i = 0; i < a.v.size(); ++i) {
-    ma += a.v[i];
-    mb += b.v[i];
+    ma[i % 3] += a.v[i];
+    mb[i % 3] += b.v[i];
   }
-  out.stand_in_mean = ma > 0 ? mb / ma - 1 : 0;
+  for (int c = 0; c < 3; ++c) out.stand_in_channel_mean[c] = ma[c] > 0 ? mb[c] / ma[c] - 1 : 0;
+  const double ya = Rgb(ma[0], ma[1], ma[2]).luminance(), yb = Rgb(mb[0], mb[1], mb[2]).luminance();
+  out.stand_in_mean = ya > 0 ? yb / ya - 1 : 0;
   out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), relative_mse(a, reference)});
   out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), relative_mse(b, reference)});
   log_line("render: the stand-in image differs from the table image by " + format_number(100 * out.stand_in_difference, "%.2f") +
            " % per pixel, " + format_number(100 * out.stand_in_difference_4x4, "%.2f") +
            " % over 4 x 4 blocks (the table image's own noise against the reference there: " +
-           format_number(100 * out.table_noise_4x4, "%.2f") + " %); image means " + format_number(100 * out.stand_in_mean, "%+.2f") + " %");
+           format_number(100 * out.table_noise_4x4, "%.2f") + " %); image means " + format_number(100 * out.stand_in_mean, "%+.2f") + " % (luminance; R " +
+           format_number(100 * out.stand_in_channel_mean[0], "%+.2f") + " %, G " +
+           format_number(100 * out.stand_in_channel_mean[1], "%+.2f") + " %, B " +
+           format_number(100 * out.stand_in_channel_mean[2], "%+.2f") + " %)");
   return out;
 }
 

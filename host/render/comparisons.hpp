@@ -21,18 +21,21 @@ struct RenderRow {
 struct Comparisons {
   std::vector<RenderRow> rows;
   double equal_time_seconds = 0;  // the budget of the equal-time renders
-  // The stand-in image against the table image (stand_in set): mean relative difference
+  // The stand-in image against the table image (stand_in set): mean relative RGB difference
   // per pixel and over 4 x 4 blocks, the table image's own noise against the reference
-  // over 4 x 4 blocks, and the relative difference of the image means; -1 / 0 when not run.
+  // over 4 x 4 blocks, and the relative difference of the image means (luminance, and
+  // each channel); -1 / 0 when not run.
   double stand_in_difference = -1, stand_in_difference_4x4 = -1, table_noise_4x4 = -1, stand_in_mean = 0;
+  double stand_in_channel_mean[3] = {0, 0, 0};
 };
 
 // Renders every comparison the settings ask for, writing each image to the output
 // directory (<estimator>_spp, <estimator>_time, table, stand_in; EXR and PFM).
 Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, const Image& reference);
 
-// sum |a - b| / sum |b| over blocks of `block` x `block` pixels: the mean relative
-// difference of two images, with the Monte Carlo noise of both reduced by the blocks.
+// sum |a - b| / sum |b| over blocks of `block` x `block` pixels and the three channels: the
+// mean relative RGB difference of two images, with the Monte Carlo noise of both reduced by
+// the blocks.
 double image_difference(const Image& a, const Image& b, int block);
 
 }  // namespace render

@@ -32,7 +32,7 @@ void write_partial(const std::string& path, const std::string& key, int width, i
   {
     h5::Handle f = h5::create_file(out.temp_path());
     h5::Handle g = h5::create_group(f.get(), "reference", path);
-    h5::write_doubles(g.get(), "sum", {hsize_t(height), hsize_t(width)}, p.sum.data(), path);
+    h5::write_doubles(g.get(), "sum", {hsize_t(height), hsize_t(width), 3}, p.sum.data(), path);
     const std::int32_t passes = p.passes;
     h5::write_ints(g.get(), "passes", {1}, &passes, path);
     h5::write_string_attr(g.get(), "key", key, path);
@@ -52,7 +52,7 @@ Partial read_partial(const std::string& path, const std::string& key, int width,
     const std::vector<std::int32_t> passes = h5::read_ints(g.get(), "passes", path);
     std::vector<double> sum = h5::read_doubles(g.get(), "sum", path);
     if (passes.size() != 1 || passes[0] < 0 || passes[0] > max_passes ||
-        sum.size() != std::size_t(width) * std::size_t(height))
+        sum.size() != 3 * std::size_t(width) * std::size_t(height))
       return p;
     p.passes = passes[0];
     p.sum = std::move(sum);
@@ -78,7 +78,7 @@ std::string scene_key(const RenderSettings& s, const std::string& table) {
   Hash64 h;
   h.update(s.lighting.env.data(), s.lighting.env.size() * sizeof(float));
   k << " env " << h.hex() << "\nreference " << path_estimator_name(s.reference_estimator) << " " << s.reference_spp
-    << "\nversion " << BSDFMIX_VERSION << "\n";
+    << "\nimage rgb\nversion " << BSDFMIX_VERSION << "\n";
   return k.str();
 }
 

@@ -20,7 +20,8 @@ std::string scene_key(const RenderSettings& s, const std::string& table);
 // same key) and written as reference.exr, reference.pfm and reference.key.
 Image converged_image(const SceneView& view, const RenderSettings& s, const std::string& key);
 
-// Sums of `passes` passes over a width x height image as an image (the mean per pixel).
+// Sums of `passes` passes over a width x height image ([height][width][3]) as an image
+// (the mean per pixel and channel).
 Image mean_image(const std::vector<double>& sum, int passes, int width, int height);
 
 // Writes <dir>/<stem>.exr and <dir>/<stem>.pfm.

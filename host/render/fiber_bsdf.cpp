@@ -49,6 +49,13 @@ FiberBsdf::FiberBsdf(const std::string& table_path) {
     const std::vector<float> v = table.read_slice(s, 0);
     std::copy(v.begin(), v.end(), f_.begin() + std::ptrdiff_t(s * cells));
   }
+  if (meta_.rgb) {
+    rgb_.resize(3 * no * cells);
+    for (std::size_t s = 0; s < no; ++s) {
+      const std::vector<float> v = table.read_slice_rgb(s, 0);
+      std::copy(v.begin(), v.end(), rgb_.begin() + std::ptrdiff_t(3 * s * cells));
+    }
+  }
   dth_ = axis_step(meta_.theta_i);
   dph_ = axis_step(meta_.phi_i);
   th0_ = meta_.theta_i.front() - dth_ / 2;
@@ -96,13 +103,18 @@ void FiberBsdf::bracket(double theta_o, std::size_t& i0, std::size_t& i1, double
   w = b.f;
 }
 
-double FiberBsdf::cell_f(std::size_t slice, double theta, double phi) const {
+long FiberBsdf::cell_of(double theta, double phi) const {
   const double fi = std::floor((theta - th0_) / dth_);
   const std::size_t nt = meta_.theta_i.size(), np = meta_.phi_i.size();
-  if (!(fi >= 0) || fi >= double(nt)) return 0;
+  if (!(fi >= 0) || fi >= double(nt)) return -1;
   long j = long(std::floor((phi - ph0_) / dph_)) % long(np);
   if (j < 0) j += long(np);
-  return f_[slice * nt * np + std::size_t(fi) * np + std::size_t(j)];
+  return long(std::size_t(fi) * np + std::size_t(j));
+}
+
+double FiberBsdf::cell_f(std::size_t slice, double theta, double phi) const {
+  const long c = cell_of(theta, phi);
+  return c < 0 ? 0.0 : f_[slice * meta_.cells_per_slice() + std::size_t(c)];
 }
 
 bool FiberBsdf::bracketed(double theta_o) const {
@@ -136,6 +148,25 @@ double FiberBsdf::f(FiberF which, double theta_o, double theta, double phi) cons
   const mix::SliceMixture& s = set_.slices[std::size_t(nearest_fitted(theta_o))];
   const double j = std::cos(theta);
   return j > 0 ? s.scale * s.pdf_param(theta, phi) / j : 0.0;
+}
+
+Rgb FiberBsdf::f_rgb(FiberF which, double theta_o, double theta, double phi) const {
+  if (which == FiberF::Table) {
+    if (rgb_.empty()) return Rgb(f(which, theta_o, theta, phi));
+    std::size_t i0, i1;
+    double w;
+    bracket(theta_o, i0, i1, w);
+    const long c = cell_of(theta, phi);
+    if (c < 0) return Rgb();
+    const std::size_t cells = meta_.cells_per_slice();
+    Rgb out;
+    for (int k = 0; k < 3; ++k) {
+      const double a = rgb_[3 * (i0 * cells + std::size_t(c)) + std::size_t(k)];
+      out[k] = w > 0 ? (1 - w) * a + w * double(rgb_[3 * (i1 * cells + std::size_t(c)) + std::size_t(k)]) : a;
+    }
+    return out;
+  }
+  return Rgb(f(which, theta_o, theta, phi));
 }
 
 mix::Sample FiberBsdf::mixture_sample(double theta_o, const double u[4]) const {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/color.hpp"
 #include "io/table.hpp"
 #include "render/cloth.hpp"
 #include "sampling/sampling.hpp"
@@ -34,8 +35,12 @@ class FiberBsdf {
   const TableMeta& meta() const { return meta_; }
   std::size_t table_bytes() const { return f_.size() * sizeof(float); }
 
-  // f(theta_o; theta, phi) of the table (linear in theta_o) or of the stand-in.
+  // f(theta_o; theta, phi) of the table (linear in theta_o) or of the stand-in: the
+  // luminance, and per channel (the table's `rgb` and the mixture's rgb_scale when they
+  // are there; otherwise the luminance in every channel).
   double f(FiberF which, double theta_o, double theta, double phi) const;
+  Rgb f_rgb(FiberF which, double theta_o, double theta, double phi) const;
+  bool has_rgb() const { return !rgb_.empty(); }
 
   // A direction (theta, phi) from uniforms u[0..3] and its density per steradian;
   // pdf 0: no sample. The mixture sampler is the mixture with `uniform_fraction` of
@@ -55,9 +60,12 @@ class FiberBsdf {
   int nearest_fitted(double theta_o) const;
   bool bracketed(double theta_o) const;
   double cell_f(std::size_t slice, double theta, double phi) const;
+  // The cell index of (theta, phi) within a slice, or -1 outside theta's range.
+  long cell_of(double theta, double phi) const;
 
   TableMeta meta_;
   std::vector<float> f_;          // [theta_o][theta_i][phi_i]
+  std::vector<float> rgb_;        // [theta_o][theta_i][phi_i][3] when the table has `rgb`
   std::vector<CellCdf> cdf_;      // per theta_o slice
   std::vector<double> cell_w_;    // per theta_i row: integral of J over a cell
   double th0_ = 0, dth_ = 0, ph0_ = 0, dph_ = 0, to0_ = 0, dto_ = 0;

@@ -38,9 +38,9 @@ void check_writable_image(const std::string& path, const Image& image) {
   if (image.width <= 0 || image.height <= 0)
     throw InputError(path + ": cannot write an empty image (" + std::to_string(image.width) + "x" +
                      std::to_string(image.height) + ")");
-  if (image.v.size() != std::size_t(image.width) * std::size_t(image.height))
+  if (image.v.size() != 3 * std::size_t(image.width) * std::size_t(image.height))
     throw InputError(path + ": image holds " + std::to_string(image.v.size()) + " values, not " +
-                     std::to_string(image.width) + "x" + std::to_string(image.height));
+                     std::to_string(image.width) + "x" + std::to_string(image.height) + "x3");
 }
 
 // The temporary name beside `path`; its directory must exist (it is not created).
@@ -89,9 +89,10 @@ void write_exr(const std::string& path, const Image& image) {
     for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
     Imf::FrameBuffer fb;
     const char* base = reinterpret_cast<const char*>(image.v.data());
-    const std::size_t xs = sizeof(float), ys = sizeof(float) * std::size_t(image.width);
-    for (const char* c : {"R", "G", "B"})
-      fb.insert(c, Imf::Slice(Imf::FLOAT, const_cast<char*>(base), xs, ys));
+    const std::size_t xs = 3 * sizeof(float), ys = 3 * sizeof(float) * std::size_t(image.width);
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c)
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, const_cast<char*>(base) + c * sizeof(float), xs, ys));
     Imf::OutputFile out(guard.temp.c_str(), header);
     out.setFrameBuffer(fb);
     out.writePixels(image.height);
@@ -119,22 +120,18 @@ Image read_exr(const std::string& path) {
     const bool y = ch.findChannel("Y") != nullptr;
     if (!rgb && !y) throw InputError(path + ": EXR has neither R, G, B nor Y channels");
     Image image{int(w), int(h)};
-    const std::size_t n = image.v.size();
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    std::vector<float> plane[3];
     Imf::FrameBuffer fb;
-    std::vector<float> g, b;
-    if (rgb) {
-      g.assign(n, 0.f);
-      b.assign(n, 0.f);
-      fb.insert("R", Imf::Slice::Make(Imf::FLOAT, image.v.data(), dw));
-      fb.insert("G", Imf::Slice::Make(Imf::FLOAT, g.data(), dw));
-      fb.insert("B", Imf::Slice::Make(Imf::FLOAT, b.data(), dw));
-    } else {
-      fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, image.v.data(), dw));
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < (rgb ? 3 : 1); ++c) {
+      plane[c].assign(n, 0.f);
+      fb.insert(rgb ? names[c] : "Y", Imf::Slice::Make(Imf::FLOAT, plane[c].data(), dw));
     }
     in.setFrameBuffer(fb);
     in.readPixels(dw.min.y, dw.max.y);
-    if (rgb)
-      for (std::size_t i = 0; i < n; ++i) image.v[i] = luminance(image.v[i], g[i], b[i]);
+    for (std::size_t i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) image.v[3 * i + std::size_t(c)] = plane[rgb ? c : 0][i];
     return image;
   } catch (const Error&) {
     throw;
@@ -145,7 +142,7 @@ Image read_exr(const std::string& path) {
 
 void write_pfm(const std::string& path, const Image& image) {
   check_writable_image(path, image);
-  bsdfmix::write_pfm(path, image.width, image.height, image.v);
+  bsdfmix::write_pfm(path, image.width, image.height, image.v, 3);
 }
 
 Image read_pfm_image(const std::string& path) {
@@ -153,7 +150,7 @@ Image read_pfm_image(const std::string& path) {
   Image image;
   image.width = p.width;
   image.height = p.height;
-  image.v = std::move(p.luminance);
+  image.v = std::move(p.rgb);
   return image;
 }
 

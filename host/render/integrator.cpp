@@ -45,19 +45,22 @@ int thread_count(int asked) {
   return n > 0 ? int(n) : 1;
 }
 
-// One path: the radiance arriving at the camera along `ray`. `theta_out`, when given,
-// receives theta_o of every fiber vertex (the pre-pass).
-double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, const Rng& rng, std::uint64_t& rays,
-                  std::vector<double>* theta_out) {
+// One path: the RGB radiance arriving at the camera along `ray`, the throughput carried
+// per channel (directions are drawn by the luminance samplers; every decision reads the
+// largest channel, so a grey path is exactly the luminance path). `theta_out`, when
+// given, receives theta_o of every fiber vertex (the pre-pass).
+Rgb trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, const Rng& rng, std::uint64_t& rays,
+               std::vector<double>* theta_out) {
   const FiberSampler fs = sampler_of(est);
   const bool nee = uses_light_sampling(est);
-  double L = 0, beta = 1, prev_pdf = 0;
+  Rgb L, beta(1.0);
+  double prev_pdf = 0;
   bool prev_nee = false;
   for (int depth = 0; depth < v.max_depth; ++depth) {
     const Hit hit = v.tracer->intersect(ray);
     ++rays;
     if (hit.kind == HitKind::None) {
-      const double Le = v.lighting->radiance_world(ray.dir);
+      const double Le = v.lighting->radiance_world(ray.dir);  // the lighting is grey
       if (!prev_nee) L += beta * Le;
       else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, v.light->pdf(ray.dir));
       break;
@@ -65,7 +68,7 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
     const Vec3 wo = neg(ray.dir);
     double u[4];
     const std::uint32_t dim = std::uint32_t(depth) * 4;
-    // The vertex: value(w) = f c (fiber: f; ground: albedo / pi cos+), sample, pdf.
+    // The vertex: value(w) = f c per channel (fiber: f; ground: albedo / pi cos+), sample, pdf.
     const bool fiber = hit.kind == HitKind::Fiber;
     FiberFrame frame = fiber ? FiberFrame(hit.tangent, wo) : FiberFrame({1, 0, 0}, {0, 0, 1});
     Vec3 gn = hit.normal, g1{1, 0, 0}, g2{0, 1, 0};
@@ -78,10 +81,10 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
       if (fiber) {
         double th, ph;
         frame.to_local(w, th, ph);
-        return v.bsdf->f(which, frame.theta_o, th, ph);
+        return v.bsdf->f_rgb(which, frame.theta_o, th, ph);
       }
       const double c = dot(w, gn);
-      return c > 0 ? v.ground_albedo / kPi * c : 0.0;
+      return Rgb(c > 0 ? v.ground_albedo / kPi * c : 0.0);
     };
     auto pdf_of = [&](const Vec3& w) {
       if (fiber) {
@@ -105,8 +108,8 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
       rng.draw(dim + 1, u);
       const Vec3 wl = v.light->sample(u[0], u[1], u[2], u[3]);
       const double pl = v.light->pdf(wl);
-      const double fv = pl > 0 ? value(wl) : 0.0;
-      if (fv > 0) {
+      const Rgb fv = pl > 0 ? value(wl) : Rgb();
+      if (fv.max() > 0) {
         Ray shadow = next;
         shadow.dir = wl;
         ++rays;
@@ -130,12 +133,12 @@ double trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, 
       pdf = z / kPi;
       if (!(pdf > 0)) break;
     }
-    const double fv = value(wi);
-    if (!(fv > 0)) break;
+    const Rgb fv = value(wi);
+    if (!(fv.max() > 0)) break;
     beta *= fv / pdf;
     if (depth + 1 >= v.rr_depth) {
       rng.draw(dim + 3, u);
-      const double q = std::min(0.95, beta);
+      const double q = std::min(0.95, beta.max());
       if (u[0] >= q) break;
       beta /= q;
     }
@@ -164,7 +167,7 @@ Ray camera_ray(const Camera& c, int width, int height, double x, double y) {
 RenderStats render_passes(const SceneView& v, PathEstimator est, FiberF which, int first, int max_passes,
                           std::vector<double>& sum, const std::function<bool(int, double)>& pass_done) {
   const std::size_t pixels = std::size_t(v.width) * std::size_t(v.height);
-  sum.resize(pixels, 0.0);
+  sum.resize(3 * pixels, 0.0);
   RenderStats st;
   const auto t0 = std::chrono::steady_clock::now();
   const int nt = thread_count(v.threads);
@@ -180,7 +183,8 @@ RenderStats render_passes(const SceneView& v, PathEstimator est, FiberF which, i
           double u[4];
           rng.draw(0, u);
           const Ray ray = camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]);
-          sum[p] += trace_path(v, est, which, ray, rng, local, nullptr);
+          const Rgb L = trace_path(v, est, which, ray, rng, local, nullptr);
+          for (int c = 0; c < 3; ++c) sum[3 * std::size_t(p) + std::size_t(c)] += L[c];
         }
       rays += local;
     };

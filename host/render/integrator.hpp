@@ -39,8 +39,8 @@ struct RenderStats {
   std::uint64_t rays = 0;
 };
 
-// Passes of one sample per pixel, from pass `first` on, accumulated into `sum` (one
-// double per pixel). `pass_done` is called after every pass with (passes done so far,
+// Passes of one sample per pixel, from pass `first` on, accumulated into `sum` (R, G, B
+// doubles per pixel, [height][width][3]). `pass_done` is called after every pass with (passes done so far,
 // seconds so far) and returns false to stop. Returns the passes done and the rays traced.
 RenderStats render_passes(const SceneView& view, PathEstimator estimator, FiberF f, int first, int max_passes,
                           std::vector<double>& sum, const std::function<bool(int, double)>& pass_done);

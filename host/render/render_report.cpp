@@ -41,6 +41,8 @@ void write_render_report(const std::string& csv, const std::string& json, const 
      << ", \"reference\": \"reference.exr\", \"stand_in_difference\": " << num(c.stand_in_difference)
      << ", \"stand_in_difference_4x4\": " << num(c.stand_in_difference_4x4)
      << ", \"table_noise_4x4\": " << num(c.table_noise_4x4) << ", \"stand_in_mean_difference\": " << num(c.stand_in_mean)
+     << ", \"stand_in_channel_mean_difference\": [" << num(c.stand_in_channel_mean[0]) << ", "
+     << num(c.stand_in_channel_mean[1]) << ", " << num(c.stand_in_channel_mean[2]) << "]"
      << ", \"fibers\": " << facts.fibers << ", \"segments\": " << facts.segments << "}\n";
   write_text_atomic(json, js.str());
   const double mixture = double(std::max<std::uint64_t>(facts.mixture_bytes, 1));

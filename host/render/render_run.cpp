@@ -49,7 +49,8 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   const Image converged = converged_image(scene.view(), s, scene_key(s, config.table));
   const Comparisons comparisons = run_comparisons(scene.view(), s, converged);
 
-  // 5. The report and the figures.
+  // 5. The report, the cloth's pixels and the figures.
+  write_pfm((fs::path(s.output) / "cloth_mask.pfm").string(), scene.cloth_mask());
   RenderFacts facts;
   facts.scene = s.lighting.name;
   facts.fiber = fs::path(config.table).stem().string();

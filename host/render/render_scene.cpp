@@ -42,5 +42,15 @@ SceneView RenderScene::prepass_view(const RenderSettings& s) const {
   return pre;
 }
 
+Image RenderScene::cloth_mask() const {
+  Image mask(view_.width, view_.height);
+  for (int y = 0; y < view_.height; ++y)
+    for (int x = 0; x < view_.width; ++x) {
+      const Hit hit = tracer_.intersect(camera_ray(view_.camera, view_.width, view_.height, x + 0.5, y + 0.5));
+      mask.set_grey(x, y, hit.kind == HitKind::Fiber ? 1.f : 0.f);
+    }
+  return mask;
+}
+
 }  // namespace render
 }  // namespace bsdfmix
