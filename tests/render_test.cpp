@@ -53,6 +53,25 @@ std::string small_table(const std::string& preset) {
   return path;
 }
 
+// The same table with an `rgb` channel of `color` times f in each channel (a grey table
+// when color is (1, 1, 1)).
+std::string colored_table(const std::string& preset, const double color[3], const std::string& name) {
+  const std::string path = (temp_dir() / (preset + "_" + name + "_rgb_table.h5")).string();
+  const TableReader plain(small_table(preset));
+  TableMeta meta = plain.meta();
+  meta.rgb = true;
+  TableWriter w(path, meta);
+  for (std::size_t t = 0; t < meta.theta_o.size(); ++t) {
+    const std::vector<float> v = plain.read_slice(t, 0);
+    std::vector<float> rgb(3 * v.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (int c = 0; c < 3; ++c) rgb[3 * i + std::size_t(c)] = float(double(v[i]) * color[c]);
+    w.write_slice(t, 0, v.data(), rgb.data());
+  }
+  w.commit();
+  return path;
+}
+
 // The table's mixtures, fitted by the sweep (K <= 8), cached in the temp directory.
 mix::MixtureSet fitted_mixture(const std::string& table) {
   const std::string out = table + ".mixture.h5";
@@ -153,6 +172,20 @@ Lighting sky() {
 const PathEstimator kAll[] = {PathEstimator::Uniform, PathEstimator::MisTab, PathEstimator::CdfTab,
                               PathEstimator::MisLightCdf, PathEstimator::MisLightGmm};
 
+// The sums of a render of a table without color, one per pixel: every pixel's R, G and B
+// are required to be equal (a grey table renders grey), and R is returned.
+std::vector<double> grey(const std::vector<double>& rgb) {
+  REQUIRE(rgb.size() % 3 == 0);
+  std::vector<double> out(rgb.size() / 3);
+  bool equal = true;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i] = rgb[3 * i];
+    equal = equal && rgb[3 * i + 1] == out[i] && rgb[3 * i + 2] == out[i];
+  }
+  REQUIRE(equal);
+  return out;
+}
+
 double image_mean(const std::vector<double>& sum, int spp) {
   double m = 0;
   for (double v : sum) m += v;
@@ -189,6 +222,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
     if (e == PathEstimator::Uniform) continue;
     std::vector<double> sum;
     render_passes(s->view, e, FiberF::Table, 0, spp, sum, nullptr);
+    sum = grey(sum);
     // every pixel estimates the same value: the standard error from their spread
     const double mean = image_mean(sum, spp);
     double var = 0;
@@ -205,6 +239,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
   for (const PathEstimator e : {PathEstimator::Uniform, PathEstimator::CdfTab}) {
     std::vector<double> sum;
     render_passes(v, e, FiberF::Table, 0, 256, sum, nullptr);
+    sum = grey(sum);
     m[k] = image_mean(sum, 256);
     double var = 0;
     for (double x : sum) var += (x / 256 - m[k]) * (x / 256 - m[k]) / double(sum.size() - 1);
@@ -230,6 +265,7 @@ TEST_CASE("every path estimator is unbiased: image means over independent seeds 
       v.seed = 1000 + std::uint64_t(r);
       std::vector<double> sum;
       render_passes(v, e, FiberF::Table, 0, spp, sum, nullptr);
+      sum = grey(sum);
       per_run.push_back(image_mean(sum, spp));
     }
     double m = 0, var = 0;
@@ -353,6 +389,8 @@ TEST_CASE("the stand-in render stays within its integral error of the table rend
       std::vector<double> a, b;
       render_passes(v, PathEstimator::CdfTab, FiberF::Table, 0, spp, a, nullptr);
       render_passes(v, PathEstimator::CdfTab, FiberF::StandIn, 0, spp, b, nullptr);
+      a = grey(a);
+      b = grey(b);
       const double x = image_mean(b, spp) / image_mean(a, spp) - 1;
       d += x / runs;
       d2 += x * x / runs;
@@ -364,6 +402,91 @@ TEST_CASE("the stand-in render stays within its integral error of the table rend
                 factor, d, se, mean_table, err);
     if (factor == 1.0) CHECK(std::abs(d) <= 3 * err + 4 * se + 0.005);
     else CHECK(d < -0.05);
+  }
+}
+
+TEST_CASE("a table whose rgb is its luminance in each channel renders the image of the table without color",
+          "[render][color]") {
+  Progress::set_enabled(false);
+  const double white[3] = {1, 1, 1};
+  FiberBsdf plain(small_table("silk")), rgb(colored_table("silk", white, "grey"));
+  REQUIRE_FALSE(plain.has_rgb());
+  REQUIRE(rgb.has_rgb());
+  plain.set_mixture(broad_mixture(plain.meta()));
+  rgb.set_mixture(broad_mixture(rgb.meta()));
+  auto a = make_scene(plain, sky(), true, 10);
+  auto b = make_scene(rgb, sky(), true, 10);
+  a->view.max_depth = b->view.max_depth = 12;
+  for (const PathEstimator e : kAll) {
+    std::vector<double> x, y;
+    render_passes(a->view, e, FiberF::Table, 0, 4, x, nullptr);
+    render_passes(b->view, e, FiberF::Table, 0, 4, y, nullptr);
+    CHECK(x == y);
+    grey(y);  // and R = G = B in every pixel
+  }
+}
+
+TEST_CASE("colored white furnace: one lossless fiber of albedo (1, 1/2, 1/4) under L = 1", "[render][color]") {
+  // One straight fiber filling the view: every camera ray meets it once, and no scattered
+  // ray can meet it again, so each channel renders its albedo times the table's (about 1;
+  // the lossless model's is exactly 1), and G and B are exactly R / 2 and R / 4 (powers of
+  // two scale f exactly).
+  Progress::set_enabled(false);
+  const double color[3] = {1, 0.5, 0.25};
+  FiberBsdf bsdf(colored_table("lossless", color, "furnace"));
+  bsdf.set_mixture(broad_mixture(bsdf.meta()));
+  Cloth cloth;
+  Fiber f;
+  f.radius = 0.5;
+  f.points = {{-3, 0, 0}, {-1, 0, 0}, {1, 0, 0}, {3, 0, 0}};
+  cloth.fibers = {f};
+  cloth.lo = {-3.5, -0.5, -0.5};
+  cloth.hi = {3.5, 0.5, 0.5};
+  GroundPlane g;
+  g.enabled = false;
+  const Tracer tracer(cloth, g);
+  const Lighting lighting = default_lighting(Domain::Hemisphere, 1.0);
+  const LightSampler light = make_light_sampler(lighting);
+  SceneView v;
+  v.tracer = &tracer;
+  v.bsdf = &bsdf;
+  v.lighting = &lighting;
+  v.light = &light;
+  v.camera.position = {0, -1.5, 0.3};
+  v.camera.look_at = {0, 0, 0};
+  v.camera.fov_deg = 8;
+  v.fiber_radius = f.radius;
+  v.width = v.height = 12;
+  v.max_depth = 8;
+  v.threads = 2;
+  // the table's albedo: the furnace's tolerance, as in the grey furnace
+  double worst = 0;
+  const auto& m = bsdf.meta();
+  for (std::size_t t = 0; t < m.theta_o.size(); ++t) {
+    double a = 0;
+    const double dth = axis_step(m.theta_i), dph = axis_step(m.phi_i);
+    for (double th : m.theta_i)
+      for (double ph : m.phi_i)
+        a += bsdf.f(FiberF::Table, m.theta_o[t], th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
+    worst = std::max(worst, std::abs(a - 1));
+  }
+  for (const PathEstimator e : {PathEstimator::CdfTab, PathEstimator::MisLightCdf}) {
+    const int spp = 64;
+    std::vector<double> sum;
+    render_passes(v, e, FiberF::Table, 0, spp, sum, nullptr);
+    const std::size_t n = sum.size() / 3;
+    double mean[3] = {0, 0, 0}, var = 0;
+    bool exact = true;
+    for (std::size_t p = 0; p < n; ++p) {
+      for (int c = 0; c < 3; ++c) mean[c] += sum[3 * p + std::size_t(c)] / spp / double(n);
+      exact = exact && sum[3 * p + 1] == 0.5 * sum[3 * p] && sum[3 * p + 2] == 0.25 * sum[3 * p];
+    }
+    for (std::size_t p = 0; p < n; ++p) var += std::pow(sum[3 * p] / spp - mean[0], 2) / double(n - 1);
+    const double se = std::sqrt(var / double(n));
+    std::printf("render_test: colored furnace %-13s: R %.4f G %.4f B %.4f (+- %.4f in R; table albedo within %.4f of 1)\n",
+                path_estimator_name(e), mean[0], mean[1], mean[2], se, worst);
+    CHECK(exact);
+    for (int c = 0; c < 3; ++c) CHECK(std::abs(mean[c] / color[c] - 1) <= worst + 4 * se / color[0] + 1e-3);
   }
 }
 
