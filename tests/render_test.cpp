@@ -123,7 +123,7 @@ struct Scene {
   SceneView view;
 };
 
-std::unique_ptr<Scene> make_scene(const FiberBsdf& bsdf, const Lighting& lighting, bool ground, int size) {
+std::unique_ptr<Scene> make_scene(const TableBsdf& bsdf, const Lighting& lighting, bool ground, int size) {
   auto s = std::make_unique<Scene>();
   ClothParams p;
   p.yarn_spacing = 0.1;
@@ -197,7 +197,7 @@ double image_mean(const std::vector<double>& sum, int spp) {
 TEST_CASE("white furnace: lossless fibers under a constant environment render 1", "[render]") {
   Progress::set_enabled(false);
   const std::string table = small_table("lossless");
-  FiberBsdf bsdf(table);
+  TableBsdf bsdf(table);
   bsdf.set_mixture(fitted_mixture(table));
   // the table's own albedo per theta_o slice (the model's is 1): the furnace's tolerance
   double worst = 0;
@@ -207,7 +207,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
     const double dth = axis_step(m.theta_i), dph = axis_step(m.phi_i);
     for (double th : m.theta_i)
       for (double ph : m.phi_i)
-        a += bsdf.f(FiberF::Table, m.theta_o[t], th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
+        a += bsdf.f(FSource::Table, m.theta_o[t], th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
     worst = std::max(worst, std::abs(a - 1));
   }
   std::printf("render_test: furnace: the table's albedo is within %.4f of 1\n", worst);
@@ -221,7 +221,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
   for (const PathEstimator e : kAll) {
     if (e == PathEstimator::Uniform) continue;
     std::vector<double> sum;
-    render_passes(s->view, e, FiberF::Table, 0, spp, sum, nullptr);
+    render_passes(s->view, e, FSource::Table, 0, spp, sum, nullptr);
     sum = grey(sum);
     // every pixel estimates the same value: the standard error from their spread
     const double mean = image_mean(sum, spp);
@@ -238,7 +238,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
   int k = 0;
   for (const PathEstimator e : {PathEstimator::Uniform, PathEstimator::CdfTab}) {
     std::vector<double> sum;
-    render_passes(v, e, FiberF::Table, 0, 256, sum, nullptr);
+    render_passes(v, e, FSource::Table, 0, 256, sum, nullptr);
     sum = grey(sum);
     m[k] = image_mean(sum, 256);
     double var = 0;
@@ -252,7 +252,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
 
 TEST_CASE("every path estimator is unbiased: image means over independent seeds agree", "[render]") {
   Progress::set_enabled(false);
-  FiberBsdf bsdf(small_table("silk"));
+  TableBsdf bsdf(small_table("silk"));
   bsdf.set_mixture(broad_mixture(bsdf.meta()));
   auto s = make_scene(bsdf, sky(), true, 8);
   s->view.max_depth = 24;
@@ -264,7 +264,7 @@ TEST_CASE("every path estimator is unbiased: image means over independent seeds 
       SceneView v = s->view;
       v.seed = 1000 + std::uint64_t(r);
       std::vector<double> sum;
-      render_passes(v, e, FiberF::Table, 0, spp, sum, nullptr);
+      render_passes(v, e, FSource::Table, 0, spp, sum, nullptr);
       sum = grey(sum);
       per_run.push_back(image_mean(sum, spp));
     }
@@ -288,7 +288,7 @@ TEST_CASE("every path estimator is unbiased: image means over independent seeds 
 
 TEST_CASE("the table lookup returns the generator's cells, linear between theta_o slices", "[render]") {
   const std::string path = small_table("cotton");
-  FiberBsdf bsdf(path);
+  TableBsdf bsdf(path);
   const TableMeta& m = bsdf.meta();
   FiberGenerateOptions opt;
   opt.preset = "cotton";
@@ -303,10 +303,10 @@ TEST_CASE("the table lookup returns the generator's cells, linear between theta_
     const std::vector<double> next = tabulate_fiber_slice_cpu(model, m, t + 1, 0);
     for (std::size_t i = 0; i < m.theta_i.size(); i += 3)
       for (std::size_t j = 0; j < m.phi_i.size(); j += 5) {
-        const double a = bsdf.f(FiberF::Table, m.theta_o[t], m.theta_i[i], m.phi_i[j]);
+        const double a = bsdf.f(FSource::Table, m.theta_o[t], m.theta_i[i], m.phi_i[j]);
         const double r = ref[i * m.phi_i.size() + j];
         worst = std::max(worst, std::abs(a - r) / std::max(r, 1e-30));
-        const double mid = bsdf.f(FiberF::Table, 0.5 * (m.theta_o[t] + m.theta_o[t + 1]), m.theta_i[i], m.phi_i[j]);
+        const double mid = bsdf.f(FSource::Table, 0.5 * (m.theta_o[t] + m.theta_o[t + 1]), m.theta_i[i], m.phi_i[j]);
         CHECK(mid == Approx(0.5 * (float(r) + float(next[i * m.phi_i.size() + j]))).epsilon(1e-6));
       }
   }
@@ -315,7 +315,7 @@ TEST_CASE("the table lookup returns the generator's cells, linear between theta_
 }
 
 TEST_CASE("the renderer samples as the study does: the header's sampler and pdf", "[render]") {
-  FiberBsdf bsdf(small_table("silk"));
+  TableBsdf bsdf(small_table("silk"));
   const mix::MixtureSet set = broad_mixture(bsdf.meta());
   bsdf.set_mixture(set);
   for (const double to : {-0.9, -0.2, 0.37, 1.1}) {
@@ -330,7 +330,7 @@ TEST_CASE("the renderer samples as the study does: the header's sampler and pdf"
     }
   }
   // every sampler's pdf is a density: its integral over the sphere is 1 (mixture: 1 - P(invalid))
-  for (const FiberSampler fs : {FiberSampler::Uniform, FiberSampler::TableCdf, FiberSampler::Mixture}) {
+  for (const BsdfSampler fs : {BsdfSampler::Uniform, BsdfSampler::TableCdf, BsdfSampler::Mixture}) {
     const int nt = 240, np = 480;
     double mass = 0;
     for (int i = 0; i < nt; ++i)
@@ -358,7 +358,7 @@ TEST_CASE("the stand-in render stays within its integral error of the table rend
   // of the table's: the render's mean may move by that integral error, compounded over
   // the bounces, and no more. With every scale 10 % too small it must fall measurably.
   const std::string table = small_table("lossless");
-  FiberBsdf bsdf(table);
+  TableBsdf bsdf(table);
   const mix::MixtureSet set = fitted_mixture(table);
   const TableMeta& m = bsdf.meta();
   double err = 0;  // the largest stand-in integral error over the slices (L = 1)
@@ -367,7 +367,7 @@ TEST_CASE("the stand-in render stays within its integral error of the table rend
     const double dth = axis_step(m.theta_i), dph = axis_step(m.phi_i);
     for (double th : m.theta_i)
       for (double ph : m.phi_i)
-        table_int += bsdf.f(FiberF::Table, sl.theta_o, th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
+        table_int += bsdf.f(FSource::Table, sl.theta_o, th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
     for (const auto& g : sl.components) {
       const double sd = std::sqrt(2 * g.s_tt);
       mass += g.weight * 0.5 * (std::erf((kPi / 2 - g.mu_t) / sd) - std::erf((-kPi / 2 - g.mu_t) / sd));
@@ -387,8 +387,8 @@ TEST_CASE("the stand-in render stays within its integral error of the table rend
       SceneView v = s->view;
       v.seed = 50 + std::uint64_t(r);
       std::vector<double> a, b;
-      render_passes(v, PathEstimator::CdfTab, FiberF::Table, 0, spp, a, nullptr);
-      render_passes(v, PathEstimator::CdfTab, FiberF::StandIn, 0, spp, b, nullptr);
+      render_passes(v, PathEstimator::CdfTab, FSource::Table, 0, spp, a, nullptr);
+      render_passes(v, PathEstimator::CdfTab, FSource::StandIn, 0, spp, b, nullptr);
       a = grey(a);
       b = grey(b);
       const double x = image_mean(b, spp) / image_mean(a, spp) - 1;
@@ -409,7 +409,7 @@ TEST_CASE("a table whose rgb is its luminance in each channel renders the image 
           "[render][color]") {
   Progress::set_enabled(false);
   const double white[3] = {1, 1, 1};
-  FiberBsdf plain(small_table("silk")), rgb(colored_table("silk", white, "grey"));
+  TableBsdf plain(small_table("silk")), rgb(colored_table("silk", white, "grey"));
   REQUIRE_FALSE(plain.has_rgb());
   REQUIRE(rgb.has_rgb());
   plain.set_mixture(broad_mixture(plain.meta()));
@@ -419,8 +419,8 @@ TEST_CASE("a table whose rgb is its luminance in each channel renders the image 
   a->view.max_depth = b->view.max_depth = 12;
   for (const PathEstimator e : kAll) {
     std::vector<double> x, y;
-    render_passes(a->view, e, FiberF::Table, 0, 4, x, nullptr);
-    render_passes(b->view, e, FiberF::Table, 0, 4, y, nullptr);
+    render_passes(a->view, e, FSource::Table, 0, 4, x, nullptr);
+    render_passes(b->view, e, FSource::Table, 0, 4, y, nullptr);
     CHECK(x == y);
     grey(y);  // and R = G = B in every pixel
   }
@@ -433,7 +433,7 @@ TEST_CASE("colored white furnace: one lossless fiber of albedo (1, 1/2, 1/4) und
   // two scale f exactly).
   Progress::set_enabled(false);
   const double color[3] = {1, 0.5, 0.25};
-  FiberBsdf bsdf(colored_table("lossless", color, "furnace"));
+  TableBsdf bsdf(colored_table("lossless", color, "furnace"));
   bsdf.set_mixture(broad_mixture(bsdf.meta()));
   Cloth cloth;
   Fiber f;
@@ -467,13 +467,13 @@ TEST_CASE("colored white furnace: one lossless fiber of albedo (1, 1/2, 1/4) und
     const double dth = axis_step(m.theta_i), dph = axis_step(m.phi_i);
     for (double th : m.theta_i)
       for (double ph : m.phi_i)
-        a += bsdf.f(FiberF::Table, m.theta_o[t], th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
+        a += bsdf.f(FSource::Table, m.theta_o[t], th, ph) * (std::sin(th + dth / 2) - std::sin(th - dth / 2)) * dph;
     worst = std::max(worst, std::abs(a - 1));
   }
   for (const PathEstimator e : {PathEstimator::CdfTab, PathEstimator::MisLightCdf}) {
     const int spp = 64;
     std::vector<double> sum;
-    render_passes(v, e, FiberF::Table, 0, spp, sum, nullptr);
+    render_passes(v, e, FSource::Table, 0, spp, sum, nullptr);
     const std::size_t n = sum.size() / 3;
     double mean[3] = {0, 0, 0}, var = 0;
     bool exact = true;
@@ -490,9 +490,64 @@ TEST_CASE("colored white furnace: one lossless fiber of albedo (1, 1/2, 1/4) und
   }
 }
 
+TEST_CASE("surface furnace: a white and a colored Lambertian table on a sphere under L = 1", "[render][color]") {
+  // A hemisphere table of f = albedo / pi: its cells integrate f cos exactly to the albedo.
+  // The sphere fills the view and is convex, so a camera ray meets it once and leaves to
+  // the environment: every pixel renders the albedo, per channel.
+  Progress::set_enabled(false);
+  const std::string path = (temp_dir() / "lambert_rgb_table.h5").string();
+  {
+    TableMeta meta = make_grid(Domain::Hemisphere, 8, 1, 16, 32, true);
+    meta.rgb = true;
+    TableWriter w(path, meta);
+    const std::vector<float> v(meta.cells_per_slice(), float(1 / kPi));
+    std::vector<float> rgb(3 * v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      rgb[3 * i] = v[i];
+      rgb[3 * i + 1] = 0.5f * v[i];
+      rgb[3 * i + 2] = 0.25f * v[i];
+    }
+    for (std::size_t t = 0; t < meta.theta_o.size(); ++t) w.write_slice(t, 0, v.data(), rgb.data());
+    w.commit();
+  }
+  TableBsdf bsdf(path);
+  const SurfaceMesh sphere = make_sphere({0, 0, 0}, 0.35, 48, 96, "test sphere");
+  GroundPlane g;
+  g.enabled = false;
+  const Tracer tracer(Cloth{}, g, CurveType::FlatLinear, &sphere);
+  const Lighting lighting = default_lighting(Domain::Hemisphere, 1.0);
+  const LightSampler light = make_light_sampler(lighting);
+  SceneView v;
+  v.tracer = &tracer;
+  v.bsdf = &bsdf;
+  v.lighting = &lighting;
+  v.light = &light;
+  v.camera.position = {0, -1.5, 0.4};
+  v.camera.look_at = {0, 0, 0};
+  v.camera.fov_deg = 6;
+  v.width = v.height = 12;
+  v.max_depth = 8;
+  v.threads = 2;
+  for (const PathEstimator e : {PathEstimator::Uniform, PathEstimator::CdfTab, PathEstimator::MisLightCdf}) {
+    const int spp = 64;
+    std::vector<double> sum;
+    render_passes(v, e, FSource::Table, 0, spp, sum, nullptr);
+    const std::size_t n = sum.size() / 3;
+    double mean[3] = {0, 0, 0}, var = 0;
+    for (std::size_t p = 0; p < n; ++p)
+      for (int c = 0; c < 3; ++c) mean[c] += sum[3 * p + std::size_t(c)] / spp / double(n);
+    for (std::size_t p = 0; p < n; ++p) var += std::pow(sum[3 * p] / spp - mean[0], 2) / double(n - 1);
+    const double se = std::sqrt(var / double(n));
+    std::printf("render_test: surface furnace %-13s: R %.4f G %.4f B %.4f (+- %.4f in R)\n", path_estimator_name(e),
+                mean[0], mean[1], mean[2], se);
+    const double albedo[3] = {1, 0.5, 0.25};
+    for (int c = 0; c < 3; ++c) CHECK(std::abs(mean[c] / albedo[c] - 1) <= 4 * se + 2e-3);
+  }
+}
+
 TEST_CASE("a render is reproducible for a seed, whatever the thread count", "[render]") {
   Progress::set_enabled(false);
-  FiberBsdf bsdf(small_table("silk"));
+  TableBsdf bsdf(small_table("silk"));
   bsdf.set_mixture(broad_mixture(bsdf.meta()));
   auto s = make_scene(bsdf, sky(), true, 10);
   s->view.max_depth = 12;
@@ -500,11 +555,11 @@ TEST_CASE("a render is reproducible for a seed, whatever the thread count", "[re
     std::vector<double> a, b, c;
     SceneView v = s->view;
     v.threads = 1;
-    render_passes(v, e, FiberF::Table, 0, 3, a, nullptr);
+    render_passes(v, e, FSource::Table, 0, 3, a, nullptr);
     v.threads = 3;
-    render_passes(v, e, FiberF::Table, 0, 3, b, nullptr);
+    render_passes(v, e, FSource::Table, 0, 3, b, nullptr);
     v.seed = 2;
-    render_passes(v, e, FiberF::Table, 0, 3, c, nullptr);
+    render_passes(v, e, FSource::Table, 0, 3, c, nullptr);
     CHECK(a == b);
     CHECK(a != c);
   }

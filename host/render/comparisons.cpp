@@ -21,7 +21,7 @@ class PassRunner {
  public:
   PassRunner(const SceneView& view, const Image& reference) : view_(view), reference_(reference) {}
 
-  std::pair<Image, RenderStats> run(PathEstimator e, FiberF f, int spp, double budget, const std::string& what,
+  std::pair<Image, RenderStats> run(PathEstimator e, FSource f, int spp, double budget, const std::string& what,
                                     std::vector<RenderRow>* progress) {
     std::vector<double> sum;
     // with a time budget, the passes it should hold (for the progress line's ETA)
@@ -88,7 +88,7 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   for (const PathEstimator e : s.estimators) {
     const std::string name = path_estimator_name(e);
     std::vector<RenderRow> prog;
-    auto [im, st] = passes.run(e, FiberF::Table, s.spp, 0, name + " (" + std::to_string(s.spp) + " spp)", &prog);
+    auto [im, st] = passes.run(e, FSource::Table, s.spp, 0, name + " (" + std::to_string(s.spp) + " spp)", &prog);
     save_image(s.output, name + "_spp", im);
     passes.record(e, st);
     for (RenderRow& pr : prog) pr.rays_per_second = rays_per_second(st);
@@ -101,7 +101,7 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   out.equal_time_seconds = budget;
   for (const PathEstimator e : s.estimators) {
     const std::string name = path_estimator_name(e);
-    auto [im, st] = passes.run(e, FiberF::Table, 0, budget, name + " (" + format_number(budget, "%.1f") + " s)", nullptr);
+    auto [im, st] = passes.run(e, FSource::Table, 0, budget, name + " (" + format_number(budget, "%.1f") + " s)", nullptr);
     save_image(s.output, name + "_time", im);
     out.rows.push_back({name, "equal_time", name + "_time.exr", st.spp, st.seconds, rays_per_second(st),
                         relative_mse(im, reference)});
@@ -110,8 +110,8 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   // The stand-in against the table: the same estimator, seed and samples.
   if (!s.stand_in) return out;
   const std::string se = path_estimator_name(s.stand_in_estimator);
-  auto [a, sa] = passes.run(s.stand_in_estimator, FiberF::Table, s.stand_in_spp, 0, "table f (" + se + ")", nullptr);
-  auto [b, sb] = passes.run(s.stand_in_estimator, FiberF::StandIn, s.stand_in_spp, 0, "stand-in f (" + se + ")", nullptr);
+  auto [a, sa] = passes.run(s.stand_in_estimator, FSource::Table, s.stand_in_spp, 0, "table f (" + se + ")", nullptr);
+  auto [b, sb] = passes.run(s.stand_in_estimator, FSource::StandIn, s.stand_in_spp, 0, "stand-in f (" + se + ")", nullptr);
   save_image(s.output, "table", a);
   save_image(s.output, "stand_in", b);
   out.stand_in_difference = image_difference(b, a, 1);

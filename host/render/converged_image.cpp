@@ -113,7 +113,7 @@ Image converged_image(const SceneView& view, const RenderSettings& s, const std:
   prog.advance(std::uint64_t(done));
   const int every = std::max(1, s.reference_spp / 16);
   const RenderStats st =
-      render_passes(view, s.reference_estimator, FiberF::Table, done, s.reference_spp - done, p.sum, [&](int n, double) {
+      render_passes(view, s.reference_estimator, FSource::Table, done, s.reference_spp - done, p.sum, [&](int n, double) {
         prog.advance();
         if ((done + n) % every == 0 && done + n < s.reference_spp) {
           p.passes = done + n;

@@ -26,15 +26,15 @@ struct Rng {
   }
 };
 
-FiberSampler sampler_of(PathEstimator e) {
+BsdfSampler sampler_of(PathEstimator e) {
   switch (e) {
-    case PathEstimator::Uniform: return FiberSampler::Uniform;
+    case PathEstimator::Uniform: return BsdfSampler::Uniform;
     case PathEstimator::MisTab:
-    case PathEstimator::MisLightGmm: return FiberSampler::Mixture;
+    case PathEstimator::MisLightGmm: return BsdfSampler::Mixture;
     case PathEstimator::CdfTab:
-    case PathEstimator::MisLightCdf: return FiberSampler::TableCdf;
+    case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
   }
-  return FiberSampler::Uniform;
+  return BsdfSampler::Uniform;
 }
 
 double power_weight(double a, double b) { return a * a / (a * a + b * b); }
@@ -49,9 +49,9 @@ int thread_count(int asked) {
 // per channel (directions are drawn by the luminance samplers; every decision reads the
 // largest channel, so a grey path is exactly the luminance path). `theta_out`, when
 // given, receives theta_o of every fiber vertex (the pre-pass).
-Rgb trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, const Rng& rng, std::uint64_t& rays,
+Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, const Rng& rng, std::uint64_t& rays,
                std::vector<double>* theta_out) {
-  const FiberSampler fs = sampler_of(est);
+  const BsdfSampler fs = sampler_of(est);
   const bool nee = uses_light_sampling(est);
   Rgb L, beta(1.0);
   double prev_pdf = 0;
@@ -69,19 +69,27 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, con
     double u[4];
     const std::uint32_t dim = std::uint32_t(depth) * 4;
     // The vertex: value(w) = f c per channel (fiber: f; ground: albedo / pi cos+), sample, pdf.
-    const bool fiber = hit.kind == HitKind::Fiber;
+    const bool fiber = hit.kind == HitKind::Fiber, surface = hit.kind == HitKind::Surface;
     FiberFrame frame = fiber ? FiberFrame(hit.tangent, wo) : FiberFrame({1, 0, 0}, {0, 0, 1});
+    // a measured surface: its BRDF in the frame of its shading normal, f cos(theta_i)
+    const SurfaceFrame sframe = surface ? SurfaceFrame(hit.normal, wo) : SurfaceFrame({0, 0, 1}, {0, 0, 1});
     Vec3 gn = hit.normal, g1{1, 0, 0}, g2{0, 1, 0};
-    if (!fiber) {
+    if (!fiber && !surface) {
       g1 = normalized(std::abs(gn[0]) < 0.9 ? cross(gn, {1, 0, 0}) : cross(gn, {0, 1, 0}));
       g2 = cross(gn, g1);
     }
     if (fiber && theta_out) theta_out->push_back(frame.theta_o);
+    if (surface && theta_out) theta_out->push_back(sframe.theta_o);
     auto value = [&](const Vec3& w) {
       if (fiber) {
         double th, ph;
         frame.to_local(w, th, ph);
         return v.bsdf->f_rgb(which, frame.theta_o, th, ph);
+      }
+      if (surface) {
+        double th, ph;
+        sframe.to_local(w, th, ph);
+        return th < kPi / 2 ? v.bsdf->f_rgb(which, sframe.theta_o, th, ph) * std::cos(th) : Rgb();
       }
       const double c = dot(w, gn);
       return Rgb(c > 0 ? v.ground_albedo / kPi * c : 0.0);
@@ -92,6 +100,11 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, con
         frame.to_local(w, th, ph);
         return v.bsdf->pdf(fs, frame.theta_o, th, ph);
       }
+      if (surface) {
+        double th, ph;
+        sframe.to_local(w, th, ph);
+        return v.bsdf->pdf(fs, sframe.theta_o, th, ph);
+      }
       const double c = dot(w, gn);
       return c > 0 ? c / kPi : 0.0;
     };
@@ -101,7 +114,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, con
       next.from_fiber = hit.fiber;
       next.skip = 4 * v.fiber_radius;
     } else {
-      next.tnear = 1e-6;
+      next.tnear = surface ? 1e-4 : 1e-6;  // the surface's facets are float triangles
     }
     // next-event estimation
     if (nee) {
@@ -126,6 +139,11 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FiberF which, Ray ray, con
       v.bsdf->sample(fs, frame.theta_o, u, th, ph, pdf);
       if (!(pdf > 0)) break;
       wi = frame.to_world(th, ph);
+    } else if (surface) {
+      double th, ph;
+      v.bsdf->sample(fs, sframe.theta_o, u, th, ph, pdf);
+      if (!(pdf > 0)) break;
+      wi = sframe.to_world(th, ph);
     } else {
       const double r = std::sqrt(u[2]), a = 2 * kPi * u[3];
       const double x = r * std::cos(a), y = r * std::sin(a), z = std::sqrt(std::max(0.0, 1 - u[2]));
@@ -164,7 +182,7 @@ Ray camera_ray(const Camera& c, int width, int height, double x, double y) {
   return ray;
 }
 
-RenderStats render_passes(const SceneView& v, PathEstimator est, FiberF which, int first, int max_passes,
+RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, int first, int max_passes,
                           std::vector<double>& sum, const std::function<bool(int, double)>& pass_done) {
   const std::size_t pixels = std::size_t(v.width) * std::size_t(v.height);
   sum.resize(3 * pixels, 0.0);
@@ -214,7 +232,7 @@ std::vector<double> collect_theta_o(const SceneView& v, int spp) {
           const Rng rng{v.seed ^ 0x9e3779b97f4a7c15ull, std::uint32_t(y * v.width + x), std::uint32_t(s)};
           double u[4];
           rng.draw(0, u);
-          trace_path(v, PathEstimator::Uniform, FiberF::Table, camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]),
+          trace_path(v, PathEstimator::Uniform, FSource::Table, camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]),
                      rng, rays, &local);
         }
     std::lock_guard<std::mutex> lock(m);

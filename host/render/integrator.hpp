@@ -1,5 +1,5 @@
 // The path tracer (docs/render.md, "Light transport"): unidirectional, bounded depth,
-// Russian roulette; at a fiber the BCSDF of render/fiber_bsdf.hpp, at the ground a diffuse
+// Russian roulette; at a fiber the BCSDF of render/table_bsdf.hpp, at the ground a diffuse
 // BRDF; the lighting an environment (sun, sky, map). Estimators that sample the light add
 // next-event estimation combined with the BSDF sample by MIS (power heuristic, beta 2: the
 // two-sample model pbrt uses for direct lighting). Reproducible for a seed: pixel p's
@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <functional>
 
-#include "render/fiber_bsdf.hpp"
+#include "render/table_bsdf.hpp"
 #include "render/image_io.hpp"
 #include "render/render_settings.hpp"
 #include "render/tracer.hpp"
@@ -22,7 +22,7 @@ namespace render {
 
 struct SceneView {
   const Tracer* tracer = nullptr;
-  const FiberBsdf* bsdf = nullptr;
+  const TableBsdf* bsdf = nullptr;
   const Lighting* lighting = nullptr;
   const LightSampler* light = nullptr;
   Camera camera;
@@ -42,7 +42,7 @@ struct RenderStats {
 // Passes of one sample per pixel, from pass `first` on, accumulated into `sum` (R, G, B
 // doubles per pixel, [height][width][3]). `pass_done` is called after every pass with (passes done so far,
 // seconds so far) and returns false to stop. Returns the passes done and the rays traced.
-RenderStats render_passes(const SceneView& view, PathEstimator estimator, FiberF f, int first, int max_passes,
+RenderStats render_passes(const SceneView& view, PathEstimator estimator, FSource f, int first, int max_passes,
                           std::vector<double>& sum, const std::function<bool(int, double)>& pass_done);
 
 // Theta_o (radians) of every fiber hit of a small render with uniform sampling and the

@@ -25,9 +25,9 @@ std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta
     need.insert(b.i0);
     if (b.f > 0) need.insert(b.i1);
   }
-  if (need.empty()) throw InputError(where + ": render: no fiber is visible from the camera (check camera and cloth)");
+  if (need.empty()) throw InputError(where + ": render: neither fiber nor surface is visible from the camera (check the camera, the cloth or the sphere)");
   log_line("render: the pre-pass (" + std::to_string(prepass.width) + " x " + std::to_string(prepass.height) + ", " +
-           std::to_string(thetas.size()) + " fiber hits) needs " + std::to_string(need.size()) + " of " +
+           std::to_string(thetas.size()) + " hits) needs " + std::to_string(need.size()) + " of " +
            std::to_string(meta.theta_o.size()) + " theta_o slices");
   return {need.begin(), need.end()};
 }

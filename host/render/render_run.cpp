@@ -33,11 +33,10 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   prepare_output(csv);
   prepare_output(json);
 
-  FiberBsdf bsdf(config.table);
+  TableBsdf bsdf(config.table);
   const RenderScene scene(s, bsdf, config.file);
-  log_line("render: " + std::to_string(scene.cloth().fibers.size()) + " fibers, " +
-           std::to_string(scene.cloth().segments()) + " segments, lighting '" + s.lighting.name + "', " +
-           std::to_string(s.width) + " x " + std::to_string(s.height));
+  log_line("render: " + scene.describe() + ", lighting '" + s.lighting.name + "', " + std::to_string(s.width) + " x " +
+           std::to_string(s.height));
 
   // 1. The slices the camera needs; 2. their mixtures.
   const TableMeta& meta = bsdf.meta();

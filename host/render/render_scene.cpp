@@ -14,11 +14,21 @@ GroundPlane ground_of(const RenderSettings& s) {
   return g;
 }
 
+Cloth cloth_of(const RenderSettings& s, const TableBsdf& bsdf, const std::string& where) {
+  return bsdf.meta().domain == Domain::Fiber ? make_cloth(s.cloth, where + ": render.cloth") : Cloth{};
+}
+
+SurfaceMesh surface_of(const RenderSettings& s, const TableBsdf& bsdf, const std::string& where) {
+  if (bsdf.meta().domain == Domain::Fiber) return {};
+  return make_sphere(s.sphere_center, s.sphere_radius, s.sphere_rings, s.sphere_segments, where + ": render.sphere");
+}
+
 }  // namespace
 
-RenderScene::RenderScene(const RenderSettings& s, const FiberBsdf& bsdf, const std::string& where)
-    : cloth_(make_cloth(s.cloth, where + ": render.cloth")),
-      tracer_(cloth_, ground_of(s)),
+RenderScene::RenderScene(const RenderSettings& s, const TableBsdf& bsdf, const std::string& where)
+    : cloth_(cloth_of(s, bsdf, where)),
+      surface_(surface_of(s, bsdf, where)),
+      tracer_(cloth_, ground_of(s), CurveType::FlatLinear, surface_.triangles.empty() ? nullptr : &surface_),
       light_(make_light_sampler(s.lighting)) {
   view_.tracer = &tracer_;
   view_.bsdf = &bsdf;
@@ -42,12 +52,17 @@ SceneView RenderScene::prepass_view(const RenderSettings& s) const {
   return pre;
 }
 
+std::string RenderScene::describe() const {
+  if (!surface_.triangles.empty()) return "a sphere of " + std::to_string(surface_.triangles.size()) + " triangles";
+  return std::to_string(cloth_.fibers.size()) + " fibers, " + std::to_string(cloth_.segments()) + " segments";
+}
+
 Image RenderScene::cloth_mask() const {
   Image mask(view_.width, view_.height);
   for (int y = 0; y < view_.height; ++y)
     for (int x = 0; x < view_.width; ++x) {
       const Hit hit = tracer_.intersect(camera_ray(view_.camera, view_.width, view_.height, x + 0.5, y + 0.5));
-      mask.set_grey(x, y, hit.kind == HitKind::Fiber ? 1.f : 0.f);
+      mask.set_grey(x, y, hit.kind == HitKind::Fiber || hit.kind == HitKind::Surface ? 1.f : 0.f);
     }
   return mask;
 }

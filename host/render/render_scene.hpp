@@ -13,14 +13,19 @@
 namespace bsdfmix {
 namespace render {
 
+// A fiber table is rendered as woven cloth; a hemisphere table (a measured material) on a
+// sphere (the render section's `sphere`), both over the ground.
 class RenderScene {
  public:
   // `where` names the render section in errors; `bsdf` must outlive the scene.
-  RenderScene(const RenderSettings& s, const FiberBsdf& bsdf, const std::string& where);
+  RenderScene(const RenderSettings& s, const TableBsdf& bsdf, const std::string& where);
   RenderScene(const RenderScene&) = delete;
   RenderScene& operator=(const RenderScene&) = delete;
 
   const Cloth& cloth() const { return cloth_; }
+  const SurfaceMesh& surface() const { return surface_; }
+  // "N fibers, M segments" or "a sphere of N triangles".
+  std::string describe() const;
   // The view at the render's size and depth.
   const SceneView& view() const { return view_; }
   // The view of the pre-pass: prepass x prepass pixels, at most prepass_depth bounces.
@@ -31,6 +36,7 @@ class RenderScene {
 
  private:
   Cloth cloth_;
+  SurfaceMesh surface_;
   Tracer tracer_;
   LightSampler light_;
   SceneView view_;

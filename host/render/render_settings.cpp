@@ -120,6 +120,12 @@ RenderSettings parse_render(const RenderSection& section) {
   r.ground.enabled = g.boolean("enabled");
   r.ground.z = g.number("z", -1e9, 1e9);
   r.ground_albedo = g.number("albedo", 0, 1);
+
+  const ConfigNode sp = nested(section, n, "sphere");
+  r.sphere_center = vec3(sp, "center");
+  r.sphere_radius = sp.number("radius", 1e-9, 1e9);
+  r.sphere_rings = int(sp.integer("rings", 3, 4096));
+  r.sphere_segments = int(sp.integer("segments", 3, 4096));
   return r;
 }
 

@@ -41,6 +41,10 @@ struct RenderSettings {
   ClothParams cloth;
   GroundPlane ground;
   double ground_albedo = 0.4;
+  // The sphere a hemisphere table (a measured material) is rendered on.
+  Vec3 sphere_center{0, 0, 0.29};
+  double sphere_radius = 0.35;
+  int sphere_rings = 96, sphere_segments = 192;
 };
 
 RenderSettings parse_render(const RenderSection& section);

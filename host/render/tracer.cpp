@@ -17,7 +17,7 @@ namespace render {
 
 namespace {
 
-constexpr unsigned kCurveGeom = 0, kGroundGeom = 1;
+constexpr unsigned kCurveGeom = 0, kGroundGeom = 1, kSurfaceGeom = 2;
 
 // The intersect context extended with the ray's self-hit rule. Embree passes the context
 // pointer through to the filter, which casts it back (the base must be the first member).
@@ -68,6 +68,7 @@ struct Tracer::Impl {
   bool ground = false;
   double ground_z = 0;
   std::vector<std::int32_t> fiber_of;  // segment (primID) -> fiber
+  SurfaceMesh surface;                 // the surface's triangles and shading normals (a copy)
   const float* vertices = nullptr;     // the curve geometry's vertex buffer (x, y, z, r)
   const unsigned* indices = nullptr;   // the curve geometry's index buffer
 
@@ -99,7 +100,8 @@ struct Tracer::Impl {
   }
 };
 
-Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type) : impl_(std::make_unique<Impl>()) {
+Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, const SurfaceMesh* surface)
+    : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.type = type;
   // Embree's default configuration (its own worker threads for the build). Its builders
@@ -195,6 +197,29 @@ Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type) : 
     m.check("build the ground geometry");
   }
 
+  if (surface && !surface->triangles.empty()) {
+    m.surface = *surface;
+    const SurfaceMesh& sm = m.surface;
+    if (sm.normals.size() != sm.vertices.size()) throw Error("render: the surface needs one normal per vertex");
+    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                             3 * sizeof(float), sm.vertices.size()));
+    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), sm.triangles.size()));
+    m.check("allocate the surface buffers");
+    for (std::size_t i = 0; i < sm.vertices.size(); ++i)
+      for (int c = 0; c < 3; ++c) vb[3 * i + std::size_t(c)] = static_cast<float>(sm.vertices[i][c]);
+    for (std::size_t t = 0; t < sm.triangles.size(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        if (sm.triangles[t][std::size_t(c)] >= sm.vertices.size()) throw Error("render: a surface triangle is out of range");
+        ib[3 * t + std::size_t(c)] = sm.triangles[t][std::size_t(c)];
+      }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(m.scene, g, kSurfaceGeom);
+    rtcReleaseGeometry(g);
+    m.check("build the surface geometry");
+  }
+
   rtcCommitScene(m.scene);
   m.check("commit the scene");
 }
@@ -241,6 +266,17 @@ Hit Tracer::intersect(const Ray& ray) const {
     h.kind = HitKind::Fiber;
     h.fiber = m.fiber_of[rh.hit.primID];
     h.tangent = m.tangent(rh.hit.primID, rh.hit.u);
+  } else if (rh.hit.geomID == kSurfaceGeom) {
+    h.kind = HitKind::Surface;
+    const auto& tri = m.surface.triangles[rh.hit.primID];
+    const double u = rh.hit.u, v = rh.hit.v;
+    Vec3 n{0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      n[k] = (1 - u - v) * m.surface.normals[tri[0]][k] + u * m.surface.normals[tri[1]][k] +
+             v * m.surface.normals[tri[2]][k];
+    n = normalized(n);
+    if (dot(n, ray.dir) > 0) n = neg(n);  // the side the ray comes from
+    h.normal = n;
   } else {
     h.kind = HitKind::Ground;
     h.normal = {0, 0, ray.org[2] >= m.ground_z ? 1.0 : -1.0};  // the side the ray comes from

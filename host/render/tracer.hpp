@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "render/cloth.hpp"
+#include "render/surface.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -20,14 +21,14 @@ struct Ray {
   double skip = 0;
 };
 
-enum class HitKind { None, Fiber, Ground };
+enum class HitKind { None, Fiber, Ground, Surface };
 
 struct Hit {
   HitKind kind = HitKind::None;
   double t = 0;
   Vec3 position{0, 0, 0};
   Vec3 tangent{0, 0, 0};  // fibers: unit curve tangent at the hit
-  Vec3 normal{0, 0, 0};   // ground: unit normal facing the ray's origin
+  Vec3 normal{0, 0, 0};   // ground: unit normal facing the ray's origin; surface: the shading normal
   std::int64_t fiber = -1;
 };
 
@@ -41,7 +42,9 @@ struct GroundPlane {
 
 class Tracer {
  public:
-  Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type = CurveType::FlatLinear);
+  // `surface`, when given, is traced too (its triangles, with their shading normals).
+  Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type = CurveType::FlatLinear,
+         const SurfaceMesh* surface = nullptr);
   ~Tracer();
   Tracer(const Tracer&) = delete;
   Tracer& operator=(const Tracer&) = delete;

@@ -1,5 +1,5 @@
 // The renderer's fiber BCSDF: the table in memory, its CDFs, the stand-in and the samplers.
-#include "render/fiber_bsdf.hpp"
+#include "render/table_bsdf.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@ namespace render {
 
 namespace {
 
-constexpr double kUniformPdf = 1 / (4 * kPi);
+constexpr double kUniformPdfSphere = 1 / (4 * kPi), kUniformPdfHemisphere = 1 / (2 * kPi);
 
 }  // namespace
 
@@ -38,11 +38,34 @@ Vec3 FiberFrame::to_world(double theta, double phi) const {
   return w;
 }
 
-FiberBsdf::FiberBsdf(const std::string& table_path) {
+SurfaceFrame::SurfaceFrame(const Vec3& normal, const Vec3& wo) {
+  n = normalized(normal);
+  const double c = std::clamp(dot(wo, n), -1.0, 1.0);
+  theta_o = std::acos(c);
+  Vec3 p{wo[0] - c * n[0], wo[1] - c * n[1], wo[2] - c * n[2]};
+  if (dot(p, p) < 1e-20) p = std::abs(n[0]) < 0.9 ? cross(n, {1, 0, 0}) : cross(n, {0, 1, 0});
+  x = normalized(p);
+  y = cross(n, x);
+}
+
+void SurfaceFrame::to_local(const Vec3& w, double& theta, double& phi) const {
+  theta = std::acos(std::clamp(dot(w, n), -1.0, 1.0));
+  phi = wrap_phi(std::atan2(dot(w, y), dot(w, x)));
+}
+
+Vec3 SurfaceFrame::to_world(double theta, double phi) const {
+  const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
+  Vec3 w;
+  for (int i = 0; i < 3; ++i) w[i] = ct * n[i] + st * (cp * x[i] + sp * y[i]);
+  return w;
+}
+
+TableBsdf::TableBsdf(const std::string& table_path) {
   const TableReader table(table_path);
   meta_ = table.meta();
-  if (meta_.domain != Domain::Fiber || !meta_.azimuthal)
-    throw InputError(table_path + ": the renderer needs a fiber table with azimuthal symmetry");
+  if (!meta_.azimuthal)
+    throw InputError(table_path + ": the renderer needs a table with azimuthal symmetry (one phi_o)");
+  uniform_pdf_ = meta_.domain == Domain::Fiber ? kUniformPdfSphere : kUniformPdfHemisphere;
   const std::size_t cells = meta_.cells_per_slice(), no = meta_.theta_o.size();
   f_.resize(no * cells);
   for (std::size_t s = 0; s < no; ++s) {
@@ -65,7 +88,7 @@ FiberBsdf::FiberBsdf(const std::string& table_path) {
   // The table CDF of every slice (cdf_tab's, host/sampling/problem.cpp build_cdf).
   for (std::size_t s = 0; s < no; ++s) {
     TableSlice t;
-    t.domain = Domain::Fiber;
+    t.domain = meta_.domain;
     t.n_theta = meta_.theta_i.size();
     t.n_phi = meta_.phi_i.size();
     t.th0 = th0_;
@@ -74,7 +97,8 @@ FiberBsdf::FiberBsdf(const std::string& table_path) {
     t.dph = dph_;
     t.f.assign(f_.begin() + std::ptrdiff_t(s * cells), f_.begin() + std::ptrdiff_t((s + 1) * cells));
     if (s == 0)
-      for (std::size_t i = 0; i < t.n_theta; ++i) cell_w_.push_back(t.cell_weight(i));
+      for (std::size_t i = 0; i < t.n_theta; ++i)
+        cell_w_.push_back(meta_.domain == Domain::Fiber ? t.cell_weight(i) : t.cell_solid_angle(i));
     bool any = false;
     for (float x : t.f) any = any || x > 0;
     cdf_.push_back(any ? build_cdf(t) : CellCdf{});
@@ -82,8 +106,10 @@ FiberBsdf::FiberBsdf(const std::string& table_path) {
   fitted_.assign(no, -1);
 }
 
-void FiberBsdf::set_mixture(const mix::MixtureSet& set) {
-  if (set.domain != Domain::Fiber) throw InputError("render: the mixture file is not of a fiber table");
+void TableBsdf::set_mixture(const mix::MixtureSet& set) {
+  if (set.domain != meta_.domain)
+    throw InputError(std::string("render: the mixture file is not of a ") +
+                     (meta_.domain == Domain::Fiber ? "fiber" : "hemisphere") + " table, as the table is");
   set_ = set;
   has_set_ = !set_.slices.empty();
   fitted_.assign(meta_.theta_o.size(), -1);
@@ -96,14 +122,14 @@ void FiberBsdf::set_mixture(const mix::MixtureSet& set) {
   }
 }
 
-void FiberBsdf::bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const {
+void TableBsdf::bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const {
   const Bracket b = mix::bracket(to0_, dto_, meta_.theta_o.size(), theta_o, false);
   i0 = b.i0;
   i1 = b.i1;
   w = b.f;
 }
 
-long FiberBsdf::cell_of(double theta, double phi) const {
+long TableBsdf::cell_of(double theta, double phi) const {
   const double fi = std::floor((theta - th0_) / dth_);
   const std::size_t nt = meta_.theta_i.size(), np = meta_.phi_i.size();
   if (!(fi >= 0) || fi >= double(nt)) return -1;
@@ -112,19 +138,19 @@ long FiberBsdf::cell_of(double theta, double phi) const {
   return long(std::size_t(fi) * np + std::size_t(j));
 }
 
-double FiberBsdf::cell_f(std::size_t slice, double theta, double phi) const {
+double TableBsdf::cell_f(std::size_t slice, double theta, double phi) const {
   const long c = cell_of(theta, phi);
   return c < 0 ? 0.0 : f_[slice * meta_.cells_per_slice() + std::size_t(c)];
 }
 
-bool FiberBsdf::bracketed(double theta_o) const {
+bool TableBsdf::bracketed(double theta_o) const {
   std::size_t i0, i1;
   double w;
   bracket(theta_o, i0, i1, w);
   return (w < 1 && fitted_[i0] >= 0) || (w > 0 && fitted_[i1] >= 0);
 }
 
-int FiberBsdf::nearest_fitted(double theta_o) const {
+int TableBsdf::nearest_fitted(double theta_o) const {
   int best = -1;
   double d = 1e300;
   for (std::size_t i = 0; i < fitted_.size(); ++i)
@@ -135,8 +161,8 @@ int FiberBsdf::nearest_fitted(double theta_o) const {
   return best;
 }
 
-double FiberBsdf::f(FiberF which, double theta_o, double theta, double phi) const {
-  if (which == FiberF::Table) {
+double TableBsdf::f(FSource which, double theta_o, double theta, double phi) const {
+  if (which == FSource::Table) {
     std::size_t i0, i1;
     double w;
     bracket(theta_o, i0, i1, w);
@@ -146,12 +172,16 @@ double FiberBsdf::f(FiberF which, double theta_o, double theta, double phi) cons
   if (!has_set_) throw InputError("render: the stand-in needs the mixtures");
   if (bracketed(theta_o)) return set_.eval_f(theta_o, 0.0, theta, phi);
   const mix::SliceMixture& s = set_.slices[std::size_t(nearest_fitted(theta_o))];
-  const double j = std::cos(theta);
-  return j > 0 ? s.scale * s.pdf_param(theta, phi) / j : 0.0;
+  if (meta_.domain == Domain::Fiber) {
+    const double j = std::cos(theta);
+    return j > 0 ? s.scale * s.pdf_param(theta, phi) / j : 0.0;
+  }
+  const double j = std::sin(theta) * std::cos(theta);  // J and the cosine of the integrand
+  return j > 0 && theta <= kPi / 2 ? s.scale * s.pdf_param(theta, phi) / j : 0.0;
 }
 
-Rgb FiberBsdf::f_rgb(FiberF which, double theta_o, double theta, double phi) const {
-  if (which == FiberF::Table) {
+Rgb TableBsdf::f_rgb(FSource which, double theta_o, double theta, double phi) const {
+  if (which == FSource::Table) {
     if (rgb_.empty()) return Rgb(f(which, theta_o, theta, phi));
     std::size_t i0, i1;
     double w;
@@ -169,23 +199,25 @@ Rgb FiberBsdf::f_rgb(FiberF which, double theta_o, double theta, double phi) con
   return Rgb(f(which, theta_o, theta, phi));
 }
 
-mix::Sample FiberBsdf::mixture_sample(double theta_o, const double u[4]) const {
+mix::Sample TableBsdf::mixture_sample(double theta_o, const double u[4]) const {
   if (bracketed(theta_o)) return set_.sample(theta_o, 0.0, u[0], u[1], u[2], u[3]);
-  return set_.slices[std::size_t(nearest_fitted(theta_o))].sample(Domain::Fiber, u[1], u[2], u[3]);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].sample(meta_.domain, u[1], u[2], u[3]);
 }
 
-double FiberBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
+double TableBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
   if (bracketed(theta_o)) return set_.pdf_omega(theta_o, 0.0, theta, phi);
-  return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(Domain::Fiber, theta, phi);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(meta_.domain, theta, phi);
 }
 
-void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double& theta, double& phi,
+void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double& theta, double& phi,
                        double& pdf_out) const {
   pdf_out = 0;
-  if (s == FiberSampler::Uniform || (s == FiberSampler::Mixture && u[0] < uniform_fraction)) {
-    theta = std::asin(std::clamp(2 * u[2] - 1, -1.0, 1.0));
+  if (s == BsdfSampler::Uniform || (s == BsdfSampler::Mixture && u[0] < uniform_fraction)) {
+    // uniform over the domain's sphere or hemisphere of directions
+    theta = meta_.domain == Domain::Fiber ? std::asin(std::clamp(2 * u[2] - 1, -1.0, 1.0))
+                                          : std::acos(std::clamp(u[2], 0.0, 1.0));
     phi = 2 * kPi * u[3] - kPi;
-  } else if (s == FiberSampler::Mixture) {
+  } else if (s == BsdfSampler::Mixture) {
     if (!has_set_) throw InputError("render: mixture sampling needs the mixtures");
     const double v[4] = {(u[0] - uniform_fraction) / (1 - uniform_fraction), u[1], u[2], u[3]};
     const mix::Sample m = mixture_sample(theta_o, v);
@@ -194,7 +226,7 @@ void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double
     phi = m.phi;
     // the sampler already evaluated the mixture's density there: the same number pdf()
     // would compute again (MixtureSet::sample calls pdf_omega at the sample)
-    pdf_out = uniform_fraction * kUniformPdf + (1 - uniform_fraction) * m.pdf_omega;
+    pdf_out = uniform_fraction * uniform_pdf_ + (1 - uniform_fraction) * m.pdf_omega;
     return;
   } else {
     // the table CDF of one of the two slices around theta_o, picked by its weight
@@ -208,20 +240,24 @@ void FiberBsdf::sample(FiberSampler s, double theta_o, const double u[4], double
     const std::size_t i = cdf_find(c.marginal.data(), nt, u[1]);
     const float* row = &c.conditional[i * (np + 1)];
     const std::size_t j = cdf_find(row, np, u[2]);
-    const double a = std::max(th0_ + dth_ * double(i), -kPi / 2), b = std::min(th0_ + dth_ * double(i + 1), kPi / 2);
-    // u[3] places the point: its two halves for theta (sin uniform) and phi
+    const double lo = theta_lo(meta_.domain);
+    const double a = std::max(th0_ + dth_ * double(i), lo), b = std::min(th0_ + dth_ * double(i + 1), kPi / 2);
+    // u[3] places the point, uniformly in solid angle within the cell: its two halves for
+    // theta (sin uniform for fibers, J = cos; cos uniform for the hemisphere, J = sin) and phi
     const double v = u[3] * 4096.0, vt = std::floor(v) / 4096.0, vp = v - std::floor(v);
-    theta = std::asin(std::clamp(std::sin(a) + vt * (std::sin(b) - std::sin(a)), -1.0, 1.0));
+    theta = meta_.domain == Domain::Fiber
+                ? std::asin(std::clamp(std::sin(a) + vt * (std::sin(b) - std::sin(a)), -1.0, 1.0))
+                : std::acos(std::clamp(std::cos(a) + vt * (std::cos(b) - std::cos(a)), 0.0, 1.0));
     phi = wrap_phi(ph0_ + dph_ * (double(j) + vp));
   }
   pdf_out = pdf(s, theta_o, theta, phi);
 }
 
-double FiberBsdf::pdf(FiberSampler s, double theta_o, double theta, double phi) const {
-  if (!(theta >= -kPi / 2 && theta <= kPi / 2)) return 0;
-  if (s == FiberSampler::Uniform) return kUniformPdf;
-  if (s == FiberSampler::Mixture)
-    return uniform_fraction * kUniformPdf + (1 - uniform_fraction) * mixture_pdf(theta_o, theta, phi);
+double TableBsdf::pdf(BsdfSampler s, double theta_o, double theta, double phi) const {
+  if (!(theta >= theta_lo(meta_.domain) && theta <= kPi / 2)) return 0;
+  if (s == BsdfSampler::Uniform) return uniform_pdf_;
+  if (s == BsdfSampler::Mixture)
+    return uniform_fraction * uniform_pdf_ + (1 - uniform_fraction) * mixture_pdf(theta_o, theta, phi);
   std::size_t i0, i1;
   double w;
   bracket(theta_o, i0, i1, w);

@@ -1,11 +1,14 @@
-// The fiber's BCSDF at a hit, as the renderer uses it (docs/render.md, "Light transport"):
-// f from the table (the 4D table in memory, linear between theta_o slices, the nearest
-// cell in (theta_i, phi)) or from the mixture stand-in (thesis eqs. 3.8-3.11), and the
-// directions drawn by the same samplers as the convergence study: uniform, the mixture
-// with a defensive uniform share (the header's MixtureSet::sample and pdf_omega, exactly
-// what the study's CPU reference calls), and the table CDF. Angles in the fiber frame:
-// sin(theta) = dot(w, tangent), phi from the plane of omega_o (so phi_o = 0, and the
-// tables' phi = phi_i - phi_o is phi itself). L_o = integral L_i f d(omega).
+// A tabulated BSDF at a hit, as the renderer uses it (docs/render.md, "Light transport"): a
+// fiber's BCSDF (fiber domain) or a measured surface's BRDF (hemisphere domain), both with
+// azimuthal symmetry. f from the table (the 4D table in memory, linear between theta_o
+// slices, the nearest cell in (theta_i, phi)) or from the mixture stand-in (thesis eqs.
+// 3.8-3.11), and the directions drawn by the same samplers as the convergence study:
+// uniform, the mixture with a defensive uniform share (the header's MixtureSet::sample
+// and pdf_omega, exactly what the study's CPU reference calls), and the table CDF. Angles
+// in the local frame of the hit, phi from the plane of omega_o (so phi_o = 0, and the
+// tables' phi = phi_i - phi_o is phi itself): for a fiber sin(theta) = dot(w, tangent),
+// L_o = integral L_i f d(omega); for a surface cos(theta) = dot(w, normal),
+// L_o = integral L_i f cos(theta) d(omega).
 #pragma once
 
 #include <bsdfmix/mixture.hpp>
@@ -22,14 +25,14 @@
 namespace bsdfmix {
 namespace render {
 
-enum class FiberF { Table, StandIn };
-enum class FiberSampler { Uniform, Mixture, TableCdf };
+enum class FSource { Table, StandIn };
+enum class BsdfSampler { Uniform, Mixture, TableCdf };
 
-class FiberBsdf {
+class TableBsdf {
  public:
-  // Reads every slice of the (azimuthal, fiber) table; `set` may be empty (no mixture
+  // Reads every slice of the (azimuthal) table; `set` may be empty (no mixture
   // samplers, no stand-in) until set_mixture.
-  explicit FiberBsdf(const std::string& table_path);
+  explicit TableBsdf(const std::string& table_path);
   void set_mixture(const mix::MixtureSet& set);
 
   const TableMeta& meta() const { return meta_; }
@@ -38,15 +41,15 @@ class FiberBsdf {
   // f(theta_o; theta, phi) of the table (linear in theta_o) or of the stand-in: the
   // luminance, and per channel (the table's `rgb` and the mixture's rgb_scale when they
   // are there; otherwise the luminance in every channel).
-  double f(FiberF which, double theta_o, double theta, double phi) const;
-  Rgb f_rgb(FiberF which, double theta_o, double theta, double phi) const;
+  double f(FSource which, double theta_o, double theta, double phi) const;
+  Rgb f_rgb(FSource which, double theta_o, double theta, double phi) const;
   bool has_rgb() const { return !rgb_.empty(); }
 
   // A direction (theta, phi) from uniforms u[0..3] and its density per steradian;
   // pdf 0: no sample. The mixture sampler is the mixture with `uniform_fraction` of
   // uniform samples (balance heuristic), as mis_tab.
-  void sample(FiberSampler s, double theta_o, const double u[4], double& theta, double& phi, double& pdf) const;
-  double pdf(FiberSampler s, double theta_o, double theta, double phi) const;
+  void sample(BsdfSampler s, double theta_o, const double u[4], double& theta, double& phi, double& pdf) const;
+  double pdf(BsdfSampler s, double theta_o, double theta, double phi) const;
   double uniform_fraction = 0.1;
 
   // The mixture's own sampler and density at theta_o: the header's MixtureSet::sample
@@ -69,9 +72,19 @@ class FiberBsdf {
   std::vector<CellCdf> cdf_;      // per theta_o slice
   std::vector<double> cell_w_;    // per theta_i row: integral of J over a cell
   double th0_ = 0, dth_ = 0, ph0_ = 0, dph_ = 0, to0_ = 0, dto_ = 0;
+  double uniform_pdf_ = 0;       // uniform sampling's density: 1 / (4 pi) or 1 / (2 pi)
   mix::MixtureSet set_;
   bool has_set_ = false;
   std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
+};
+
+// Surface frame at a hit: normal n, and the plane of omega_o (phi = 0 along x).
+struct SurfaceFrame {
+  Vec3 n, x, y;
+  double theta_o = 0;
+  SurfaceFrame(const Vec3& normal, const Vec3& wo);
+  void to_local(const Vec3& w, double& theta, double& phi) const;  // theta in [0, pi]
+  Vec3 to_world(double theta, double phi) const;
 };
 
 // Fiber frame at a hit: tangent t and the plane of omega_o (phi = 0 along n).
