@@ -469,6 +469,35 @@ TEST_CASE("malformed files are rejected with one line naming file and problem", 
     find(f, "rgb")->name = "spectra";
     check_rejected(write_bytes("spectral.bsdf", tensor_bytes(f)), "spectral data");
   }
+  SECTION("float-rounding negatives read as 0 and are counted; real negatives are refused") {
+    // The RGL database holds files whose luminance warp has values like -4e-10: within
+    // float rounding of zero for a field of values up to ~1, which Mitsuba and pbrt load.
+    auto set_float = [](RawField& f, std::size_t k, float v) {
+      REQUIRE(4 * k + 4 <= f.data.size());
+      std::memcpy(f.data.data() + 4 * k, &v, 4);
+    };
+    auto f = raw_fields(good);
+    set_float(*find(f, "luminance"), 443, -4e-10f);
+    set_float(*find(f, "luminance"), 2000, -1e-9f);
+    set_float(*find(f, "vndf"), 17, -2e-10f);
+    const std::string p = write_bytes("rounding_negatives.bsdf", tensor_bytes(f));
+    const RglBrdf b(p);
+    CHECK(b.rounding_zeros() == 3);
+    CHECK(RglBrdf(rgl_path("paper_white_rgb")).rounding_zeros() == 0);
+    auto g = raw_fields(good);
+    set_float(*find(g, "luminance"), 443, -1e-3f);  // far beyond rounding: a real negative
+    check_rejected(write_bytes("real_negative.bsdf", tensor_bytes(g)), "field 'luminance': element 443 is negative");
+    // the import logs the count and writes a valid table
+    RglImportOptions opt;
+    opt.file = p;
+    opt.n_theta_o = 4;
+    opt.n_theta_i = 8;
+    opt.n_phi_i = 16;
+    const std::string table = temp_path("rounding_negatives.h5");
+    import_rgl_table(opt, table);
+    const TableReader r(table);
+    for (std::size_t t = 0; t < 4; ++t) r.read_slice(t, 0);  // checks NaN, Inf, negative
+  }
   SECTION("a rebuilt well-formed file is accepted and evaluates identically") {
     const std::string p = write_bytes("rebuilt.bsdf", tensor_bytes(raw_fields(good)));
     RglBrdf a(rgl_path("paper_white_rgb")), b(p);

@@ -6,6 +6,7 @@
 
 #include "core/domain.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "tables/rgl_file.hpp"
 
 namespace bsdfmix {
@@ -186,9 +187,17 @@ std::string shape_text(const std::vector<std::string>& dims) {
   return s + "]";
 }
 
+// How far below zero a value of a non-negative field may lie and still count as zero: a
+// few float32 ulps of the field's largest magnitude (the RGL database's files hold such
+// rounding negatives, about -4e-10 in a luminance warp; Mitsuba and pbrt load them).
+constexpr double kRoundingZero = 8 * 1.1920928955078125e-07;
+
 // Checks dtype float32, rank and the extents given (-1: any >= 2); returns the values.
+// With `non_negative`, values within float rounding of zero below it (kRoundingZero times
+// the field's largest magnitude) are set to 0 and counted in `zeroed`; other negatives are
+// refused.
 std::vector<double> load_float(const RglFile& file, const std::string& name, const std::vector<long long>& want,
-                               bool non_negative) {
+                               bool non_negative, std::size_t* zeroed = nullptr) {
   const RglField& f = file.field(name);
   const std::string where = file.path() + ": field '" + name + "'";
   if (f.dtype != std::uint8_t(RglDtype::Float32))
@@ -201,10 +210,20 @@ std::vector<double> load_float(const RglFile& file, const std::string& name, con
   }
   if (!ok) throw InputError(where + ": wrong dimensions " + f.shape_text() + ", expected " + shape_text(dims));
   std::vector<double> v = file.as_double(f);
-  for (std::size_t k = 0; k < v.size(); ++k)
-    if (!std::isfinite(v[k]) || (non_negative && v[k] < 0.0))
-      throw InputError(where + ": element " + std::to_string(k) + " is " +
-                       (std::isfinite(v[k]) ? "negative" : "not finite"));
+  double largest = 0;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    if (!std::isfinite(v[k])) throw InputError(where + ": element " + std::to_string(k) + " is not finite");
+    largest = std::max(largest, std::abs(v[k]));
+  }
+  if (!non_negative) return v;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    if (!(v[k] < 0.0)) continue;
+    if (-v[k] > kRoundingZero * largest)
+      throw InputError(where + ": element " + std::to_string(k) + " is negative (" + format_number(v[k], "%.9g") +
+                       ", beyond float rounding of zero for values up to " + format_number(largest, "%.9g") + ")");
+    v[k] = 0.0;
+    if (zeroed) ++*zeroed;
+  }
   return v;
 }
 
@@ -258,12 +277,12 @@ RglBrdf::RglBrdf(const std::string& path) : path_(path) {
   const RglField& ndf_f = file.field("ndf");
   if (ndf_f.shape.size() != 2)
     throw InputError(path + ": field 'ndf': wrong dimensions " + ndf_f.shape_text() + ", expected [>=2, >=2]");
-  auto ndf = load_float(file, "ndf", {-1, -1}, true);
+  auto ndf = load_float(file, "ndf", {-1, -1}, true, &rounding_zeros_);
   ndf_ = RglWarp2D(ndf, ndf_f.shape[1], ndf_f.shape[0], {}, false);
   const RglField& sigma_f = file.field("sigma");
   if (sigma_f.shape.size() != 2)
     throw InputError(path + ": field 'sigma': wrong dimensions " + sigma_f.shape_text() + ", expected [>=2, >=2]");
-  auto sigma = load_float(file, "sigma", {-1, -1}, true);
+  auto sigma = load_float(file, "sigma", {-1, -1}, true, &rounding_zeros_);
   for (std::size_t k = 0; k < sigma.size(); ++k)
     if (!(sigma[k] > 0.0))
       throw InputError(path + ": field 'sigma': element " + std::to_string(k) + " is not positive");
@@ -276,7 +295,7 @@ RglBrdf::RglBrdf(const std::string& path) : path_(path) {
     if (f.shape.size() != 4)
       throw InputError(path + ": field '" + name + "': wrong dimensions " + f.shape_text() + ", expected [1, " +
                        std::to_string(n_theta) + ", >=2, >=2]");
-    auto v = load_float(file, name, {1, n_theta, -1, -1}, true);
+    auto v = load_float(file, name, {1, n_theta, -1, -1}, true, &rounding_zeros_);
     const std::size_t size = f.shape[2] * f.shape[3];
     for (long long t = 0; t < n_theta; ++t) {
       double sum = 0.0;

@@ -78,6 +78,9 @@ class RglBrdf {
   const std::string& sha256() const { return sha256_; }
   std::size_t n_theta() const { return theta_axis_.size(); }  // tabulated view elevations
   std::size_t resolution() const { return res_; }            // nodes per side of the RGB grids
+  // Values of the non-negative fields (ndf, sigma, vndf, luminance) that lay within float
+  // rounding below zero and were read as 0.
+  std::size_t rounding_zeros() const { return rounding_zeros_; }
 
   // f for the view direction omega_o and the light direction omega_i (unit vectors in
   // the local frame, z the normal). Zero below the horizon (either cosine <= 0).
@@ -101,6 +104,7 @@ class RglBrdf {
   std::string path_, description_, sha256_;
   std::vector<double> theta_axis_;
   std::size_t res_ = 0;
+  std::size_t rounding_zeros_ = 0;
   bool jacobian_ = true;
   RglWarp2D ndf_, sigma_, vndf_, luminance_, rgb_;
 };

@@ -25,6 +25,9 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   TableMeta meta = make_grid(Domain::Hemisphere, opt.n_theta_o, 1, opt.n_theta_i, opt.n_phi_i, true);
   meta.rgb = true;
   const std::string name = std::filesystem::path(opt.file).filename().string();
+  if (brdf.rounding_zeros())
+    log_line(name + ": " + std::to_string(brdf.rounding_zeros()) +
+             " value(s) of its non-negative fields within float rounding below zero, read as 0");
   meta.source = "{\"model\": \"rgl\", \"file\": \"" + name + "\", \"sha256\": \"" + brdf.sha256() + "\"}";
 
   const std::size_t n_to = meta.theta_o.size(), n_ti = meta.theta_i.size(), n_pi = meta.phi_i.size();
