@@ -42,7 +42,8 @@ std::size_t lines(const std::string& s) {
 }  // namespace
 
 TEST_CASE("every command has --help and exits 0 with it", "[cli]") {
-  for (const char* c : {"", "devices", "inspect", "generate", "import", "fit", "sample", "converge", "run", "bench"}) {
+  for (const char* c : {"", "devices", "inspect", "generate", "import", "fit", "sample", "converge", "run", "bench", "catalog",
+                        "render"}) {
     INFO(c);
     const Run r = run(std::string(c) + " --help");
     CHECK(r.code == 0);
