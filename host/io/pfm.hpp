@@ -13,8 +13,8 @@ struct PfmImage {
   std::vector<float> luminance;  // [height][width], row 0 at the top
 };
 
-// Luminance of an RGB value, 0.2126 R + 0.7152 G + 0.0722 B (in double); exactly R when
-// R = G = B.
+// Luminance of an RGB value, 0.2126 R + 0.7152 G + 0.0722 B (in double, rec709_luminance of
+// core/color.hpp); exactly R when R = G = B.
 float luminance(float r, float g, float b);
 
 // Reads `path`, strictly: the magic Pf or PF; width and height decimal digits in
