@@ -43,6 +43,7 @@ std::string small_table(const std::string& preset) {
   opt.h_nodes = 64;
   TableMeta meta = fiber_table_meta(opt);
   meta.source = fiber_source_json(opt);
+  meta.rgb = false;  // the luminance alone: the renderer reads `values`
   const FiberModel model = fiber_model_for(opt);
   std::vector<float> values;
   for (std::size_t t = 0; t < meta.theta_o.size(); ++t) {
