@@ -2,13 +2,17 @@
 // omega_o slices at a time, in float. CPU reference: host/tables/fiber_model.cpp;
 // test: tests/fiber_test.cpp.
 //
-// f(theta_o, theta_i, dphi) = sum_p M_p(theta_o, theta_i) * Nbar_p(theta_o, dphi), where
-// Nbar_p = (1/2) sum_k w_k A_p(theta_o, h_k) N_p(dphi; theta_o, h_k) is the h-averaged
-// azimuthal factor (Gauss-Legendre nodes h_k, weights w_k). Three kernels:
-//   fiber_azimuthal:    Nbar[b][p][j]   for each slice b of the batch and phi_i cell j
-//   fiber_longitudinal: M[b][p][i]      for each theta_i cell i
-//   fiber_combine:      f[b][i][j] = sum_p M[b][p][i] Nbar[b][p][j], times the noise factor
-// Slice s of the table (s = t_o * n_phi_o + p_o) is batch entry b = s - first_slice.
+// Per channel c of linear RGB (R, G, B), f_c(theta_o, theta_i, dphi) = sum_p M_p(theta_o,
+// theta_i) * Nbar_cp(theta_o, dphi), where Nbar_cp = (1/2) sum_k w_k A_cp(theta_o, h_k)
+// N_p(dphi; theta_o, h_k) is the h-averaged azimuthal factor (Gauss-Legendre nodes h_k,
+// weights w_k). The geometry (M_p, N_p, Fresnel, path lengths) is shared by the channels;
+// only the transmittance exp(-sigma_a[c] * path) in A_cp differs. Three kernels:
+//   fiber_azimuthal:    Nbar[b][c][p][j]  for each slice b of the batch and phi_i cell j
+//   fiber_longitudinal: M[b][p][i]        for each theta_i cell i
+//   fiber_combine:      rgb[b][i][j][c] = sum_p M[b][p][i] Nbar[b][c][p][j], times the
+//                       noise factor of the cell (one factor for the three channels)
+// Slice s of the table (s = t_o * n_phi_o + p_o) is batch entry b = s - first_slice. The
+// table's `values` (the luminance of rgb) is computed on the host.
 // philox4x32_10 and wrap_phi: kernels/common.cl.
 
 #ifndef I0_SERIES_TERMS
@@ -20,14 +24,16 @@
 #ifndef LOBES
 #define LOBES 4  // R, TT, TRT, residual
 #endif
+#define CHANNELS 3  // R, G, B
 
 #define FIBER_PI 3.14159265358979323846f
 
 // Model parameters, identical for every work item.
 typedef struct {
-  float eta, sigma_a, s, logistic_norm;  // logistic_norm = CDF(pi) - CDF(-pi)
-  float v[LOBES];                         // longitudinal variances
-  float tilt[LOBES];                      // theta_o shift of each lobe: -2a, a, 4a, 0
+  float eta, s, logistic_norm;  // logistic_norm = CDF(pi) - CDF(-pi)
+  float sigma_a[CHANNELS];      // absorption per unit radius, R, G, B
+  float v[LOBES];               // longitudinal variances
+  float tilt[LOBES];            // theta_o shift of each lobe: -2a, a, 4a, 0
 } FiberParams;
 
 // log(I0(x) exp(-x)), x >= 0.
@@ -95,29 +101,37 @@ __kernel void fiber_azimuthal(const FiberParams prm, __global const float* theta
   const float sin_o = sin(th_o), cos_o = fmax(cos(th_o), 1e-7f);
   const float sin_t = sin_o / prm.eta, cos_t = sqrt(fmax(0.0f, 1.0f - sin_t * sin_t));
   const float etap = sqrt(prm.eta * prm.eta - sin_o * sin_o) / cos_o;
-  float acc0 = 0.0f, acc1 = 0.0f, acc2 = 0.0f, acc3 = 0.0f;
+  float acc[CHANNELS][LOBES];
+  for (int c = 0; c < CHANNELS; ++c)
+    for (int p = 0; p < LOBES; ++p) acc[c][p] = 0.0f;
   for (uint k = 0; k < n_h; ++k) {
     const float h = h_rule[k].x, w = h_rule[k].y;
     const float sin_gt = h / etap, cos_gt = sqrt(fmax(0.0f, 1.0f - sin_gt * sin_gt));
     const float gamma_o = asin(clamp(h, -1.0f, 1.0f)), gamma_t = asin(clamp(sin_gt, -1.0f, 1.0f));
-    const float T = exp(-prm.sigma_a * (2.0f * cos_gt / cos_t));
+    const float path = 2.0f * cos_gt / cos_t;
     const float F = fresnel_dielectric(cos_o * sqrt(fmax(0.0f, 1.0f - h * h)), prm.eta);
-    const float a0 = F, a1 = (1.0f - F) * (1.0f - F) * T, a2 = a1 * T * F, a3 = a2 * F * T / fmax(1.0f - T * F, 1e-30f);
-    const float n0 = trimmed_logistic(wrap_phi(dphi + 2.0f * gamma_o), prm.s, prm.logistic_norm);
-    const float n1 = trimmed_logistic(wrap_phi(dphi - (2.0f * gamma_t - 2.0f * gamma_o + FIBER_PI)), prm.s,
-                                      prm.logistic_norm);
-    const float n2 = trimmed_logistic(wrap_phi(dphi - (4.0f * gamma_t - 2.0f * gamma_o + 2.0f * FIBER_PI)), prm.s,
-                                      prm.logistic_norm);
-    acc0 += w * a0 * n0;
-    acc1 += w * a1 * n1;
-    acc2 += w * a2 * n2;
-    acc3 += w * a3;
+    const float wn0 = w * trimmed_logistic(wrap_phi(dphi + 2.0f * gamma_o), prm.s, prm.logistic_norm);
+    const float wn1 = w * trimmed_logistic(wrap_phi(dphi - (2.0f * gamma_t - 2.0f * gamma_o + FIBER_PI)), prm.s,
+                                           prm.logistic_norm);
+    const float wn2 = w * trimmed_logistic(wrap_phi(dphi - (4.0f * gamma_t - 2.0f * gamma_o + 2.0f * FIBER_PI)),
+                                           prm.s, prm.logistic_norm);
+    for (int c = 0; c < CHANNELS; ++c) {
+      const float T = exp(-prm.sigma_a[c] * path);
+      const float a1 = (1.0f - F) * (1.0f - F) * T, a2 = a1 * T * F;
+      const float a3 = a2 * F * T / fmax(1.0f - T * F, 1e-30f);
+      acc[c][0] += F * wn0;
+      acc[c][1] += a1 * wn1;
+      acc[c][2] += a2 * wn2;
+      acc[c][3] += w * a3;
+    }
   }
-  __global float* out = nbar + (size_t)b * LOBES * n_phi_i;
-  out[0 * n_phi_i + j] = 0.5f * acc0;
-  out[1 * n_phi_i + j] = 0.5f * acc1;
-  out[2 * n_phi_i + j] = 0.5f * acc2;
-  out[3 * n_phi_i + j] = 0.5f * acc3 / (2.0f * FIBER_PI);
+  __global float* out = nbar + (size_t)b * CHANNELS * LOBES * n_phi_i;
+  for (int c = 0; c < CHANNELS; ++c) {
+    out[(c * LOBES + 0) * n_phi_i + j] = 0.5f * acc[c][0];
+    out[(c * LOBES + 1) * n_phi_i + j] = 0.5f * acc[c][1];
+    out[(c * LOBES + 2) * n_phi_i + j] = 0.5f * acc[c][2];
+    out[(c * LOBES + 3) * n_phi_i + j] = 0.5f * acc[c][3] / (2.0f * FIBER_PI);
+  }
 }
 
 // global (n_theta_i, batch)
@@ -134,15 +148,18 @@ __kernel void fiber_longitudinal(const FiberParams prm, __global const float* th
 // global (n_phi_i, n_theta_i, batch)
 __kernel void fiber_combine(__global const float* m, __global const float* nbar, const uint n_theta_i,
                             const uint n_phi_i, const uint first_slice, const uint batch, const float noise,
-                            const ulong seed, __global float* f) {
+                            const ulong seed, __global float* rgb) {
   const uint j = get_global_id(0), i = get_global_id(1), b = get_global_id(2);
   if (j >= n_phi_i || i >= n_theta_i || b >= batch) return;
   __global const float* mb = m + (size_t)b * LOBES * n_theta_i;
-  __global const float* nb = nbar + (size_t)b * LOBES * n_phi_i;
-  float v = 0.0f;
-  for (int p = 0; p < LOBES; ++p) v += mb[p * n_theta_i + i] * nb[p * n_phi_i + j];
+  __global const float* nb = nbar + (size_t)b * CHANNELS * LOBES * n_phi_i;
   const ulong cells = (ulong)n_theta_i * n_phi_i;
   const ulong local_cell = (ulong)i * n_phi_i + j;
-  if (noise > 0.0f) v *= noise_factor((ulong)(first_slice + b) * cells + local_cell, seed, noise);
-  f[(size_t)b * cells + local_cell] = v;
+  const float factor = noise > 0.0f ? noise_factor((ulong)(first_slice + b) * cells + local_cell, seed, noise) : 1.0f;
+  __global float* out = rgb + ((size_t)b * cells + local_cell) * CHANNELS;
+  for (int c = 0; c < CHANNELS; ++c) {
+    float v = 0.0f;
+    for (int p = 0; p < LOBES; ++p) v += mb[p * n_theta_i + i] * nb[(c * LOBES + p) * n_phi_i + j];
+    out[c] = noise > 0.0f ? v * factor : v;
+  }
 }

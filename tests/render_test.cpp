@@ -31,10 +31,11 @@ fs::path temp_dir() {
   return d;
 }
 
-// A small fiber table of a preset, tabulated on the CPU (18 theta_o x 30 x 60 cells).
+// A small fiber table of a preset, tabulated on the CPU (18 theta_o x 30 x 60 cells), the
+// luminance alone (the color tests add their own `rgb`). Kept in the temp directory while
+// its source (the generator's parameters, the model included) is the current one.
 std::string small_table(const std::string& preset) {
   const std::string path = (temp_dir() / (preset + "_table.h5")).string();
-  if (fs::exists(path)) return path;
   FiberGenerateOptions opt;
   opt.preset = preset;
   opt.n_theta_o = 18;
@@ -43,6 +44,8 @@ std::string small_table(const std::string& preset) {
   opt.h_nodes = 64;
   TableMeta meta = fiber_table_meta(opt);
   meta.source = fiber_source_json(opt);
+  meta.rgb = false;
+  if (fs::exists(path) && TableReader(path).meta().source == meta.source) return path;
   const FiberModel model = fiber_model_for(opt);
   std::vector<float> values;
   for (std::size_t t = 0; t < meta.theta_o.size(); ++t) {
@@ -56,6 +59,7 @@ std::string small_table(const std::string& preset) {
 // The same table with an `rgb` channel of `color` times f in each channel (a grey table
 // when color is (1, 1, 1)).
 std::string colored_table(const std::string& preset, const double color[3], const std::string& name) {
+  // always rewritten from the current small table
   const std::string path = (temp_dir() / (preset + "_" + name + "_rgb_table.h5")).string();
   const TableReader plain(small_table(preset));
   TableMeta meta = plain.meta();
@@ -75,7 +79,7 @@ std::string colored_table(const std::string& preset, const double color[3], cons
 // The table's mixtures, fitted by the sweep (K <= 8), cached in the temp directory.
 mix::MixtureSet fitted_mixture(const std::string& table) {
   const std::string out = table + ".mixture.h5";
-  if (!fs::exists(out)) {
+  if (!fs::exists(out) || read_mixture_file(out).table_source != TableReader(table).meta().source) {
     FitSection fit;
     fit.output = out;
     fit.report = table + ".fit.csv";

@@ -8,7 +8,9 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/progress.hpp"
 #include "io/h5.hpp"
+#include "io/inspect.hpp"
 #include "io/table.hpp"
 
 using namespace bsdfmix;
@@ -123,6 +125,56 @@ TEST_CASE("a non-symmetric hemisphere table with rgb round-trips", "[table]") {
   CHECK_FALSE(r.meta().azimuthal);
   CHECK(r.read_slice(1, 2)[5] == 6.0f);
   CHECK(r.read_slice_rgb(1, 2)[4] == 2.0f);
+}
+
+TEST_CASE("a compressed table with rgb round-trips, and inspect shows its colour", "[table]") {
+  Progress::set_enabled(false);
+  TableMeta m = make_grid(Domain::Fiber, 3, 1, 16, 32, true);
+  m.rgb = true;
+  const std::size_t cells = m.cells_per_slice();
+  auto slice_rgb = [&](std::size_t t) {
+    std::vector<float> rgb(3 * cells);
+    for (std::size_t k = 0; k < cells; ++k)
+      for (std::size_t c = 0; c < 3; ++c) rgb[3 * k + c] = 0.1f * float(c + 1) + 0.01f * float(t) + 1e-4f * float(k % 7);
+    return rgb;
+  };
+  auto slice_y = [&](const std::vector<float>& rgb) {
+    std::vector<float> y(cells);
+    for (std::size_t k = 0; k < cells; ++k)
+      y[k] = float(0.2126 * rgb[3 * k] + 0.7152 * rgb[3 * k + 1] + 0.0722 * rgb[3 * k + 2]);
+    return y;
+  };
+  std::uintmax_t size[2] = {0, 0};
+  for (int deflate : {0, 6}) {
+    const std::string p = temp_path("deflate" + std::to_string(deflate) + ".h5");
+    {
+      TableWriter w(p, m, deflate);
+      for (std::size_t t = 0; t < 3; ++t) {
+        const auto rgb = slice_rgb(t);
+        w.write_slice(t, 0, slice_y(rgb).data(), rgb.data());
+      }
+      w.commit();
+    }
+    size[deflate ? 1 : 0] = fs::file_size(p);
+    TableReader r(p);
+    REQUIRE(r.meta().rgb);
+    for (std::size_t t = 0; t < 3; ++t) {
+      const auto rgb = slice_rgb(t);
+      CHECK(r.read_slice_rgb(t, 0) == rgb);
+      CHECK(r.read_slice(t, 0) == slice_y(rgb));
+    }
+    const std::string text = describe_file(p, true);
+    CHECK_THAT(text, Catch::Contains("the luminance of rgb") && Catch::Contains("rgb        [3, 1, 16, 32, 3] float32") &&
+                         Catch::Contains("the table has colour") && Catch::Contains("colour     per-slice integral R in") &&
+                         Catch::Contains("file size"));
+  }
+  CHECK(size[1] < size[0] / 2);  // shuffle + deflate on slowly varying floats
+  CHECK_THROWS_WITH(TableWriter(temp_path("bad_deflate.h5"), m, 10), Catch::Contains("deflate level must be in [0, 9]"));
+  // A table without rgb says nothing of colour.
+  const std::string plain = temp_path("plain.h5");
+  write_table(plain, small_meta(), ramp(small_meta().n_slices() * small_meta().cells_per_slice()));
+  const std::string text = describe_file(plain, true);
+  CHECK_THAT(text, !Catch::Contains("rgb") && !Catch::Contains("colour"));
 }
 
 TEST_CASE("a writer that is not committed leaves no file", "[table]") {

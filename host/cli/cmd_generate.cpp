@@ -35,6 +35,9 @@ void add_generate(CLI::App& app, Common& common) {
   fiber->add_option("--seed", opt.seed, "noise seed")->capture_default_str();
   fiber->add_option("--h-nodes", opt.h_nodes, "Gauss-Legendre nodes in the fiber offset h")
       ->capture_default_str();
+  fiber->add_option("--deflate", opt.deflate,
+                    "compress the file: 0 none, 1..9 HDF5 shuffle + deflate at that level (slower to write)")
+      ->capture_default_str();
   fiber->add_option("-o,--output", output, "the table file to write (HDF5)")->required();
   add_common_options(*fiber, common);
   sub->require_subcommand(1);

@@ -1,5 +1,6 @@
 // Linear RGB (Rec. 709 / sRGB primaries) as the renderer carries it along paths, and its
-// luminance Y, the quantity the tables' `values` hold for colored tables.
+// luminance Y, the one definition: the fiber and RGL tables' `values` beside their `rgb`
+// (docs/formats.md, "Table file"), the images.
 #pragma once
 
 #include <algorithm>
@@ -8,6 +9,13 @@ namespace bsdfmix {
 
 // The luminance weights of Rec. 709: Y = 0.2126 R + 0.7152 G + 0.0722 B.
 constexpr double kLumaR = 0.2126, kLumaG = 0.7152, kLumaB = 0.0722;
+
+// Y of (r, g, b) in double (the weights sum to 1); exactly r when r = g = b, so that a grey
+// keeps its number.
+inline double rec709_luminance(double r, double g, double b) {
+  if (r == g && g == b) return r;
+  return kLumaR * r + kLumaG * g + kLumaB * b;
+}
 
 struct Rgb {
   double c[3] = {0, 0, 0};
@@ -19,7 +27,7 @@ struct Rgb {
   // The largest channel: what decides "is there anything" and Russian roulette, so that
   // a grey value behaves exactly as the plain number it stands for.
   double max() const { return std::max(c[0], std::max(c[1], c[2])); }
-  double luminance() const { return kLumaR * c[0] + kLumaG * c[1] + kLumaB * c[2]; }
+  double luminance() const { return rec709_luminance(c[0], c[1], c[2]); }
   Rgb& operator+=(const Rgb& o) {
     for (int i = 0; i < 3; ++i) c[i] += o.c[i];
     return *this;

@@ -46,15 +46,23 @@ std::string describe_table(const std::string& path, bool check_cells) {
   s << "  symmetry   " << (m.azimuthal ? "azimuthal" : "none") << "\n";
   s << "  values     [" << m.theta_o.size() << ", " << m.phi_o.size() << ", " << m.theta_i.size() << ", "
     << m.phi_i.size() << "] float32 = " << m.n_slices() * m.cells_per_slice() << " cells ("
-    << bytes_text(double(m.n_slices() * m.cells_per_slice()) * 4) << ")" << (m.rgb ? ", with rgb" : "") << "\n";
+    << bytes_text(double(m.n_slices() * m.cells_per_slice()) * 4) << ")" << (m.rgb ? ", the luminance of rgb" : "")
+    << "\n";
+  if (m.rgb)
+    s << "  rgb        [" << m.theta_o.size() << ", " << m.phi_o.size() << ", " << m.theta_i.size() << ", "
+      << m.phi_i.size() << ", 3] float32: the table has colour (f in R, G, B, linear Rec. 709)\n";
   s << "  theta_o    " << axis_text(m.theta_o) << "\n";
   s << "  phi_o      " << axis_text(m.phi_o) << "\n";
   s << "  theta_i    " << axis_text(m.theta_i) << "\n";
   s << "  phi_i      " << axis_text(m.phi_i) << "\n";
   s << "  source     " << m.source << "\n";
+  s << "  file size  " << bytes_text(double(std::filesystem::file_size(path))) << "\n";
   if (check_cells) {
     double lo = 1e300, hi = -1e300, sum = 0, integ_lo = 1e300, integ_hi = -1e300;
     std::size_t zero_slices = 0;
+    // With rgb: each channel's per-slice integral (albedo), its range and mean over slices.
+    double ch_lo[3] = {1e300, 1e300, 1e300}, ch_hi[3] = {-1e300, -1e300, -1e300}, ch_sum[3] = {0, 0, 0};
+    std::vector<float> channel(m.cells_per_slice());
     Progress progress("inspect " + path, m.n_slices(), "slices");
     for (std::size_t t = 0; t < m.theta_o.size(); ++t)
       for (std::size_t p = 0; p < m.phi_o.size(); ++p) {
@@ -70,6 +78,17 @@ std::string describe_table(const std::string& path, bool check_cells) {
         if (integ == 0) ++zero_slices;
         integ_lo = std::min(integ_lo, integ);
         integ_hi = std::max(integ_hi, integ);
+        if (m.rgb) {
+          const auto rgb = r.read_slice_rgb(t, p);
+          for (int c = 0; c < 3; ++c) {
+            for (std::size_t k = 0; k < channel.size(); ++k) channel[k] = rgb[3 * k + std::size_t(c)];
+            double ci = 0;
+            for (double x : integrand_weights(m.domain, m.theta_i, m.phi_i, channel.data())) ci += x;
+            ch_lo[c] = std::min(ch_lo[c], ci);
+            ch_hi[c] = std::max(ch_hi[c], ci);
+            ch_sum[c] += ci;
+          }
+        }
         progress.advance();
       }
     progress.finish();
@@ -80,6 +99,15 @@ std::string describe_table(const std::string& path, bool check_cells) {
     std::snprintf(buf, sizeof buf, "  integral   per slice (albedo, L_i = 1) in [%.6g, %.6g]; %zu all-zero slice(s)\n",
                   integ_lo, integ_hi, zero_slices);
     s << buf;
+    if (m.rgb) {
+      const double n = double(m.n_slices());
+      std::snprintf(buf, sizeof buf,
+                    "  colour     per-slice integral R in [%.6g, %.6g], G in [%.6g, %.6g], B in [%.6g, %.6g]; "
+                    "mean (%.4g, %.4g, %.4g)\n",
+                    ch_lo[0], ch_hi[0], ch_lo[1], ch_hi[1], ch_lo[2], ch_hi[2], ch_sum[0] / n, ch_sum[1] / n,
+                    ch_sum[2] / n);
+      s << buf;
+    }
   }
   return s.str();
 }

@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "core/atomic_file.hpp"
+#include "core/color.hpp"
 #include "core/error.hpp"
 
 namespace bsdfmix {
@@ -34,10 +35,7 @@ std::uint32_t float_bits(float f) {
 
 }  // namespace
 
-float luminance(float r, float g, float b) {
-  if (r == g && g == b) return r;
-  return float(0.2126 * double(r) + 0.7152 * double(g) + 0.0722 * double(b));
-}
+float luminance(float r, float g, float b) { return float(rec709_luminance(r, g, b)); }
 
 PfmImage read_pfm(const std::string& path) {
   std::ifstream f(path, std::ios::binary);

@@ -15,8 +15,8 @@ struct PfmImage {
   std::vector<float> rgb;        // [height][width][3]
 };
 
-// Luminance of an RGB value, 0.2126 R + 0.7152 G + 0.0722 B (in double); exactly R when
-// R = G = B.
+// Luminance of an RGB value, 0.2126 R + 0.7152 G + 0.0722 B (in double, rec709_luminance of
+// core/color.hpp); exactly R when R = G = B.
 float luminance(float r, float g, float b);
 
 // Reads `path`, strictly: the magic Pf or PF; width and height decimal digits in

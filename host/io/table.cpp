@@ -214,9 +214,13 @@ struct TableWriter::Impl {
   std::vector<bool> written;
 };
 
-TableWriter::TableWriter(const std::string& path, const TableMeta& meta) : impl_(std::make_unique<Impl>()) {
+TableWriter::TableWriter(const std::string& path, const TableMeta& meta, int deflate)
+    : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   validate_meta(meta, path);
+  if (deflate < 0 || deflate > 9) throw IoError(path + ": deflate level must be in [0, 9]");
+  if (deflate > 0 && H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0)
+    throw IoError(path + ": this HDF5 library has no deflate filter (write with deflate level 0)");
   im.path = path;
   im.meta = meta;
   const std::uint64_t bytes = std::uint64_t(meta.n_slices()) * meta.cells_per_slice() * 4 * (meta.rgb ? 4 : 1);
@@ -240,6 +244,8 @@ TableWriter::TableWriter(const std::string& path, const TableMeta& meta) : impl_
     h5::Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
     h5::Handle dcpl(H5Pcreate(H5P_DATASET_CREATE));
     H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
+    if (deflate > 0 && (H5Pset_shuffle(dcpl.get()) < 0 || H5Pset_deflate(dcpl.get(), unsigned(deflate)) < 0))
+      throw IoError(where + ": cannot set the compression of dataset " + name);
     h5::Handle d(H5Dcreate2(g, name, H5T_IEEE_F32LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT));
     if (!d.valid()) throw IoError(where + ": cannot create dataset " + name);
     return d;

@@ -55,10 +55,12 @@ class TableReader {
 
 // Writes a table slice by slice under a temporary name; commit() checks that
 // every slice was written and renames it into place. Without commit() nothing
-// is left behind.
+// is left behind. `deflate` 0 stores the datasets uncompressed; 1..9 compresses each
+// slice chunk with HDF5's shuffle and deflate filters at that level (IoError when this
+// HDF5 has no deflate filter). Readers decompress transparently.
 class TableWriter {
  public:
-  TableWriter(const std::string& path, const TableMeta& meta);
+  TableWriter(const std::string& path, const TableMeta& meta, int deflate = 0);
   ~TableWriter();
   void write_slice(std::size_t t_o, std::size_t p_o, const float* values, const float* rgb = nullptr);
   void commit();

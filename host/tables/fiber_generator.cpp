@@ -10,11 +10,13 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "core/color.hpp"
 #include "core/domain.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/progress.hpp"
 #include "device/program.hpp"
+#include "io/pfm.hpp"
 #include "tables/fiber_presets.hpp"
 
 namespace bsdfmix {
@@ -23,11 +25,12 @@ namespace {
 
 // Mirrors the FiberParams struct of kernels/fiber.cl (floats only, no padding).
 struct KernelParams {
-  cl_float eta, sigma_a, s, logistic_norm;
+  cl_float eta, s, logistic_norm;
+  cl_float sigma_a[kFiberChannels];
   cl_float v[kFiberLobes];
   cl_float tilt[kFiberLobes];
 };
-static_assert(sizeof(KernelParams) == 12 * sizeof(cl_float), "KernelParams must match kernels/fiber.cl");
+static_assert(sizeof(KernelParams) == 14 * sizeof(cl_float), "KernelParams must match kernels/fiber.cl");
 
 std::string fmt(double x) {
   // The shorter of %.15g / %.17g that reads back exactly.
@@ -37,6 +40,10 @@ std::string fmt(double x) {
 
 constexpr std::uint32_t kNoiseStream = 0x66696265u;  // "fibe": third counter word
 constexpr std::size_t kBatchBytes = std::size_t(64) << 20;
+
+std::string fmt_rgb(const FiberRgb& v) {
+  return "[" + fmt(v[0]) + ", " + fmt(v[1]) + ", " + fmt(v[2]) + "]";
+}
 
 }  // namespace
 
@@ -50,14 +57,17 @@ void validate_fiber_options(const FiberGenerateOptions& opt) {
   if (opt.symmetry && opt.n_phi_o > 1) fail("phi_o resolution must be 1 with azimuthal symmetry");
   if (!(opt.noise >= 0.0 && opt.noise <= 10.0)) fail("noise level must be in [0, 10]");
   if (opt.h_nodes < 2 || opt.h_nodes > 4096) fail("h_nodes must be in [2, 4096]");
+  if (opt.deflate < 0 || opt.deflate > 9) fail("deflate level must be in [0, 9]");
 }
 
 std::string fiber_source_json(const FiberGenerateOptions& opt) {
-  const FiberParams& p = fiber_preset(opt.preset).params;
+  const FiberPreset& preset = fiber_preset(opt.preset);
+  const FiberParams& p = preset.params;
   std::ostringstream s;
   s << "{\"model\": \"chiang2016\", \"preset\": \"" << opt.preset << "\", \"eta\": " << fmt(p.eta)
     << ", \"beta_m\": " << fmt(p.beta_m) << ", \"beta_n\": " << fmt(p.beta_n) << ", \"alpha\": " << fmt(p.alpha)
-    << ", \"sigma_a\": " << fmt(p.sigma_a) << ", \"noise\": " << fmt(opt.noise) << ", \"seed\": " << opt.seed
+    << ", \"sigma_a\": " << fmt_rgb(p.sigma_a) << ", \"color\": " << fmt_rgb(preset.color)
+    << ", \"channels\": \"linear Rec. 709 RGB\", \"noise\": " << fmt(opt.noise) << ", \"seed\": " << opt.seed
     << ", \"h_nodes\": " << opt.h_nodes << "}";
   return s.str();
 }
@@ -67,6 +77,7 @@ TableMeta fiber_table_meta(const FiberGenerateOptions& opt) {
   const std::size_t n_phi_o = opt.symmetry ? 1 : (opt.n_phi_o == 0 ? opt.n_phi_i : opt.n_phi_o);
   TableMeta meta = make_grid(Domain::Fiber, opt.n_theta_o, n_phi_o, opt.n_theta_i, opt.n_phi_i, opt.symmetry);
   meta.source = fiber_source_json(opt);
+  meta.rgb = true;
   return meta;
 }
 
@@ -89,8 +100,8 @@ double fiber_noise_factor(std::uint64_t cell, std::uint64_t seed, double level) 
   return std::exp(level * z - 0.5 * level * level);
 }
 
-std::vector<double> tabulate_fiber_slice_cpu(const FiberModel& model, const TableMeta& meta, std::size_t t_o,
-                                             std::size_t p_o, double noise, std::uint64_t seed) {
+std::vector<double> tabulate_fiber_slice_rgb_cpu(const FiberModel& model, const TableMeta& meta, std::size_t t_o,
+                                                 std::size_t p_o, double noise, std::uint64_t seed) {
   if (t_o >= meta.theta_o.size() || p_o >= meta.phi_o.size())
     throw InputError("fiber slice (" + std::to_string(t_o) + ", " + std::to_string(p_o) + ") outside the table");
   const double th_o = meta.theta_o[t_o], ph_o = meta.phi_o[p_o];
@@ -98,18 +109,33 @@ std::vector<double> tabulate_fiber_slice_cpu(const FiberModel& model, const Tabl
   std::vector<double> dphi(n_pi);
   for (std::size_t j = 0; j < n_pi; ++j) dphi[j] = meta.phi_i[j] - ph_o;
   const auto nbar = model.azimuthal_factors(th_o, dphi);
-  std::vector<double> out(n_ti * n_pi);
+  std::vector<double> out(n_ti * n_pi * kFiberChannels);
   const std::uint64_t first_cell = std::uint64_t(meta.slice_index(t_o, p_o)) * meta.cells_per_slice();
   for (std::size_t i = 0; i < n_ti; ++i) {
     std::array<double, kFiberLobes> m{};
     for (int p = 0; p < kFiberLobes; ++p) m[std::size_t(p)] = model.longitudinal(p, th_o, meta.theta_i[i]);
     for (std::size_t j = 0; j < n_pi; ++j) {
-      double v = 0;
-      for (std::size_t p = 0; p < kFiberLobes; ++p) v += m[p] * nbar[p][j];
-      out[i * n_pi + j] = v * fiber_noise_factor(first_cell + i * n_pi + j, seed, noise);
+      const double factor = fiber_noise_factor(first_cell + i * n_pi + j, seed, noise);
+      for (std::size_t c = 0; c < kFiberChannels; ++c) {
+        double v = 0;
+        for (std::size_t p = 0; p < kFiberLobes; ++p) v += m[p] * nbar[c][p][j];
+        out[(i * n_pi + j) * kFiberChannels + c] = v * factor;
+      }
     }
   }
   return out;
+}
+
+std::vector<double> tabulate_fiber_slice_cpu(const FiberModel& model, const TableMeta& meta, std::size_t t_o,
+                                             std::size_t p_o, double noise, std::uint64_t seed) {
+  const std::vector<double> rgb = tabulate_fiber_slice_rgb_cpu(model, meta, t_o, p_o, noise, seed);
+  std::vector<double> y(rgb.size() / kFiberChannels);
+  for (std::size_t k = 0; k < y.size(); ++k) y[k] = rec709_luminance(rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]);
+  return y;
+}
+
+void fiber_luminance(const float* rgb, std::size_t cells, float* values) {
+  for (std::size_t k = 0; k < cells; ++k) values[k] = luminance(rgb[3 * k], rgb[3 * k + 1], rgb[3 * k + 2]);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -122,7 +148,7 @@ struct FiberDeviceTabulator::Impl {
   std::uint64_t seed = 1;
   cl::CommandQueue queue;
   cl::Kernel k_azimuthal, k_longitudinal, k_combine;
-  cl::Buffer theta_o, phi_o, theta_i, phi_i, h_rule, nbar, m, f;
+  cl::Buffer theta_o, phi_o, theta_i, phi_i, h_rule, nbar, m, rgb;
   std::vector<cl::Event> pending;
   ~Impl() {
     // Reads still in flight write into the caller's memory: let them land first.
@@ -143,7 +169,8 @@ FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberMode
   d.seed = seed;
   const std::size_t cells = meta.cells_per_slice();
   const std::uint64_t max_alloc = std::max<std::uint64_t>(device.info().max_alloc, 1 << 20);
-  const std::size_t by_alloc = std::max<std::size_t>(1, std::size_t(max_alloc / (cells * sizeof(float))));
+  const std::size_t by_alloc =
+      std::max<std::size_t>(1, std::size_t(max_alloc / (cells * kFiberChannels * sizeof(float))));
   d.max_batch = std::max<std::size_t>(1, std::min({max_batch, meta.n_slices(), by_alloc}));
   if (meta.n_slices() > 0xFFFFFFFFull || cells > 0xFFFFFFFFull)
     throw ConfigError("generate fiber: table too large for 32-bit slice and cell indices");
@@ -151,7 +178,7 @@ FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberMode
   const FiberParams& fp = model.params();
   KernelParams kp{};
   kp.eta = cl_float(fp.eta);
-  kp.sigma_a = cl_float(fp.sigma_a);
+  for (int c = 0; c < kFiberChannels; ++c) kp.sigma_a[c] = cl_float(fp.sigma_a[std::size_t(c)]);
   kp.s = cl_float(model.logistic_scale());
   kp.logistic_norm = cl_float(1 / (1 + std::exp(-kPi / model.logistic_scale())) -
                               1 / (1 + std::exp(kPi / model.logistic_scale())));
@@ -184,9 +211,10 @@ FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberMode
     d.phi_i = upload(ph_i);
     d.h_rule = cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rule.size() * sizeof(cl_float2),
                           rule.data());
-    d.nbar = cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.phi_i.size() * sizeof(cl_float));
+    d.nbar = cl::Buffer(ctx, CL_MEM_READ_WRITE,
+                        d.max_batch * kFiberChannels * kFiberLobes * meta.phi_i.size() * sizeof(cl_float));
     d.m = cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.theta_i.size() * sizeof(cl_float));
-    d.f = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, d.max_batch * cells * sizeof(cl_float));
+    d.rgb = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, d.max_batch * cells * kFiberChannels * sizeof(cl_float));
 
     const cl_uint n_h = cl_uint(rule.size()), n_phi_o = cl_uint(meta.phi_o.size()),
                   n_theta_i = cl_uint(meta.theta_i.size()), n_phi_i = cl_uint(meta.phi_i.size());
@@ -214,7 +242,7 @@ FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberMode
     d.k_combine.setArg(3, n_phi_i);
     d.k_combine.setArg(6, cl_float(noise));
     d.k_combine.setArg(7, cl_ulong(seed));
-    d.k_combine.setArg(8, d.f);
+    d.k_combine.setArg(8, d.rgb);
   } catch (const cl::Error& e) {
     throw_device_error(e, "fiber tabulation setup on " + device.info().label());
   }
@@ -224,7 +252,7 @@ FiberDeviceTabulator::~FiberDeviceTabulator() = default;
 
 std::size_t FiberDeviceTabulator::max_batch() const { return impl_->max_batch; }
 
-void FiberDeviceTabulator::enqueue(std::size_t first, std::size_t count, float* out) {
+void FiberDeviceTabulator::enqueue(std::size_t first, std::size_t count, float* rgb) {
   Impl& d = *impl_;
   if (count == 0 || count > d.max_batch || first + count > d.meta.n_slices())
     throw ConfigError("fiber tabulation: batch [" + std::to_string(first) + ", " + std::to_string(first + count) +
@@ -243,7 +271,8 @@ void FiberDeviceTabulator::enqueue(std::size_t first, std::size_t count, float* 
     d.k_combine.setArg(5, count_u);
     launch(d.queue, d.k_combine, "fiber_combine", cl::NDRange(n_pi, n_ti, count));
     cl::Event ev;
-    d.queue.enqueueReadBuffer(d.f, CL_FALSE, 0, count * n_ti * n_pi * sizeof(cl_float), out, nullptr, &ev);
+    d.queue.enqueueReadBuffer(d.rgb, CL_FALSE, 0, count * n_ti * n_pi * kFiberChannels * sizeof(cl_float), rgb,
+                              nullptr, &ev);
     d.pending.push_back(ev);
   } catch (const cl::Error& e) {
     throw_device_error(e, "fiber tabulation of slices " + std::to_string(first) + ".." +
@@ -262,9 +291,10 @@ void FiberDeviceTabulator::wait() {
   }
 }
 
-void FiberDeviceTabulator::compute(std::size_t first, std::size_t count, float* out) {
-  enqueue(first, count, out);
+void FiberDeviceTabulator::compute(std::size_t first, std::size_t count, float* rgb, float* values) {
+  enqueue(first, count, rgb);
   wait();
+  if (values) fiber_luminance(rgb, count * impl_->meta.cells_per_slice(), values);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -277,8 +307,9 @@ void generate_fiber_table(const FiberGenerateOptions& opt, const std::string& de
   if (devices.empty()) throw DeviceError("generate fiber: no OpenCL device selected by '" + device_selector + "'");
   const Device& device = devices.front();
   const std::size_t cells = meta.cells_per_slice();
-  const std::size_t batch = std::max<std::size_t>(1, kBatchBytes / (cells * sizeof(float)));
-  // Two host buffers (declared before the tabulator, which finishes its reads into them
+  // Per slice in memory: the rgb channel (3 floats a cell) and the values (1).
+  const std::size_t batch = std::max<std::size_t>(1, kBatchBytes / (cells * (kFiberChannels + 1) * sizeof(float)));
+  // Two host rgb buffers (declared before the tabulator, which finishes its reads into them
   // when destroyed): the device fills one while the other is written to disk.
   std::array<std::vector<float>, 2> host;
   FiberDeviceTabulator tab(device, model, meta, opt.noise, opt.seed, batch);
@@ -286,11 +317,13 @@ void generate_fiber_table(const FiberGenerateOptions& opt, const std::string& de
 
   log_line("generate fiber " + opt.preset + ": " + std::to_string(meta.theta_o.size()) + " x " +
            std::to_string(meta.phi_o.size()) + " x " + std::to_string(meta.theta_i.size()) + " x " +
-           std::to_string(meta.phi_i.size()) + " cells on " + device.info().label() + " -> " + out_path);
-  TableWriter writer(out_path, meta);
+           std::to_string(meta.phi_i.size()) + " cells, rgb and luminance, on " + device.info().label() + " -> " +
+           out_path);
+  TableWriter writer(out_path, meta, opt.deflate);
   Progress progress("generate fiber " + opt.preset, n_slices, "slices");
-  host[0].resize(b * cells);
-  if (n_slices > b) host[1].resize(b * cells);
+  host[0].resize(b * cells * kFiberChannels);
+  if (n_slices > b) host[1].resize(b * cells * kFiberChannels);
+  std::vector<float> values(cells);
   std::size_t first = 0, which = 0;
   std::size_t count = std::min(b, n_slices);
   tab.enqueue(first, count, host[0].data());
@@ -301,7 +334,9 @@ void generate_fiber_table(const FiberGenerateOptions& opt, const std::string& de
     if (next_count > 0) tab.enqueue(next_first, next_count, host[1 - which].data());
     for (std::size_t k = 0; k < count; ++k) {
       const std::size_t s = first + k;
-      writer.write_slice(s / meta.phi_o.size(), s % meta.phi_o.size(), host[which].data() + k * cells);
+      const float* rgb = host[which].data() + k * cells * kFiberChannels;
+      fiber_luminance(rgb, cells, values.data());
+      writer.write_slice(s / meta.phi_o.size(), s % meta.phi_o.size(), values.data(), rgb);
     }
     progress.advance(count);
     first = next_first;

@@ -22,12 +22,13 @@ struct FiberGenerateOptions {
   double noise = 0.0;         // multiplicative log-normal noise, sigma of log f; 0: none
   std::uint64_t seed = 1;     // noise seed
   std::size_t h_nodes = kFiberHNodes;
+  int deflate = 0;            // the file's compression (TableWriter): 0 none, 1..9 shuffle + deflate
 };
 
 // Checks the options (resolutions, noise, preset); throws ConfigError naming the option.
 void validate_fiber_options(const FiberGenerateOptions& opt);
 
-// The table grid and the `source` JSON of the options.
+// The table grid (with the `rgb` channel) and the `source` JSON of the options.
 TableMeta fiber_table_meta(const FiberGenerateOptions& opt);
 std::string fiber_source_json(const FiberGenerateOptions& opt);
 
@@ -40,10 +41,17 @@ FiberModel fiber_model_for(const FiberGenerateOptions& opt);
 // level is 0.
 double fiber_noise_factor(std::uint64_t cell, std::uint64_t seed, double level);
 
-// CPU reference of one slice (t_o, p_o) of the table `meta`, row-major [theta_i][phi_i],
-// double precision, noise included.
+// CPU reference of one slice (t_o, p_o) of the table `meta` in double precision, noise
+// included (one factor per cell for its three channels): the rgb channel, row-major
+// [theta_i][phi_i][R, G, B]; and `values`, its luminance (core/color.hpp), [theta_i][phi_i].
+std::vector<double> tabulate_fiber_slice_rgb_cpu(const FiberModel& model, const TableMeta& meta, std::size_t t_o,
+                                                 std::size_t p_o, double noise = 0.0, std::uint64_t seed = 1);
 std::vector<double> tabulate_fiber_slice_cpu(const FiberModel& model, const TableMeta& meta, std::size_t t_o,
                                              std::size_t p_o, double noise = 0.0, std::uint64_t seed = 1);
+
+// The table's `values` from its `rgb`: values[k] = luminance of rgb[3k .. 3k + 2], for
+// `cells` cells (the float luminance of io/pfm.hpp: exactly R where R = G = B).
+void fiber_luminance(const float* rgb, std::size_t cells, float* values);
 
 // Device evaluation of consecutive slices of a table with kernels/fiber.cl.
 class FiberDeviceTabulator {
@@ -56,11 +64,13 @@ class FiberDeviceTabulator {
 
   std::size_t max_batch() const;
   // Enqueues slices [first, first + count) (global slice index t_o * n_phi_o + p_o) and a
-  // non-blocking read into `out` (count * cells_per_slice floats); wait() blocks until done.
-  void enqueue(std::size_t first, std::size_t count, float* out);
+  // non-blocking read of their rgb channel into `rgb` (count * cells_per_slice * 3 floats,
+  // [slice][theta_i][phi_i][R, G, B]); wait() blocks until done.
+  void enqueue(std::size_t first, std::size_t count, float* rgb);
   void wait();
-  // enqueue + wait.
-  void compute(std::size_t first, std::size_t count, float* out);
+  // enqueue + wait; then, when `values` is given, the luminance of each cell
+  // (count * cells_per_slice floats, fiber_luminance).
+  void compute(std::size_t first, std::size_t count, float* rgb, float* values = nullptr);
 
  private:
   struct Impl;

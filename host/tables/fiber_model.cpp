@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/color.hpp"
 #include "core/domain.hpp"
 #include "core/error.hpp"
 
@@ -99,6 +100,20 @@ GaussLegendre gauss_legendre(std::size_t n) {
   return g;
 }
 
+FiberRgb sigma_a_from_color(const FiberRgb& color, double beta_n) {
+  if (!(beta_n > 0.0 && beta_n <= 1.0)) throw ConfigError("sigma_a from a colour: beta_n must be in (0, 1]");
+  const double b = beta_n;
+  const double d = 5.969 - 0.215 * b + 2.532 * b * b - 10.73 * std::pow(b, 3) + 5.574 * std::pow(b, 4) +
+                   0.245 * std::pow(b, 5);
+  FiberRgb s{};
+  for (int c = 0; c < kFiberChannels; ++c) {
+    const double x = color[std::size_t(c)];
+    if (!(x > 0.0 && x <= 1.0)) throw ConfigError("sigma_a from a colour: every channel must be in (0, 1]");
+    s[std::size_t(c)] = sqr(std::log(x) / d);
+  }
+  return s;
+}
+
 double log_bessel_i0(double x) { return log_i0_scaled(std::abs(x)) + std::abs(x); }
 double bessel_i0(double x) { return std::exp(log_bessel_i0(x)); }
 
@@ -107,7 +122,8 @@ FiberModel::FiberModel(const FiberParams& params, std::size_t h_nodes, const cha
     throw ConfigError(std::string(where) + ": " + what);
   };
   if (!(params.eta > 1.0 && params.eta < 10.0)) fail("eta must be in (1, 10)");
-  if (!(params.sigma_a >= 0.0 && std::isfinite(params.sigma_a))) fail("sigma_a must be >= 0");
+  for (double s : params.sigma_a)
+    if (!(s >= 0.0 && std::isfinite(s))) fail("sigma_a must be >= 0 in every channel");
   if (!(params.beta_m > 0.0 && params.beta_m <= 1.0)) fail("beta_m must be in (0, 1]");
   if (!(params.beta_n > 0.0 && params.beta_n <= 1.0)) fail("beta_n must be in (0, 1]");
   if (!(std::abs(params.alpha) < kPi / 4)) fail("alpha must be in (-pi/4, pi/4) radians");
@@ -157,24 +173,28 @@ double FiberModel::longitudinal(int p, double theta_o, double theta_i) const {
   return std::exp(log_m);
 }
 
-std::array<double, kFiberLobes> FiberModel::attenuation(double theta_o, double h) const {
+std::array<FiberLobes, kFiberChannels> FiberModel::attenuation(double theta_o, double h) const {
   const double eta = params_.eta;
   const double sin_o = std::sin(theta_o), cos_o = std::max(std::cos(theta_o), 1e-12);
   const double sin_t = sin_o / eta, cos_t = safe_sqrt(1 - sin_t * sin_t);
   const double etap = std::sqrt(eta * eta - sin_o * sin_o) / cos_o;  // modified index (Bravais)
   const double sin_gt = h / etap, cos_gt = safe_sqrt(1 - sin_gt * sin_gt);
-  const double T = std::exp(-params_.sigma_a * (2 * cos_gt / cos_t));
+  const double path = 2 * cos_gt / cos_t;  // one internal path, in fiber radii
   const double cos_go = safe_sqrt(1 - h * h);
   const double F = fresnel_dielectric(cos_o * cos_go, eta);
-  std::array<double, kFiberLobes> a{};
-  a[0] = F;
-  a[1] = sqr(1 - F) * T;
-  a[2] = a[1] * T * F;
-  // Geometric series of the orders p >= 3; at grazing h = +-1 with no absorption T F = 1,
-  // where (1 - F)^2 = 0 already: the residual is 0.
-  const double denom = 1 - T * F;
-  a[3] = denom > 0 ? a[2] * F * T / denom : 0.0;
-  return a;
+  std::array<FiberLobes, kFiberChannels> out{};
+  for (int c = 0; c < kFiberChannels; ++c) {
+    const double T = std::exp(-params_.sigma_a[std::size_t(c)] * path);
+    FiberLobes& a = out[std::size_t(c)];
+    a[0] = F;
+    a[1] = sqr(1 - F) * T;
+    a[2] = a[1] * T * F;
+    // Geometric series of the orders p >= 3; at grazing h = +-1 with no absorption T F = 1,
+    // where (1 - F)^2 = 0 already: the residual is 0.
+    const double denom = 1 - T * F;
+    a[3] = denom > 0 ? a[2] * F * T / denom : 0.0;
+  }
+  return out;
 }
 
 double FiberModel::azimuthal(int p, double theta_o, double h, double phi) const {
@@ -187,33 +207,46 @@ double FiberModel::azimuthal(int p, double theta_o, double h, double phi) const 
   return trimmed_logistic(wrap_phi(phi - center), s_);
 }
 
-double FiberModel::f_at_h(double theta_o, double phi_o, double theta_i, double phi_i, double h) const {
+FiberRgb FiberModel::f_at_h(double theta_o, double phi_o, double theta_i, double phi_i, double h) const {
   const auto a = attenuation(theta_o, h);
-  double sum = 0;
-  for (int p = 0; p < kFiberLobes; ++p)
-    sum += longitudinal(p, theta_o, theta_i) * a[static_cast<std::size_t>(p)] *
-           azimuthal(p, theta_o, h, phi_i - phi_o);
+  FiberRgb sum{};
+  for (int p = 0; p < kFiberLobes; ++p) {
+    const double mn = longitudinal(p, theta_o, theta_i) * azimuthal(p, theta_o, h, phi_i - phi_o);
+    for (std::size_t c = 0; c < kFiberChannels; ++c) sum[c] += mn * a[c][static_cast<std::size_t>(p)];
+  }
+  return sum;
+}
+
+FiberRgb FiberModel::f_rgb(double theta_o, double phi_o, double theta_i, double phi_i) const {
+  FiberRgb sum{};
+  for (std::size_t k = 0; k < gl_.nodes.size(); ++k) {
+    const FiberRgb v = f_at_h(theta_o, phi_o, theta_i, phi_i, gl_.nodes[k]);
+    for (std::size_t c = 0; c < kFiberChannels; ++c) sum[c] += gl_.weights[k] * v[c];
+  }
+  for (double& x : sum) x *= 0.5;
   return sum;
 }
 
 double FiberModel::f(double theta_o, double phi_o, double theta_i, double phi_i) const {
-  double sum = 0;
-  for (std::size_t k = 0; k < gl_.nodes.size(); ++k)
-    sum += gl_.weights[k] * f_at_h(theta_o, phi_o, theta_i, phi_i, gl_.nodes[k]);
-  return 0.5 * sum;
+  const FiberRgb v = f_rgb(theta_o, phi_o, theta_i, phi_i);
+  return rec709_luminance(v[0], v[1], v[2]);
 }
 
-std::array<std::vector<double>, kFiberLobes> FiberModel::azimuthal_factors(double theta_o,
-                                                                           const std::vector<double>& phi) const {
-  std::array<std::vector<double>, kFiberLobes> out;
-  for (auto& v : out) v.assign(phi.size(), 0.0);
+FiberModel::AzimuthalFactors FiberModel::azimuthal_factors(double theta_o, const std::vector<double>& phi) const {
+  AzimuthalFactors out;
+  for (auto& channel : out)
+    for (auto& v : channel) v.assign(phi.size(), 0.0);
+  std::array<double, 3> n{};
   for (std::size_t k = 0; k < gl_.nodes.size(); ++k) {
     const double h = gl_.nodes[k], w = 0.5 * gl_.weights[k];
     const auto a = attenuation(theta_o, h);
-    for (std::size_t j = 0; j < phi.size(); ++j)
-      for (int p = 0; p < 3; ++p)
-        out[static_cast<std::size_t>(p)][j] += w * a[static_cast<std::size_t>(p)] * azimuthal(p, theta_o, h, phi[j]);
-    for (std::size_t j = 0; j < phi.size(); ++j) out[3][j] += w * a[3] / (2 * kPi);
+    for (std::size_t j = 0; j < phi.size(); ++j) {
+      for (int p = 0; p < 3; ++p) n[std::size_t(p)] = w * azimuthal(p, theta_o, h, phi[j]);
+      for (std::size_t c = 0; c < kFiberChannels; ++c) {
+        for (std::size_t p = 0; p < 3; ++p) out[c][p][j] += a[c][p] * n[p];
+        out[c][3][j] += w * a[c][3] / (2 * kPi);
+      }
+    }
   }
   return out;
 }

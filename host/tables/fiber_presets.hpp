@@ -10,7 +10,10 @@ namespace bsdfmix {
 
 struct FiberPreset {
   std::string name;
-  FiberParams params;     // alpha in radians
+  FiberParams params;     // alpha in radians; sigma_a per channel (R, G, B)
+  FiberRgb color{};       // the colour of a mass of these fibers that sigma_a gives (linear
+                          // Rec. 709 RGB, Chiang et al. 2016's mapping, sigma_a_from_color);
+                          // 1, 1, 1 for lossless
   std::string rationale;  // one line: why these values
 };
 

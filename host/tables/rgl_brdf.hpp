@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "core/color.hpp"
+
 namespace bsdfmix {
 
 class RglFile;
@@ -109,7 +111,7 @@ class RglBrdf {
   RglWarp2D ndf_, sigma_, vndf_, luminance_, rgb_;
 };
 
-// Luminance of linear sRGB/Rec.709 primaries.
-inline double rgb_luminance(double r, double g, double b) { return 0.2126 * r + 0.7152 * g + 0.0722 * b; }
+// Luminance of linear sRGB/Rec.709 primaries (core/color.hpp).
+inline double rgb_luminance(double r, double g, double b) { return rec709_luminance(r, g, b); }
 
 }  // namespace bsdfmix
