@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -65,23 +66,30 @@ std::string mpirun(int ranks) {
   return "mpirun -n " + std::to_string(ranks) + " --oversubscribe --bind-to none --mca btl self,vader ";
 }
 
-// A small fiber table: two lobes per slice, moving with theta_o.
+// A small fiber table with an rgb channel: two lobes per slice of two colours, moving
+// with theta_o.
 std::string small_table() {
-  const std::string path = (temp_dir() / "small_table.h5").string();
+  const std::string path = (temp_dir() / "small_table_rgb.h5").string();
   if (fs::exists(path)) return path;
   const std::size_t n_to = 12, nt = 16, np = 32;
   TableMeta m = make_grid(Domain::Fiber, n_to, 1, nt, np, true);
   m.source = R"({"model": "mpi test"})";
-  std::vector<float> v;
-  for (std::size_t t = 0; t < n_to; ++t)
+  m.rgb = true;
+  TableWriter out(path, m);
+  for (std::size_t t = 0; t < n_to; ++t) {
+    std::vector<float> v, rgb;
     for (std::size_t i = 0; i < nt; ++i)
       for (std::size_t j = 0; j < np; ++j) {
         const double a = m.theta_i[i], b = m.phi_i[j], c = 0.1 * double(t);
         const double l1 = std::exp(-((a - c) * (a - c) + (b - 1.0) * (b - 1.0)) / 0.08);
         const double l2 = 0.5 * std::exp(-((a + c) * (a + c) + (b + 2.0) * (b + 2.0)) / 0.2);
         v.push_back(float(l1 + l2 + 0.01));
+        rgb.insert(rgb.end(), {float(0.9 * l1 + 0.2 * l2 + 0.01), float(0.4 * l1 + 0.6 * l2 + 0.01),
+                               float(0.1 * l1 + 0.9 * l2 + 0.01)});
       }
-  write_table(path, m, v);
+    out.write_slice(t, 0, v.data(), rgb.data());
+  }
+  out.commit();
   return path;
 }
 
@@ -115,6 +123,8 @@ void require_same_mixture(const std::string& a_path, const std::string& b_path) 
   CHECK(same_bits(a.l1_rel, b.l1_rel));
   CHECK(same_bits(a.loglik, b.loglik));
   CHECK(same_bits(a.scale, b.scale));
+  CHECK(a.has_rgb() == b.has_rgb());
+  CHECK(same_bits(a.rgb_scale, b.rgb_scale));
   CHECK(same_bits(a.theta_o, b.theta_o));
   CHECK(a.fit_settings == b.fit_settings);
 }
@@ -133,7 +143,9 @@ const std::string& reference_mixture() {
     const Run r = run("", "fit " + cfg + " -q");
     INFO(r.err);
     REQUIRE(r.code == 0);
-    return (temp_dir() / "one_mixture.h5").string();
+    const std::string out = (temp_dir() / "one_mixture.h5").string();
+    REQUIRE(read_mixture_file(out).has_rgb());  // the small table's colour is fitted too
+    return out;
   }();
   return path;
 }
@@ -158,7 +170,9 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
       mean.insert(mean.end(), {u(rng), u(rng)});
       cov.insert(cov.end(), {1.0 + std::abs(u(rng)), 0.1 * u(rng), 1.0 + std::abs(u(rng))});
     }
-    p.mixture.add_slice(u(rng), u(rng), std::abs(u(rng)), u(rng), s == 4 ? 0.0 : std::abs(u(rng)), w, mean, cov);
+    std::vector<double> rgb;
+    for (int j = 0; j < 3 * k; ++j) rgb.push_back(std::abs(u(rng)));
+    p.mixture.add_slice(u(rng), u(rng), std::abs(u(rng)), u(rng), s == 4 ? 0.0 : std::abs(u(rng)), w, mean, cov, &rgb);
     p.slice_index.push_back(100 + 3 * s);
   }
   p.mixture.loglik[2] = -0.0;  // the sign of zero survives too
@@ -168,6 +182,11 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
                                                             : "ok"});
   p.report[1].status = std::string("any bytes: ") + std::string(1, '\0') + "x,\n";
   p.report[2].loglik = -0.0;
+  for (std::size_t s = 0; s < 5; ++s) {
+    p.report[s].rgb_l1_rel = std::abs(u(rng));
+    p.report[s].rgb_negative = 0.1 * std::abs(u(rng));
+  }
+  p.report[3].rgb_l1_rel = p.report[3].rgb_negative = std::numeric_limits<double>::quiet_NaN();  // a row without colour
   p.search.push_back({103, 2, 0, -1, 0.2, 0.208, true});
   p.search.push_back({103, 3, 1, u(rng), u(rng), u(rng), false});
   p.slices_hash = "0123456789abcdef";
@@ -189,12 +208,14 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   CHECK(same_bits(q.mixture.weights, p.mixture.weights));
   CHECK(same_bits(q.mixture.means, p.mixture.means));
   CHECK(same_bits(q.mixture.covariances, p.mixture.covariances));
+  CHECK(q.mixture.has_rgb());
+  CHECK(same_bits(q.mixture.rgb_scale, p.mixture.rgb_scale));
   REQUIRE(q.report.size() == p.report.size());
   for (std::size_t i = 0; i < p.report.size(); ++i) {
     const ReportRow &a = q.report[i], &b = p.report[i];
     CHECK(a.slice == b.slice);
-    CHECK(same_bits(std::vector<double>{a.theta_o, a.phi_o, a.loglik, a.l1_rel, a.seconds},
-                    std::vector<double>{b.theta_o, b.phi_o, b.loglik, b.l1_rel, b.seconds}));
+    CHECK(same_bits(std::vector<double>{a.theta_o, a.phi_o, a.loglik, a.l1_rel, a.seconds, a.rgb_l1_rel, a.rgb_negative},
+                    std::vector<double>{b.theta_o, b.phi_o, b.loglik, b.l1_rel, b.seconds, b.rgb_l1_rel, b.rgb_negative}));
     CHECK(a.k == b.k);
     CHECK(a.iterations == b.iterations);
     CHECK(a.device == b.device);
@@ -202,6 +223,7 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
     CHECK(a.failed() == b.failed());
   }
   CHECK(q.report[3].failed());
+  CHECK(std::isnan(q.report[3].rgb_l1_rel));
   CHECK(std::signbit(q.report[2].loglik));
   REQUIRE(q.search.size() == p.search.size());
   for (std::size_t i = 0; i < p.search.size(); ++i) {
@@ -215,6 +237,15 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   CHECK(q.slices_hash == p.slices_hash);
   CHECK(std::signbit(q.mixture.loglik[2]));
   CHECK(scale::encode_part(q) == bytes);
+  // A part of a table without rgb comes back without it.
+  BatchPart grey = p;
+  grey.mixture.rgb_scale.clear();
+  const std::vector<std::uint8_t> grey_bytes = scale::encode_part(grey);
+  CHECK_FALSE(scale::decode_part(grey_bytes.data(), grey_bytes.size()).mixture.has_rgb());
+  BatchPart torn = p;  // rgb_scale of the wrong length is refused
+  torn.mixture.rgb_scale.pop_back();
+  const std::vector<std::uint8_t> torn_bytes = scale::encode_part(torn);
+  CHECK_THROWS_AS(scale::decode_part(torn_bytes.data(), torn_bytes.size()), InputError);
 
   // Truncated or padded bytes are refused, never half-read.
   for (std::size_t n : {std::size_t(0), std::size_t(7), bytes.size() / 2, bytes.size() - 1})

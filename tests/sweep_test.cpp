@@ -50,30 +50,37 @@ struct Lobe {
 };
 
 // A fiber table whose slice t is f such that the integrand weights are the mixture
-// of `lobes(t)` (f = density / cos(theta)).
+// of `lobes(t)` (f = density / cos(theta)); with `colour`, an rgb channel too: lobe k
+// tinted by the k-th of a few colours.
 template <class Lobes>
-std::string mixture_table(const std::string& name, std::size_t n_theta_o, std::size_t nt, std::size_t np, Lobes lobes) {
+std::string mixture_table(const std::string& name, std::size_t n_theta_o, std::size_t nt, std::size_t np, Lobes lobes,
+                          bool colour = false) {
+  static const double tints[3][3] = {{0.9, 0.4, 0.2}, {0.3, 0.8, 0.5}, {0.2, 0.3, 0.9}};
   TableMeta m = make_grid(Domain::Fiber, n_theta_o, 1, nt, np, true);
   m.source = R"({"model": "test mixture"})";
-  std::vector<float> v;
+  m.rgb = colour;
+  const std::string path = (temp_dir() / name).string();
+  TableWriter out(path, m);
   for (std::size_t t = 0; t < n_theta_o; ++t) {
-    std::vector<double> w, mean, cov;
+    std::vector<mix::SliceMixture> parts;
+    std::vector<double> wk;
     for (const Lobe& l : lobes(t)) {
-      w.push_back(l.w);
-      mean.insert(mean.end(), {l.mt, l.mp});
-      cov.insert(cov.end(), {l.stt, l.stp, l.spp});
+      parts.push_back(make_slice_mixture({1.0}, {l.mt, l.mp}, {l.stt, l.stp, l.spp}));
+      wk.push_back(l.w);
     }
-    if (w.empty()) {  // an all-zero slice
-      v.insert(v.end(), nt * np, 0.0f);
-      continue;
-    }
-    const mix::SliceMixture mixture = make_slice_mixture(w, mean, cov);
+    double wsum = 0;
+    for (double x : wk) wsum += x;
+    std::vector<float> v(nt * np, 0.0f), rgb(3 * nt * np, 0.0f);  // no lobes: an all-zero slice
     for (std::size_t i = 0; i < nt; ++i)
       for (std::size_t j = 0; j < np; ++j)
-        v.push_back(float(mixture.pdf_param(m.theta_i[i], m.phi_i[j]) / std::cos(m.theta_i[i])));
+        for (std::size_t k = 0; k < parts.size(); ++k) {
+          const double d = wk[k] / wsum * parts[k].pdf_param(m.theta_i[i], m.phi_i[j]) / std::cos(m.theta_i[i]);
+          v[i * np + j] += float(d);
+          for (int c = 0; c < 3; ++c) rgb[3 * (i * np + j) + std::size_t(c)] += float(d * tints[k % 3][c]);
+        }
+    out.write_slice(t, 0, v.data(), colour ? rgb.data() : nullptr);
   }
-  const std::string path = (temp_dir() / name).string();
-  write_table(path, m, v);
+  out.commit();
   return path;
 }
 
@@ -232,8 +239,11 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
     }
     // The CSVs follow their contracts.
     const std::string report = slurp(f.report), search = slurp(f.search_report);
-    CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n", 0) == 0);
-    CHECK(std::count(report.begin(), report.end(), ',') == 5 * 9);  // 10 fields a row, no comma inside one
+    CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status,rgb_l1_rel,rgb_negative\n",
+                       0) == 0);
+    CHECK(std::count(report.begin(), report.end(), ',') == 5 * 11);  // 12 fields a row, no comma inside one
+    CHECK(std::count(report.begin(), report.end(), '\n') == std::count(report.begin(), report.end(), ',') / 11);
+    CHECK_THAT(report, Catch::Contains(",ok,,\n"));  // no rgb: the colour columns are empty
     CHECK(search.rfind("slice,k,restart,loglik,l1_rel,score,chosen\n", 0) == 0);
     CHECK(std::count(report.begin(), report.end(), '\n') == 5);
     std::size_t rows = 0;
@@ -292,8 +302,8 @@ TEST_CASE("zero slices are stored with scale 0 and never NaN", "[fit]") {
   CHECK(std::isfinite(m.loglik[0]));
   CHECK(m.scale[1] > 0);
   const std::string report = slurp(f.report);
-  CHECK_THAT(report, Catch::Contains(",zero: every cell is zero; stored with scale 0\n"));
-  CHECK_THAT(report, Catch::Contains(",ok\n"));
+  CHECK_THAT(report, Catch::Contains(",zero: every cell is zero; stored with scale 0,,\n"));
+  CHECK_THAT(report, Catch::Contains(",ok,,\n"));
 }
 
 TEST_CASE("a slice with fewer non-zero cells than K gets one component per cell", "[fit]") {
@@ -315,15 +325,17 @@ TEST_CASE("a slice with fewer non-zero cells than K gets one component per cell"
   // Three components at the covariance floor, one on each cell: each holds most of its
   // mass in its cell (its center density times the cell area would overstate it 2.5x).
   CHECK(m.l1_rel[0] < 0.4);
-  CHECK_THAT(slurp(f.report), Catch::Contains(",reduced: K lowered from 8 to 3; the number of non-zero cells\n"));
+  CHECK_THAT(slurp(f.report), Catch::Contains(",reduced: K lowered from 8 to 3; the number of non-zero cells,,\n"));
 }
 
 TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   Progress::set_enabled(false);
-  const std::string table = mixture_table("resume.h5", 12, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
+  for (const bool colour : {false, true}) {
+  INFO((colour ? "a table with rgb" : "a table without rgb"));
+  const std::string table = mixture_table(colour ? "resume_rgb.h5" : "resume.h5", 12, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
     return {{0.6, -0.4 + 0.05 * double(t), -1.0, 0.03, 0.0, 0.06}, {0.4, 0.5, 1.5 - 0.1 * double(t), 0.02, 0.005, 0.05}};
-  });
-  FitSection whole = fit_settings("whole");
+  }, colour);
+  FitSection whole = fit_settings(colour ? "whole_rgb" : "whole");
   whole.batch = 3;
   whole.k_max = 4;
   run_sweep(table, whole, "");
@@ -332,9 +344,9 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   // The same sweep stopped after two batches, then rerun: it resumes from the
   // committed batches and ends with the same file.
   FitSection part = whole;
-  part.output = (temp_dir() / "part_mixture.h5").string();
-  part.report = (temp_dir() / "part_fit.csv").string();
-  part.search_report = (temp_dir() / "part_search.csv").string();
+  part.output = (temp_dir() / (colour ? "part_rgb_mixture.h5" : "part_mixture.h5")).string();
+  part.report = (temp_dir() / (colour ? "part_rgb_fit.csv" : "part_fit.csv")).string();
+  part.search_report = (temp_dir() / (colour ? "part_rgb_search.csv" : "part_search.csv")).string();
   fs::remove_all(part.output + ".parts");
   fs::remove(part.output);
   const SweepSummary first = run_sweep(table, part, "", 2);
@@ -350,9 +362,14 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   CHECK(a.covariances == b.covariances);
   CHECK(a.scale == b.scale);
   CHECK(a.l1_rel == b.l1_rel);
+  CHECK(a.rgb_scale == b.rgb_scale);
+  CHECK(a.has_rgb() == colour);
   CHECK(slurp(whole.search_report) == slurp(part.search_report));
-  // The report rows come back from the part files as they were fitted (but the time).
+  // The report rows come back from the part files as they were fitted (but the time), the
+  // colour columns with them.
   CHECK(without_column(slurp(whole.report), 7) == without_column(slurp(part.report), 7));
+  if (colour) CHECK_THAT(slurp(part.report), !Catch::Contains(",ok,,\n"));
+  }
 }
 
 namespace {
@@ -364,14 +381,18 @@ class MemorySlices final : public SliceSource {
     const TableReader reader(table);
     meta_ = reader.meta();
     const TableSlices slices(reader);
-    for (const SliceRef& r : plan_slices(meta_, {}, {})) weights_.push_back(slices.weights(r));
+    for (const SliceRef& r : plan_slices(meta_, {}, {})) {
+      weights_.push_back(slices.weights(r));
+      if (meta_.rgb) rgb_.push_back(slices.rgb_weights(r));
+    }
   }
   const TableMeta& meta() const override { return meta_; }
   std::vector<double> weights(const SliceRef& ref) const override { return weights_.at(ref.index); }
+  std::vector<double> rgb_weights(const SliceRef& ref) const override { return rgb_.at(ref.index); }
 
  private:
   TableMeta meta_;
-  std::vector<std::vector<double>> weights_;
+  std::vector<std::vector<double>> weights_, rgb_;
 };
 
 }  // namespace
@@ -381,7 +402,7 @@ TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") 
   const std::string table = mixture_table("in_memory.h5", 7, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
     if (t == 4) return {};  // an all-zero slice
     return {{0.7, -0.3 + 0.08 * double(t), 0.5, 0.02, 0.0, 0.05}, {0.3, 0.6, -2.0 + 0.3 * double(t), 0.04, 0.01, 0.2}};
-  });
+  }, true);
   for (const SearchStrategy search : {SearchStrategy::Smem, SearchStrategy::Restarts}) {
     INFO("search: " << search_name(search));
     FitSection f = fit_settings(std::string("in_memory_") + search_name(search));
@@ -403,6 +424,8 @@ TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") 
     CHECK(m.scale == file.scale);
     CHECK(m.loglik == file.loglik);
     CHECK(m.l1_rel == file.l1_rel);
+    CHECK(m.rgb_scale == file.rgb_scale);
+    CHECK(m.has_rgb());
     CHECK(m.theta_o == file.theta_o);
     CHECK(m.table_theta_o == file.table_theta_o);
     CHECK(m.fit_settings == file.fit_settings);
@@ -414,11 +437,12 @@ TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") 
     CHECK_FALSE(r.report[4].failed());
 
     // Its rows are the file sweep's CSV rows.
-    std::string report = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,device,status\n";
+    std::string report = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,device,status,rgb_l1_rel,rgb_negative\n";
     for (const ReportRow& row : r.report)
       report += std::to_string(row.slice) + "," + g9(row.theta_o) + "," + g9(row.phi_o) + "," +
                 std::to_string(row.k) + "," + std::to_string(row.iterations) + "," + g9(row.loglik) + "," +
-                g9(row.l1_rel) + "," + row.device + "," + row.status + "\n";
+                g9(row.l1_rel) + "," + row.device + "," + row.status + "," + g9(row.rgb_l1_rel) + "," +
+                g9(row.rgb_negative) + "\n";
     CHECK(without_column(report, 99) == without_column(slurp(f.report), 7));
     std::string search_csv = "slice,k,restart,loglik,l1_rel,score,chosen\n";
     for (const SearchRow& row : r.search)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "device/device.hpp"
+#include "fit/amplitudes.hpp"
 #include "fit/gmm.hpp"
 #include "fit/l1_refine.hpp"
 #include "fit/slices.hpp"
@@ -84,6 +85,17 @@ class EmEngine {
                                  const L1Objective& objective) {
     return l1_values(l1_prepare(set), queries, objective);
   }
+
+  // The normal-equation sums of the amplitude fit (fit/amplitudes.hpp; kernels/em.cl
+  // amp_basis and amp_sums) of each query, batched by K bucket over the work queues. The
+  // channels are checked and made ready once (amp_prepare), evaluated many times.
+  struct AmpSlices {
+    SliceGrid grid;
+    int channels = 1;
+    std::vector<std::vector<float>> w;  // per slice, kMaxChannels rows of the padded stride
+  };
+  static AmpSlices amp_prepare(const ChannelSet& set);
+  std::vector<AmplitudeSums> amplitude_sums(const AmpSlices& slices, const std::vector<AmplitudeQuery>& queries);
 
   // Upper bound on the point-component updates of one EM iteration of a batch
   // (sum over its problems of padded cells x K bucket); at least one problem per batch.

@@ -46,4 +46,11 @@ double gmm_density(const Gmm& gmm, double theta, double phi) {
   return std::exp(gmm_log_density(gmm, theta, phi));
 }
 
+bool sub_cell(double s_tt, double s_tp, double s_pp, double dtheta, double dphi) {
+  const double wide = 0.5 * std::min(dtheta, dphi);
+  const double half_tr = 0.5 * (s_tt + s_pp);
+  const double lmin = half_tr - std::sqrt(0.25 * (s_tt - s_pp) * (s_tt - s_pp) + s_tp * s_tp);
+  return !(lmin >= wide * wide);
+}
+
 }  // namespace bsdfmix

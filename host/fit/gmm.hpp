@@ -19,4 +19,12 @@ double gmm_density(const Gmm& gmm, double theta, double phi);
 // log of gmm_density, computed without underflow far from every component.
 double gmm_log_density(const Gmm& gmm, double theta, double phi);
 
+// Whether a component of covariance (s_tt, s_tp, s_pp) is narrower than half a cell of a
+// dtheta x dphi grid (its smallest eigenvalue below (min(dtheta, dphi) / 2)^2): the table
+// cannot resolve it, so its mass in a cell is its mean density over 3 x 3 points of the
+// cell (offsets -1/3, 0, 1/3 of a step) times the cell area, where a wider one's is its
+// density at the cell center times the area. The stand-in's cell masses follow this rule
+// everywhere: the search's L1 error, the amplitude fit, the report (docs/formats.md).
+bool sub_cell(double s_tt, double s_tp, double s_pp, double dtheta, double dphi);
+
 }  // namespace bsdfmix

@@ -13,22 +13,28 @@ namespace bsdfmix {
 
 void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
                             const std::vector<double>& w, const std::vector<double>& mean,
-                            const std::vector<double>& cov) {
+                            const std::vector<double>& cov, const std::vector<double>* rgb) {
   const int kk = static_cast<int>(w.size());
-  if (mean.size() != 2 * w.size() || cov.size() != 3 * w.size())
+  if (mean.size() != 2 * w.size() || cov.size() != 3 * w.size() || (rgb && rgb->size() != 3 * w.size()))
     throw Error("MixtureFile::add_slice: inconsistent component arrays");
+  if (slices() > 0 && (rgb != nullptr) != has_rgb())
+    throw Error("MixtureFile::add_slice: every slice has rgb_scale, or none");
   if (kk > kmax) {  // widen every stored slice
     const std::size_t s = slices();
     std::vector<float> nw(s * kk, 0.f), nm(s * kk * 2, 0.f), nc(s * kk * 3, 0.f);
+    std::vector<double> nr(has_rgb() ? s * kk * 3 : 0, 0.0);
     for (std::size_t i = 0; i < s; ++i)
       for (int j = 0; j < kmax; ++j) {
         nw[i * kk + j] = weights[i * kmax + j];
         for (int d = 0; d < 2; ++d) nm[(i * kk + j) * 2 + d] = means[(i * kmax + j) * 2 + d];
         for (int d = 0; d < 3; ++d) nc[(i * kk + j) * 3 + d] = covariances[(i * kmax + j) * 3 + d];
+        if (has_rgb())
+          for (int d = 0; d < 3; ++d) nr[(i * kk + j) * 3 + d] = rgb_scale[(i * kmax + j) * 3 + d];
       }
     weights.swap(nw);
     means.swap(nm);
     covariances.swap(nc);
+    rgb_scale.swap(nr);
     kmax = kk;
   }
   theta_o.push_back(theta_o_);
@@ -42,6 +48,8 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
     weights.push_back(used ? float(w[j]) : 0.f);
     for (int d = 0; d < 2; ++d) means.push_back(used ? float(mean[2 * j + d]) : 0.f);
     for (int d = 0; d < 3; ++d) covariances.push_back(used ? float(cov[3 * j + d]) : 0.f);
+    if (rgb)
+      for (int d = 0; d < 3; ++d) rgb_scale.push_back(used ? (*rgb)[3 * j + d] : 0.0);
   }
 }
 
@@ -59,12 +67,18 @@ void MixtureFile::slice_params(std::size_t s, std::vector<double>& w, std::vecto
   }
 }
 
+std::vector<double> MixtureFile::slice_rgb(std::size_t s) const {
+  if (!has_rgb()) return {};
+  const std::size_t K = static_cast<std::size_t>(kmax);
+  return std::vector<double>(rgb_scale.begin() + long(s * K * 3), rgb_scale.begin() + long((s * K + k[s]) * 3));
+}
+
 std::uint64_t MixtureFile::payload_bytes() const {
-  // Exactly what write_mixture_group stores: the padded [S, kmax] float arrays, the
-  // per-slice doubles and int32 K, and the table's omega_o axes.
+  // Exactly what write_mixture_group stores: the padded [S, kmax] float arrays (and the
+  // double rgb_scale), the per-slice doubles and int32 K, and the table's omega_o axes.
   const std::uint64_t S = slices(), K = std::uint64_t(std::max(kmax, 0));
-  return S * K * 6 * sizeof(float) + S * 5 * sizeof(double) + S * sizeof(std::int32_t) +
-         (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
+  return S * K * 6 * sizeof(float) + (has_rgb() ? S * K * 3 * sizeof(double) : 0) + S * 5 * sizeof(double) +
+         S * sizeof(std::int32_t) + (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
 }
 
 void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& path) {
@@ -78,6 +92,7 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
   h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
   h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
+  if (m.has_rgb()) h5::write_doubles(id, "rgb_scale", {S, K, 3}, m.rgb_scale.data(), path);
   h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
   h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
   h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
@@ -146,6 +161,13 @@ MixtureFile read_mixture_file(const std::string& path) {
   m.means = h5::read_floats(id, "means", where);
   m.covariances = h5::read_floats(id, "covariances", where);
   const std::size_t K = static_cast<std::size_t>(m.kmax);
+  if (h5::exists(id, "rgb_scale")) {  // optional: files written before colour have none
+    h5::Handle d = h5::open_dataset(id, "rgb_scale", where);
+    if (h5::shape(d.get()) != std::vector<hsize_t>{S, hsize_t(K), 3})
+      throw InputError(where + "/rgb_scale: expected shape [S, Kmax, 3] = [" + std::to_string(S) + ", " +
+                       std::to_string(K) + ", 3]");
+    m.rgb_scale = h5::read_doubles(id, "rgb_scale", where);
+  }
   if (h5::exists(id, "table_theta_o")) {
     m.table_theta_o = h5::read_doubles(id, "table_theta_o", where);
     m.table_phi_o = h5::read_doubles(id, "table_phi_o", where);
@@ -167,10 +189,49 @@ MixtureFile read_mixture_file(const std::string& path) {
       if (!(c[0] > 0) || !(c[2] > 0) || !(double(c[0]) * c[2] - double(c[1]) * c[1] > 0))
         throw InputError(at + " component " + std::to_string(j) + ": covariance is not positive definite");
       wsum += w;
+      if (m.has_rgb())
+        for (int ch = 0; ch < 3; ++ch) {
+          const double a = m.rgb_scale[(s * K + j) * 3 + ch];
+          if (!std::isfinite(a) || a < 0)
+            throw InputError(at + " component " + std::to_string(j) + ": rgb_scale is not a finite non-negative number");
+        }
     }
     if (std::abs(wsum - 1.0) > 1e-3) throw InputError(at + ": weights sum to " + std::to_string(wsum) + ", expected 1");
   }
   return m;
+}
+
+namespace {
+
+// Slice s as stored, not yet prepared.
+mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
+  const std::size_t K = static_cast<std::size_t>(m.kmax);
+  mix::SliceMixture sm;
+  sm.theta_o = m.theta_o[s];
+  sm.phi_o = m.phi_o[s];
+  sm.scale = m.scale[s];
+  sm.has_rgb = m.has_rgb();
+  for (int j = 0; j < m.k[s]; ++j) {
+    mix::Gaussian g;
+    g.weight = m.weights[s * K + j];
+    g.mu_t = m.means[(s * K + j) * 2];
+    g.mu_p = m.means[(s * K + j) * 2 + 1];
+    g.s_tt = m.covariances[(s * K + j) * 3];
+    g.s_tp = m.covariances[(s * K + j) * 3 + 1];
+    g.s_pp = m.covariances[(s * K + j) * 3 + 2];
+    if (sm.has_rgb)
+      for (int c = 0; c < 3; ++c) g.rgb[c] = m.rgb_scale[(s * K + j) * 3 + c];
+    sm.components.push_back(g);
+  }
+  return sm;
+}
+
+}  // namespace
+
+mix::SliceMixture slice_mixture(const MixtureFile& m, std::size_t s) {
+  mix::SliceMixture sm = stored_slice(m, s);
+  sm.prepare();
+  return sm;
 }
 
 mix::MixtureSet to_mixture_set(const MixtureFile& m) {
@@ -179,24 +240,7 @@ mix::MixtureSet to_mixture_set(const MixtureFile& m) {
   set.azimuthal = m.azimuthal;
   set.grid_theta_o = m.table_theta_o;
   set.grid_phi_o = m.table_phi_o;
-  const std::size_t K = static_cast<std::size_t>(m.kmax);
-  for (std::size_t s = 0; s < m.slices(); ++s) {
-    mix::SliceMixture sm;
-    sm.theta_o = m.theta_o[s];
-    sm.phi_o = m.phi_o[s];
-    sm.scale = m.scale[s];
-    for (int j = 0; j < m.k[s]; ++j) {
-      mix::Gaussian g;
-      g.weight = m.weights[s * K + j];
-      g.mu_t = m.means[(s * K + j) * 2];
-      g.mu_p = m.means[(s * K + j) * 2 + 1];
-      g.s_tt = m.covariances[(s * K + j) * 3];
-      g.s_tp = m.covariances[(s * K + j) * 3 + 1];
-      g.s_pp = m.covariances[(s * K + j) * 3 + 2];
-      sm.components.push_back(g);
-    }
-    set.slices.push_back(std::move(sm));
-  }
+  for (std::size_t s = 0; s < m.slices(); ++s) set.slices.push_back(stored_slice(m, s));
   set.prepare();
   return set;
 }

@@ -27,13 +27,21 @@ struct MixtureFile {
   std::vector<float> weights;      // [S, kmax]
   std::vector<float> means;        // [S, kmax, 2]
   std::vector<float> covariances;  // [S, kmax, 3]
+  // [S, kmax, 3]: per component the integral of each channel (R, G, B) of the integrand,
+  // as `scale` is the luminance's (docs/formats.md, "Mixture file"); empty: no colour.
+  std::vector<double> rgb_scale;
 
   std::size_t slices() const { return theta_o.size(); }
-  // Appends one slice; pads or widens to kmax as needed.
+  bool has_rgb() const { return !rgb_scale.empty(); }
+  // Appends one slice; pads or widens to kmax as needed. `rgb` (3K, [component][channel])
+  // gives its rgb_scale: every slice of a file has it, or none.
   void add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
-                 const std::vector<double>& w, const std::vector<double>& mean, const std::vector<double>& cov);
+                 const std::vector<double>& w, const std::vector<double>& mean, const std::vector<double>& cov,
+                 const std::vector<double>* rgb = nullptr);
   // The k used components of slice s as parameter arrays (K, 2K, 3K).
   void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
+  // The k used components' rgb_scale of slice s (3K, [component][channel]); empty without colour.
+  std::vector<double> slice_rgb(std::size_t s) const;
   // Bytes of the datasets as the file stores them (H5Dget_storage_size of each),
   // padding to kmax included: the measure of compression.
   std::uint64_t payload_bytes() const;
@@ -47,6 +55,10 @@ void write_mixture_file(const std::string& path, const MixtureFile& m);
 
 // Reads and validates a mixture file; throws InputError naming file, dataset and slice.
 MixtureFile read_mixture_file(const std::string& path);
+
+// Slice s as the renderer-facing header holds it (prepared): the stored float32 parameters,
+// the scale and, with colour, each component's rgb amplitudes.
+mix::SliceMixture slice_mixture(const MixtureFile& m, std::size_t s);
 
 // The renderer-facing view of the file (prepared: ready to evaluate and sample).
 mix::MixtureSet to_mixture_set(const MixtureFile& m);

@@ -14,10 +14,11 @@ namespace bsdfmix::scale {
 namespace {
 
 constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
-// The fewest bytes a report row (7 numbers, two string lengths) and a search row take.
-constexpr std::size_t kReportRowBytes = 8 + 8 + 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8;
+// The fewest bytes a report row (9 numbers, two string lengths) and a search row take.
+constexpr std::size_t kReportRowBytes = 8 + 8 + 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8 + 8 + 8;
 constexpr std::size_t kSearchRowBytes = 8 + 4 + 4 + 8 + 8 + 8 + 1;
-constexpr std::uint32_t kVersion = 2;  // 2: the report and search rows as fields, not CSV text
+// 2: the report and search rows as fields, not CSV text; 3: rgb_scale and the rows' RGB errors
+constexpr std::uint32_t kVersion = 3;
 
 class Writer {
  public:
@@ -109,6 +110,7 @@ std::vector<std::uint8_t> encode_part(const BatchPart& p) {
   w.vec(m.weights);
   w.vec(m.means);
   w.vec(m.covariances);
+  w.vec(m.rgb_scale);
   w.pod(std::uint64_t(p.report.size()));
   for (const ReportRow& r : p.report) {
     w.pod(std::uint64_t(r.slice));
@@ -121,6 +123,8 @@ std::vector<std::uint8_t> encode_part(const BatchPart& p) {
     w.pod(r.seconds);
     w.str(r.device);
     w.str(r.status);
+    w.pod(r.rgb_l1_rel);
+    w.pod(r.rgb_negative);
   }
   w.pod(std::uint64_t(p.search.size()));
   for (const SearchRow& r : p.search) {
@@ -158,6 +162,7 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   m.weights = r.vec<float>();
   m.means = r.vec<float>();
   m.covariances = r.vec<float>();
+  m.rgb_scale = r.vec<double>();
   p.report.resize(r.count(kReportRowBytes));
   for (ReportRow& row : p.report) {
     row.slice = std::size_t(r.pod<std::uint64_t>());
@@ -170,6 +175,8 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
     row.seconds = r.pod<double>();
     row.device = r.str();
     row.status = r.str();
+    row.rgb_l1_rel = r.pod<double>();
+    row.rgb_negative = r.pod<double>();
   }
   p.search.resize(r.count(kSearchRowBytes));
   for (SearchRow& row : p.search) {
@@ -187,7 +194,8 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   const std::size_t S = m.slices(), K = std::size_t(std::max(m.kmax, 0));
   if (!r.done() || p.slice_index.size() != S || m.phi_o.size() != S || m.scale.size() != S ||
       m.loglik.size() != S || m.l1_rel.size() != S || m.k.size() != S || m.weights.size() != S * K ||
-      m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K || p.report.size() != S)
+      m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K ||
+      (!m.rgb_scale.empty() && m.rgb_scale.size() != 3 * S * K) || p.report.size() != S)
     Reader::fail();
   return p;
 }

@@ -39,6 +39,7 @@ Fitted evaluate(const EmResult& r, const WeightedSlice& full);
 struct SliceWork {
   SliceRef ref;
   WeightedSlice full, pooled;  // pooled: the search's coarser slice (search_pool)
+  std::vector<double> rgb;     // with colour: the R, G, B integrand weights (SliceSource::rgb_weights)
   double total = 0;
 };
 

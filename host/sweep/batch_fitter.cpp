@@ -14,6 +14,7 @@
 #include "fit/scheduler.hpp"
 #include "sweep/batch.hpp"
 #include "sweep/criterion.hpp"
+#include "sweep/stand_in.hpp"
 #include "sweep/sweep.hpp"
 
 namespace bsdfmix {
@@ -219,6 +220,10 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
     w.full.phi = meta.phi_i;
     w.full.w = source_.weights(ref);
     hash_weights(content, w.full.w);
+    if (meta.rgb) {
+      w.rgb = source_.rgb_weights(ref);
+      hash_weights(content, w.rgb);
+    }
     w.total = w.full.total();
     w.pooled = pool_slice(w.full, std::size_t(fit_.search_pool));
     b.work.push_back(std::move(w));
@@ -234,25 +239,54 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
   b.search_rows.assign(n, {});
 }
 
-void BatchFitter::finish(const Batch& b, double seconds, BatchPart& part) const {
+void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
   const TableMeta& meta = source_.meta();
   part.mixture.domain = meta.domain;
   part.mixture.azimuthal = meta.azimuthal;
+  std::vector<Fitted> kept(b.size());
+  std::vector<StandInSlice> stand;
   for (std::size_t s = 0; s < b.size(); ++s) {
     const SliceWork& w = b.work[s];
-    Fitted f = b.best[s];
-    const std::string st = status(b, s);
+    Fitted& f = kept[s] = b.best[s];
     if (!f.ok) {  // zero slice or failed fit: one moment-matched Gaussian
       f.gmm = moment_gaussian(b.full_set.grid, w.full.w);
-      f.l1 = w.total > 0 ? l1_rel_error(w.full, make_slice_mixture(f.gmm.weight, f.gmm.mean, f.gmm.cov)) : 0.0;
       f.loglik = 0;
       f.iterations = 0;
     }
+    stand.push_back({&f.gmm, &w.full.w, meta.rgb ? &w.rgb : nullptr});
+  }
+  // The stand-ins on the kept Gaussians: the luminance's amplitudes become scale and weights.
+  const std::vector<StandIn> stand_ins = fit_stand_ins(b.engine, b.full_set.grid, stand);
+  for (std::size_t s = 0; s < b.size(); ++s) {
+    Fitted& f = kept[s];
+    f.gmm.weight = stand_ins[s].weight;
+    const SliceWork& w = b.work[s];
     const double theta_o = meta.theta_o[w.ref.t_o], phi_o = meta.phi_o[w.ref.p_o];
     part.slice_index.push_back(w.ref.index);
-    part.mixture.add_slice(theta_o, phi_o, w.total, f.loglik, f.l1, f.gmm.weight, f.gmm.mean, f.gmm.cov);
-    part.report.push_back({w.ref.index, theta_o, phi_o, f.gmm.k(), f.iterations, f.loglik, f.l1,
-                           seconds / double(b.size()), devices_, st});
+    part.mixture.add_slice(theta_o, phi_o, stand_ins[s].scale, f.loglik, 0.0, f.gmm.weight, f.gmm.mean, f.gmm.cov,
+                           meta.rgb ? &stand_ins[s].rgb : nullptr);
+  }
+  // Their errors as the header evaluates the slices stored (float32 parameters), and the
+  // log-likelihood of the weights stored.
+  std::vector<StandInError> errors(b.size());
+  const std::size_t first = part.mixture.slices() - b.size();
+  const std::size_t threads = std::min<std::size_t>(b.size(), std::max(1u, std::thread::hardware_concurrency()));
+  run_on_workers(b.size(), threads, [&](std::size_t, std::size_t s) {
+    errors[s] = stand_in_error(b.work[s].full, b.work[s].rgb, slice_mixture(part.mixture, first + s));
+    if (kept[s].ok)
+      kept[s].loglik = em_detail::weighted_loglik(b.full_set.grid, em_detail::prepare_slice(b.full_set, s).w, kept[s].gmm);
+  });
+  for (std::size_t s = 0; s < b.size(); ++s) {
+    const SliceWork& w = b.work[s];
+    const Fitted& f = kept[s];
+    const std::string st = status(b, s);
+    part.mixture.l1_rel[first + s] = errors[s].l1_rel;
+    part.mixture.loglik[first + s] = f.loglik;
+    ReportRow row{w.ref.index, part.mixture.theta_o[first + s], part.mixture.phi_o[first + s], f.gmm.k(), f.iterations,
+                  f.loglik, errors[s].l1_rel, seconds / double(b.size()), devices_, st};
+    row.rgb_l1_rel = errors[s].rgb_l1_rel;
+    row.rgb_negative = errors[s].rgb_negative;
+    part.report.push_back(row);
     part.search.insert(part.search.end(), b.search_rows[s].begin(), b.search_rows[s].end());
     if (st != "ok") log_line("slice " + std::to_string(w.ref.index) + ": " + st);
   }
@@ -277,6 +311,15 @@ std::string joined_names(const std::vector<Device>& devices) {
 
 void hash_weights(Hash64& content, const std::vector<double>& w) { content.update(w.data(), w.size() * sizeof(double)); }
 
+std::string slices_hash(const SliceSource& source, const std::vector<const SliceRef*>& refs) {
+  Hash64 content;
+  for (const SliceRef* ref : refs) {
+    hash_weights(content, source.weights(*ref));
+    if (source.meta().rgb) hash_weights(content, source.rgb_weights(*ref));
+  }
+  return content.hex();
+}
+
 SweepResult empty_result(const TableMeta& meta, const FitSection& fit) {
   SweepResult r;
   r.mixture.domain = meta.domain;
@@ -293,7 +336,9 @@ void append_part(SweepResult& result, const BatchPart& part) {
   for (std::size_t s = 0; s < m.slices(); ++s) {
     std::vector<double> w, mean, cov;
     m.slice_params(s, w, mean, cov);
-    result.mixture.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov);
+    const std::vector<double> rgb = m.slice_rgb(s);
+    result.mixture.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov,
+                             m.has_rgb() ? &rgb : nullptr);
   }
   result.slice_index.insert(result.slice_index.end(), part.slice_index.begin(), part.slice_index.end());
   result.report.insert(result.report.end(), part.report.begin(), part.report.end());

@@ -33,7 +33,7 @@ class BatchFitter {
 
  private:
   void load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& part) const;
-  void finish(const Batch& b, double seconds, BatchPart& part) const;
+  void finish(Batch& b, double seconds, BatchPart& part) const;
 
   const SliceSource& source_;
   const FitSection& fit_;
@@ -53,8 +53,10 @@ std::vector<std::vector<SliceRef>> split_batches(const std::vector<SliceRef>& pl
 std::string joined_names(const std::vector<Device>& devices);
 
 // Adds one slice's integrand weights to a content hash (BatchPart::slices_hash is
-// that of its slices, in order).
+// that of its slices, in order, each with its rgb weights after when the source has them).
 void hash_weights(Hash64& content, const std::vector<double>& w);
+// That hash of the slices `refs` of `source`.
+std::string slices_hash(const SliceSource& source, const std::vector<const SliceRef*>& refs);
 
 // A sweep result of `meta` under `fit` with no slices yet: the mixture's header set.
 SweepResult empty_result(const TableMeta& meta, const FitSection& fit);

@@ -27,6 +27,7 @@ struct ReportRecord {
   double loglik, l1_rel, seconds;
   const char* device;
   const char* status;
+  double rgb_l1_rel, rgb_negative;
 };
 struct SearchRecord {
   std::uint64_t slice;
@@ -54,6 +55,8 @@ h5::Handle report_type(hid_t str) {
   H5Tinsert(t.get(), "seconds", HOFFSET(ReportRecord, seconds), H5T_NATIVE_DOUBLE);
   H5Tinsert(t.get(), "device", HOFFSET(ReportRecord, device), str);
   H5Tinsert(t.get(), "status", HOFFSET(ReportRecord, status), str);
+  H5Tinsert(t.get(), "rgb_l1_rel", HOFFSET(ReportRecord, rgb_l1_rel), H5T_NATIVE_DOUBLE);
+  H5Tinsert(t.get(), "rgb_negative", HOFFSET(ReportRecord, rgb_negative), H5T_NATIVE_DOUBLE);
   return t;
 }
 
@@ -120,7 +123,7 @@ BatchPart read_part(const std::string& path) {
   const h5::Handle str = string_type(), report = report_type(str.get()), search = search_type();
   read_records<ReportRecord>(g.get(), "report_rows", report.get(), path, [&](const ReportRecord& r) {
     part.report.push_back({std::size_t(r.slice), r.theta_o, r.phi_o, r.k, r.iterations, r.loglik, r.l1_rel,
-                           r.seconds, r.device ? r.device : "", r.status ? r.status : ""});
+                           r.seconds, r.device ? r.device : "", r.status ? r.status : "", r.rgb_l1_rel, r.rgb_negative});
   });
   read_records<SearchRecord>(g.get(), "search_rows", search.get(), path, [&](const SearchRecord& r) {
     part.search.push_back({std::size_t(r.slice), r.k, r.restart, r.loglik, r.l1_rel, r.score, r.chosen != 0});
@@ -134,7 +137,7 @@ void write_part(const std::string& path, const BatchPart& part) {
   std::vector<ReportRecord> report;
   for (const ReportRow& r : part.report)
     report.push_back({r.slice, r.theta_o, r.phi_o, r.k, r.iterations, r.loglik, r.l1_rel, r.seconds,
-                      r.device.c_str(), r.status.c_str()});
+                      r.device.c_str(), r.status.c_str(), r.rgb_l1_rel, r.rgb_negative});
   std::vector<SearchRecord> search;
   for (const SearchRow& r : part.search)
     search.push_back({r.slice, r.k, r.restart, r.loglik, r.l1_rel, r.score, std::uint8_t(r.chosen)});

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/domain.hpp"
+#include "fit/gmm.hpp"
 
 namespace bsdfmix {
 
@@ -59,13 +61,8 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
   // A component narrower than half a cell (the table cannot resolve it: EM leaves it at
   // its covariance floor, a quarter cell) is integrated over each cell (3 x 3 points);
   // a wider one is compared like the table, by its density at the cell centers.
-  const double wide = 0.5 * std::min(dt, dp);
   std::vector<const mix::Gaussian*> broad, narrow;
-  for (const auto& g : m.components) {
-    const double half_tr = 0.5 * (g.s_tt + g.s_pp);
-    const double lmin = half_tr - std::sqrt(0.25 * (g.s_tt - g.s_pp) * (g.s_tt - g.s_pp) + g.s_tp * g.s_tp);
-    (lmin >= wide * wide ? broad : narrow).push_back(&g);
-  }
+  for (const auto& g : m.components) (sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp) ? narrow : broad).push_back(&g);
   const std::size_t np = s.phi.size();
   double err = 0;
   for (std::size_t t = 0; t < s.theta.size(); ++t)
@@ -82,6 +79,54 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
       err += std::abs(s.w[t * np + p] - total * density * area);
     }
   return err / total;
+}
+
+StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& rgb, const mix::SliceMixture& m) {
+  StandInError e;
+  const std::size_t nt = s.theta.size(), np = s.phi.size(), n = nt * np;
+  const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
+  const bool colour = !rgb.empty();
+  std::vector<bool> narrow;
+  for (const auto& g : m.components) narrow.push_back(sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
+  // Each component's mass in a cell (its density there, by the header, times the area),
+  // its luminance amplitude scale * weight and, with colour, its rgb amplitudes.
+  double lum = 0, lum_err = 0, abs_rgb = 0, rgb_err = 0, neg_err = 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    for (std::size_t p = 0; p < np; ++p) {
+      const std::size_t i = t * np + p;
+      double y = 0, c[3] = {0, 0, 0};
+      for (std::size_t k = 0; k < m.components.size(); ++k) {
+        const mix::Gaussian& g = m.components[k];
+        double d = 0;
+        if (!narrow[k]) {
+          d = g.density(s.theta[t], s.phi[p]);
+        } else {
+          for (int a = -1; a <= 1; ++a)
+            for (int b = -1; b <= 1; ++b) d += g.density(s.theta[t] + a * dt / 3, wrap_phi(s.phi[p] + b * dp / 3));
+          d /= 9;
+        }
+        d *= area;
+        y += m.scale * g.weight * d;
+        for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? g.rgb[q] : m.scale * g.weight) * d;
+      }
+      lum += s.w[i];
+      lum_err += std::abs(s.w[i] - y);
+      if (!colour) continue;
+      for (std::size_t ch = 0; ch < 3; ++ch) {
+        const double w = rgb[ch * n + i], d = std::abs(w - c[ch]);
+        abs_rgb += std::abs(w);
+        rgb_err += d;
+        if (w < 0) neg_err += d;
+      }
+    }
+  e.l1_rel = lum > 0 ? lum_err / lum : 0.0;
+  if (!colour) {
+    e.rgb_l1_rel = e.rgb_negative = std::numeric_limits<double>::quiet_NaN();
+  } else if (abs_rgb > 0) {
+    e.rgb_l1_rel = rgb_err / abs_rgb;
+    e.rgb_negative = neg_err / abs_rgb;
+  }
+  return e;
 }
 
 }  // namespace bsdfmix

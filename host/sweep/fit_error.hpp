@@ -32,4 +32,18 @@ mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const st
 // most of its mass in one cell; its center density overstates that 2.5x).
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m);
 
+// The errors of a slice's stand-in exactly as a renderer evaluates it through the header:
+// each component's mass in each cell by the header's density (as l1_rel_error: at the cell
+// center, or over 3 x 3 points for a component narrower than half a cell; fit/gmm.hpp
+// sub_cell) times its amplitudes as stored (scale * weight; rgb with colour), every
+// Gaussian whole, its mass past the theta border lost, against the table's integrand weights.
+struct StandInError {
+  double l1_rel = 0;        // sum |w - stand-in| / sum w over the luminance (0 for a zero slice)
+  double rgb_l1_rel = 0;    // sum over R, G, B and the cells of |w_c - stand-in_c|, over sum |w_c|
+  double rgb_negative = 0;  // the part of rgb_l1_rel in cells whose measured channel is negative
+};
+// `rgb`: the slice's R, G, B integrand weights, channel-major (SliceSource::rgb_weights);
+// empty: no colour, rgb_l1_rel and rgb_negative NaN.
+StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& rgb, const mix::SliceMixture& m);
+
 }  // namespace bsdfmix

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,9 @@ struct ReportRow {  // one row of the fit report (docs/formats.md, "Fit report")
   int k = 0, iterations = 0;
   double loglik = 0, l1_rel = 0, seconds = 0;
   std::string device, status;  // status: ok / zero: ... / reduced: ... / failed: ...
+  // The stand-in's RGB error and the part of it in cells whose measured channel is
+  // negative (sweep/fit_error.hpp StandInError); NaN for a table without rgb.
+  double rgb_l1_rel = std::numeric_limits<double>::quiet_NaN(), rgb_negative = std::numeric_limits<double>::quiet_NaN();
   bool failed() const;
 };
 

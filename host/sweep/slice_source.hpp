@@ -19,6 +19,11 @@ class SliceSource {
   // The integrand weights of one slice, row-major [theta_i][phi_i], as integrand_weights()
   // gives them for a table (f * [cos theta_i] * J * cell area).
   virtual std::vector<double> weights(const SliceRef& ref) const = 0;
+  // With meta().rgb, the integrand weights of the R, G and B channels of one slice, the same
+  // integrand per channel: channel-major [3][theta_i][phi_i], of any sign (measured channels
+  // dip below zero where they are noise). The stand-in's rgb_scale is fitted to them.
+  // Without rgb (the default) there are none: InputError.
+  virtual std::vector<double> rgb_weights(const SliceRef& ref) const;
 };
 
 // The slices of a table file.
@@ -27,6 +32,7 @@ class TableSlices final : public SliceSource {
   explicit TableSlices(const TableReader& reader);
   const TableMeta& meta() const override;
   std::vector<double> weights(const SliceRef& ref) const override;
+  std::vector<double> rgb_weights(const SliceRef& ref) const override;
 
  private:
   const TableReader& reader_;

@@ -64,13 +64,13 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
   std::unordered_map<std::size_t, const SliceRef*> planned;
   for (const SliceRef& r : plan) planned.emplace(r.index, &r);
   checkpoint.verify([&](const std::vector<std::size_t>& indices) {
-    Hash64 content;
+    std::vector<const SliceRef*> refs;
     for (std::size_t index : indices) {
       const auto at = planned.find(index);
       if (at == planned.end()) return std::string("not planned");
-      hash_weights(content, source.weights(*at->second));
+      refs.push_back(at->second);
     }
-    return content.hex();
+    return slices_hash(source, refs);
   });
 
   // Batches are fixed ranges of the plan, so a resumed sweep rebuilds exactly the

@@ -23,11 +23,13 @@ std::string num(double v, const char* f = "%.9g") { return format_number(std::is
 
 std::string report_csv(const std::vector<ReportRow>& rows) {
   std::ostringstream s;
-  s << "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status\n";
+  s << "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status,rgb_l1_rel,rgb_negative\n";
+  // The colour columns are empty for a table without rgb (NaN in the rows).
+  auto colour = [](double v) { return std::isnan(v) ? std::string() : num(v); };
   for (const ReportRow& r : rows)
     s << r.slice << "," << num(r.theta_o) << "," << num(r.phi_o) << "," << r.k << "," << r.iterations << ","
       << num(r.loglik) << "," << num(r.l1_rel) << "," << num(r.seconds, "%.6f") << "," << r.device << "," << r.status
-      << "\n";
+      << "," << colour(r.rgb_l1_rel) << "," << colour(r.rgb_negative) << "\n";
   return s.str();
 }
 

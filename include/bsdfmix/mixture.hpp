@@ -9,7 +9,9 @@
 // ([-pi/2, pi/2] for fibers, [0, pi/2] for the hemisphere) are invalid; pdf() is the
 // true density of what sample() returns, so its integral over the domain is
 // 1 - P(invalid). pdf_omega = pdf_param / J(theta), J = cos(theta) (fiber) or sin(theta)
-// (hemisphere). The stand-in for f is scale * pdf_omega [/ cos(theta_i) for the hemisphere].
+// (hemisphere). The stand-in for f is scale * pdf_omega [/ cos(theta_i) for the hemisphere];
+// with colour (has_rgb), channel c of it is sum_k rgb[c] of component k times its density,
+// over J [and cos(theta_i)] alike (eval_rgb).
 #pragma once
 
 #include <algorithm>
@@ -79,6 +81,7 @@ inline Bracket bracket(const std::vector<double>& axis, double x, bool periodic)
 struct Gaussian {
   double weight = 0, mu_t = 0, mu_p = 0;
   double s_tt = 0, s_tp = 0, s_pp = 0;
+  double rgb[3] = {0, 0, 0};  // with SliceMixture::has_rgb: the component's amplitude per channel (rgb_scale)
   // derived by prepare()
   double i_tt = 0, i_tp = 0, i_pp = 0;  // inverse covariance
   double norm = 0;                      // 1 / (2 pi sqrt(det))
@@ -134,7 +137,8 @@ inline void normal_pair(double u1, double u2, double& z0, double& z1) {
 // The mixture of one omega_o slice.
 struct SliceMixture {
   double theta_o = 0, phi_o = 0;
-  double scale = 0;  // the slice's integral of the integrand weight
+  double scale = 0;  // the luminance stand-in's amplitude: scale * pdf_param is the integrand
+  bool has_rgb = false;  // the components' rgb amplitudes are set (else the colour is grey: eval_f)
   std::vector<Gaussian> components;
   std::vector<double> cdf;  // cumulative weights, built by prepare()
 
@@ -155,6 +159,22 @@ struct SliceMixture {
     double p = 0;
     for (const auto& g : components) p += g.weight * g.density(theta, phi);
     return p;
+  }
+
+  // The stand-in over (theta, phi), i.e. the integrand f [cos(theta)] J: scale * pdf_param.
+  double eval_param(double theta, double phi) const { return scale * pdf_param(theta, phi); }
+
+  // The same per channel: sum_k rgb[c] N_k with colour, else eval_param in every channel.
+  void eval_rgb_param(double theta, double phi, double out[3]) const {
+    if (!has_rgb) {
+      out[0] = out[1] = out[2] = eval_param(theta, phi);
+      return;
+    }
+    out[0] = out[1] = out[2] = 0;
+    for (const auto& g : components) {
+      const double d = g.density(theta, phi);
+      for (int c = 0; c < 3; ++c) out[c] += g.rgb[c] * d;
+    }
   }
 
   // Component index for u in [0, 1): binary search of the CDF.
@@ -394,6 +414,32 @@ class MixtureSet {
     return f;
   }
 
+  // The stand-in's colour: channel c of f, blended between slices exactly as eval_f; a slice
+  // without rgb gives eval_f's value in all three channels.
+  void eval_rgb(double theta_o, double phi_o, double theta, double phi, double rgb[3]) const {
+    rgb[0] = rgb[1] = rgb[2] = 0;
+    if (theta < theta_lo(domain) || theta > theta_hi(domain)) return;
+    const double j = jacobian(domain, theta);
+    if (!(j > 0)) return;
+    const Blend b = blend(theta_o, phi_o);
+    for (int k = 0; k < b.count; ++k) {
+      const SliceMixture& s = slices[b.slice[k]];
+      const double at = wrap_phi(phi - b.rotate);
+      if (!s.has_rgb) {  // grey: eval_f's terms, in eval_f's order
+        const double f = b.weight[k] * s.scale * s.pdf_param(theta, at);
+        for (int q = 0; q < 3; ++q) rgb[q] += f;
+        continue;
+      }
+      double c[3];
+      s.eval_rgb_param(theta, at, c);
+      for (int q = 0; q < 3; ++q) rgb[q] += b.weight[k] * c[q];
+    }
+    for (int q = 0; q < 3; ++q) {
+      rgb[q] /= j;
+      if (domain == Domain::Hemisphere) rgb[q] /= std::cos(theta);
+    }
+  }
+
   // A sample for omega_o from four uniforms in [0, 1): u0 picks the slice, u1 the
   // component, (u2, u3) the point.
   Sample sample(double theta_o, double phi_o, double u0, double u1, double u2, double u3) const {
@@ -416,17 +462,21 @@ class MixtureSet {
 
   // The blended mixture of omega_o (thesis eq. 3.7) as one slice mixture in the world
   // phi frame: every component of the blended slices, weighted by its slice's blend
-  // weight, its mean rotated by phi_o under azimuthal symmetry. scale is the blended scale.
+  // weight, its mean rotated by phi_o under azimuthal symmetry. scale is the blended scale;
+  // when every blended slice has rgb, so has the result (amplitudes times the blend weights).
   SliceMixture blended(double theta_o, double phi_o) const {
     const Blend b = blend(theta_o, phi_o);
     SliceMixture out;
     out.theta_o = theta_o;
     out.phi_o = phi_o;
+    out.has_rgb = true;
     for (int k = 0; k < b.count; ++k) {
       const SliceMixture& s = slices[b.slice[k]];
       out.scale += b.weight[k] * s.scale;
+      out.has_rgb = out.has_rgb && s.has_rgb;
       for (Gaussian g : s.components) {
         g.weight *= b.weight[k];
+        for (double& c : g.rgb) c *= b.weight[k];
         g.mu_p = wrap_phi(g.mu_p + b.rotate);
         out.components.push_back(g);
       }
