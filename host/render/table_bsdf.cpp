@@ -112,6 +112,8 @@ void TableBsdf::set_mixture(const mix::MixtureSet& set) {
                      (meta_.domain == Domain::Fiber ? "fiber" : "hemisphere") + " table, as the table is");
   set_ = set;
   has_set_ = !set_.slices.empty();
+  set_has_rgb_ = false;
+  for (const auto& sl : set_.slices) set_has_rgb_ = set_has_rgb_ || sl.has_rgb;
   fitted_.assign(meta_.theta_o.size(), -1);
   for (std::size_t k = 0; k < set_.slices.size(); ++k) {
     std::size_t best = 0;
@@ -196,7 +198,19 @@ Rgb TableBsdf::f_rgb(FSource which, double theta_o, double theta, double phi) co
     }
     return out;
   }
-  return Rgb(f(which, theta_o, theta, phi));
+  // The stand-in: its rgb amplitudes where the mixture file has them (eval_rgb, blended
+  // between slices as eval_f), else the luminance in every channel.
+  if (!has_set_ || !set_has_rgb_) return Rgb(f(which, theta_o, theta, phi));
+  double c[3];
+  if (bracketed(theta_o)) {
+    set_.eval_rgb(theta_o, 0.0, theta, phi, c);
+    return Rgb(c[0], c[1], c[2]);
+  }
+  const mix::SliceMixture& s = set_.slices[std::size_t(nearest_fitted(theta_o))];
+  const double j = meta_.domain == Domain::Fiber ? std::cos(theta) : std::sin(theta) * std::cos(theta);
+  if (!(j > 0) || theta < theta_lo(meta_.domain) || theta > kPi / 2) return Rgb();
+  s.eval_rgb_param(theta, phi, c);
+  return Rgb(c[0] / j, c[1] / j, c[2] / j);
 }
 
 mix::Sample TableBsdf::mixture_sample(double theta_o, const double u[4]) const {

@@ -75,6 +75,7 @@ class TableBsdf {
   double uniform_pdf_ = 0;       // uniform sampling's density: 1 / (4 pi) or 1 / (2 pi)
   mix::MixtureSet set_;
   bool has_set_ = false;
+  bool set_has_rgb_ = false;      // some slice of the mixtures has rgb amplitudes
   std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
 };
 

@@ -1,0 +1,42 @@
+// `bsdfmix compare MIXTURE TABLE` (docs/fitting.md, "Checking a stand-in"): the stand-in's
+// error against the table at every slice of the table, the slices between fitted ones
+// included (blended as the header blends them, thesis eq. 3.7): what a renderer that
+// evaluates the mixture file through include/bsdfmix/mixture.hpp gets, cell by cell.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace bsdfmix {
+
+// One table slice against the stand-in. Every error is a sum over the slice's cells of
+// |stand-in - table| times the cell's integrand weight (f [cos theta_i] J dtheta dphi)
+// over the same sum of |table|, evaluated at the cell centers.
+struct SliceComparison {
+  std::size_t slice = 0;
+  double theta_o = 0, phi_o = 0;
+  bool fitted = false;      // the mixture file holds this slice (else it is blended)
+  double l1 = 0;            // luminance (`values` against eval_f)
+  double l1_rgb[3] = {0, 0, 0};  // per channel (`rgb` against eval_rgb); 0 without `rgb`
+  double rgb_error = 0;     // summed over the channels, over the channels' summed |table|
+  double negative_share = 0;  // of that sum, the share in cells where the table's channel is negative
+  double energy = 0;        // the stand-in's integral over the table's, minus 1 (luminance)
+  double energy_rgb[3] = {0, 0, 0};
+};
+
+struct Comparison {
+  bool rgb = false;  // the table has `rgb`
+  std::vector<SliceComparison> slices;
+};
+
+// Compares every slice of `table` with the stand-in of `mixture`; InputError when the two
+// do not describe the same function (domain, symmetry, omega_o axes).
+Comparison compare_stand_in(const std::string& mixture, const std::string& table);
+
+// The CSV (docs/formats.md, "Compare CSV") and the printed summary (medians and 90th
+// percentiles over all slices, and over the fitted and the blended ones).
+std::string comparison_csv(const Comparison& c);
+std::string comparison_summary(const Comparison& c);
+
+}  // namespace bsdfmix
