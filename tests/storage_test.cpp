@@ -5,6 +5,7 @@
 #include <hdf5.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include "core/error.hpp"
@@ -196,4 +197,22 @@ TEST_CASE("a file fitted on every 2nd slice is blended linearly between its fitt
   b = ts.blend(0.1, 0);
   CHECK(b.count == 1);
   CHECK(b.slice[0] == 0);
+}
+
+TEST_CASE("bsdfmix pack writes the same mixtures in the storage asked for", "[storage]") {
+  const MixtureFile m = sample_file(true);
+  const std::string in = temp_path("pack_in.h5"), out = temp_path("pack_out.h5");
+  write_mixture_file(in, m);
+  const std::string cmd = std::string(BSDFMIX_BINARY) + " pack " + in + " -o " + out + " --quiet > " +
+                          temp_path("pack.log") + " 2>&1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const MixtureFile r = read_mixture_file(out);
+  CHECK(r.storage == MixtureStorage{true, true});  // the default, ragged_f32
+  CHECK(r.weights == m.weights);
+  CHECK(r.fit_settings == m.fit_settings);
+  CHECK(r.payload_bytes() == stored_bytes(out));
+  CHECK(r.payload_bytes() < m.payload_bytes());
+  const std::string bad = std::string(BSDFMIX_BINARY) + " pack " + in + " -o " + out + " --storage tiny > " +
+                          temp_path("pack_bad.log") + " 2>&1";
+  CHECK(std::system(bad.c_str()) != 0);
 }
