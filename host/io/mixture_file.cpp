@@ -73,12 +73,33 @@ std::vector<double> MixtureFile::slice_rgb(std::size_t s) const {
   return std::vector<double>(rgb_scale.begin() + long(s * K * 3), rgb_scale.begin() + long((s * K + k[s]) * 3));
 }
 
+std::string storage_name(const MixtureStorage& s) {
+  return std::string(s.ragged ? "ragged" : "padded") + (s.float32 ? "_f32" : "");
+}
+
+MixtureStorage parse_storage(const std::string& name, const std::string& where) {
+  for (const bool r : {false, true})
+    for (const bool f : {false, true})
+      if (storage_name({r, f}) == name) return {r, f};
+  throw InputError(where + ": unknown storage '" + name + "' (padded, ragged, padded_f32 or ragged_f32)");
+}
+
+std::uint64_t MixtureFile::stored_components() const {
+  if (!storage.ragged) return std::uint64_t(slices()) * std::uint64_t(std::max(kmax, 0));
+  std::uint64_t n = 0;
+  for (const auto kk : k) n += std::uint64_t(kk);
+  return n;
+}
+
 std::uint64_t MixtureFile::payload_bytes() const {
-  // Exactly what write_mixture_group stores: the padded [S, kmax] float arrays (and the
-  // double rgb_scale), the per-slice doubles and int32 K, and the table's omega_o axes.
-  const std::uint64_t S = slices(), K = std::uint64_t(std::max(kmax, 0));
-  return S * K * 6 * sizeof(float) + (has_rgb() ? S * K * 3 * sizeof(double) : 0) + S * 5 * sizeof(double) +
-         S * sizeof(std::int32_t) + (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
+  // Exactly what write_mixture_group stores: the float component arrays (padded [S, kmax]
+  // or ragged [sum k]) and rgb_scale (float64 or float32), the per-slice doubles, int32 k
+  // (and, ragged, int32 offset), and the table's omega_o axes.
+  const std::uint64_t S = slices(), N = stored_components();
+  const std::uint64_t rgb_bytes = storage.float32 ? sizeof(float) : sizeof(double);
+  return N * 6 * sizeof(float) + (has_rgb() ? N * 3 * rgb_bytes : 0) + S * 5 * sizeof(double) +
+         S * sizeof(std::int32_t) * (storage.ragged ? 2 : 1) +
+         (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
 }
 
 void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& path) {
@@ -89,10 +110,46 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_doubles(id, "theta_o", {S}, m.theta_o.data(), path);
   h5::write_doubles(id, "phi_o", {S}, m.phi_o.data(), path);
   h5::write_ints(id, "k", {S}, m.k.data(), path);
-  h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
-  h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
-  h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
-  if (m.has_rgb()) h5::write_doubles(id, "rgb_scale", {S, K, 3}, m.rgb_scale.data(), path);
+  if (m.storage.ragged) {  // one flat [sum k, ...] array per quantity, slice s at offset[s]
+    std::vector<std::int32_t> offset;
+    std::vector<float> w, mu, cov, rgbf;
+    std::vector<double> rgbd;
+    for (std::size_t i = 0; i < s; ++i) {
+      offset.push_back(static_cast<std::int32_t>(w.size()));
+      for (int j = 0; j < m.k[i]; ++j) {
+        const std::size_t c = i * K + std::size_t(j);
+        w.push_back(m.weights[c]);
+        for (int d = 0; d < 2; ++d) mu.push_back(m.means[c * 2 + d]);
+        for (int d = 0; d < 3; ++d) cov.push_back(m.covariances[c * 3 + d]);
+        if (m.has_rgb())
+          for (int d = 0; d < 3; ++d) {
+            rgbd.push_back(m.rgb_scale[c * 3 + d]);
+            rgbf.push_back(float(m.rgb_scale[c * 3 + d]));
+          }
+      }
+    }
+    const hsize_t N = w.size();
+    h5::write_ints(id, "offset", {S}, offset.data(), path);
+    h5::write_floats(id, "weights", {N}, w.data(), path);
+    h5::write_floats(id, "means", {N, 2}, mu.data(), path);
+    h5::write_floats(id, "covariances", {N, 3}, cov.data(), path);
+    if (m.has_rgb()) {
+      if (m.storage.float32) h5::write_floats(id, "rgb_scale", {N, 3}, rgbf.data(), path);
+      else h5::write_doubles(id, "rgb_scale", {N, 3}, rgbd.data(), path);
+    }
+  } else {
+    h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
+    h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
+    h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
+    if (m.has_rgb()) {
+      if (m.storage.float32) {
+        const std::vector<float> rgbf(m.rgb_scale.begin(), m.rgb_scale.end());
+        h5::write_floats(id, "rgb_scale", {S, K, 3}, rgbf.data(), path);
+      } else {
+        h5::write_doubles(id, "rgb_scale", {S, K, 3}, m.rgb_scale.data(), path);
+      }
+    }
+  }
   h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
   h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
   h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
@@ -113,6 +170,70 @@ void write_mixture_file(const std::string& path, const MixtureFile& m) {
   }
   out.commit();
 }
+
+namespace {
+
+std::string dims_text(const std::vector<hsize_t>& dims) {
+  std::string got;
+  for (std::size_t i = 0; i < dims.size(); ++i) got += (i ? ", " : "") + std::to_string(dims[i]);
+  return got;
+}
+
+bool is_float32(hid_t dataset) {
+  h5::Handle t(H5Dget_type(dataset));
+  return H5Tget_class(t.get()) == H5T_FLOAT && H5Tget_size(t.get()) == 4;
+}
+
+// The ragged layout: offset [S], weights [N], means [N, 2], covariances [N, 3], rgb_scale
+// [N, 3], slice s at offset[s] .. offset[s] + k[s]; spread into the padded arrays of memory.
+void read_ragged(hid_t id, const std::string& where, MixtureFile& m) {
+  const std::size_t S = m.slices();
+  m.storage.ragged = true;
+  const std::vector<std::int32_t> offset = h5::read_ints(id, "offset", where);
+  if (offset.size() != S)
+    throw InputError(where + "/offset: length " + std::to_string(offset.size()) + ", expected " + std::to_string(S));
+  std::size_t N = 0;
+  m.kmax = 0;
+  for (std::size_t s = 0; s < S; ++s) {
+    if (m.k[s] < 1) throw InputError(where + " slice " + std::to_string(s) + ": k = " + std::to_string(m.k[s]) + " below 1");
+    if (offset[s] != std::int32_t(N))
+      throw InputError(where + "/offset: slice " + std::to_string(s) + " starts at " + std::to_string(offset[s]) +
+                       ", expected " + std::to_string(N) + " (the sum of k before it)");
+    N += std::size_t(m.k[s]);
+    m.kmax = std::max(m.kmax, int(m.k[s]));
+  }
+  const bool rgb = h5::exists(id, "rgb_scale");
+  for (const auto& [name, last] : {std::pair{"weights", 0}, std::pair{"means", 2}, std::pair{"covariances", 3},
+                                   std::pair{"rgb_scale", 3}}) {
+    if (std::string(name) == "rgb_scale" && !rgb) continue;
+    h5::Handle d = h5::open_dataset(id, name, where);
+    const std::vector<hsize_t> dims = h5::shape(d.get());
+    const std::vector<hsize_t> want = last ? std::vector<hsize_t>{N, hsize_t(last)} : std::vector<hsize_t>{N};
+    if (dims != want)
+      throw InputError(where + "/" + name + ": shape [" + dims_text(dims) + "], expected [" + dims_text(want) +
+                       "] (ragged: [sum k" + (last ? ", " + std::to_string(last) : std::string()) + "])");
+    if (std::string(name) == "rgb_scale") m.storage.float32 = is_float32(d.get());
+  }
+  const std::vector<float> w = h5::read_floats(id, "weights", where), mu = h5::read_floats(id, "means", where),
+                           cov = h5::read_floats(id, "covariances", where);
+  const std::vector<double> r = rgb ? h5::read_doubles(id, "rgb_scale", where) : std::vector<double>{};
+  const std::size_t K = std::size_t(m.kmax);
+  m.weights.assign(S * K, 0.f);
+  m.means.assign(S * K * 2, 0.f);
+  m.covariances.assign(S * K * 3, 0.f);
+  if (rgb) m.rgb_scale.assign(S * K * 3, 0.0);
+  for (std::size_t s = 0; s < S; ++s)
+    for (int j = 0; j < m.k[s]; ++j) {
+      const std::size_t src = std::size_t(offset[s]) + std::size_t(j), dst = s * K + std::size_t(j);
+      m.weights[dst] = w[src];
+      for (int d = 0; d < 2; ++d) m.means[dst * 2 + d] = mu[src * 2 + d];
+      for (int d = 0; d < 3; ++d) m.covariances[dst * 3 + d] = cov[src * 3 + d];
+      if (rgb)
+        for (int d = 0; d < 3; ++d) m.rgb_scale[dst * 3 + d] = r[src * 3 + d];
+    }
+}
+
+}  // namespace
 
 MixtureFile read_mixture_file(const std::string& path) {
   h5::Handle f = h5::open_file(path);
@@ -139,35 +260,37 @@ MixtureFile read_mixture_file(const std::string& path) {
       throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
                        std::to_string(S) + " (the length of theta_o)");
   if (m.k.size() != S) throw InputError(where + "/k: length " + std::to_string(m.k.size()) + ", expected " + std::to_string(S));
-  {
-    h5::Handle d = h5::open_dataset(id, "weights", where);
-    const auto dims = h5::shape(d.get());
-    if (dims.size() != 2 || dims[0] != S) throw InputError(where + "/weights: expected shape [S, Kmax] with S = " + std::to_string(S));
-    m.kmax = static_cast<int>(dims[1]);
-  }
-  // The full shapes, not only the element counts: [S, 2, Kmax] has as many elements as
-  // [S, Kmax, 2] and would be read in the wrong order.
-  for (const auto& [name, last] : {std::pair{"means", 2}, std::pair{"covariances", 3}}) {
-    h5::Handle d = h5::open_dataset(id, name, where);
-    const std::vector<hsize_t> dims = h5::shape(d.get()), want = {S, hsize_t(m.kmax), hsize_t(last)};
-    if (dims != want) {
-      std::string got;
-      for (std::size_t i = 0; i < dims.size(); ++i) got += (i ? ", " : "") + std::to_string(dims[i]);
-      throw InputError(where + "/" + name + ": shape [" + got + "], expected [S, Kmax, " + std::to_string(last) +
-                       "] = [" + std::to_string(S) + ", " + std::to_string(m.kmax) + ", " + std::to_string(last) + "]");
+  if (h5::exists(id, "offset")) {
+    read_ragged(id, where, m);
+  } else {
+    {
+      h5::Handle d = h5::open_dataset(id, "weights", where);
+      const auto dims = h5::shape(d.get());
+      if (dims.size() != 2 || dims[0] != S) throw InputError(where + "/weights: expected shape [S, Kmax] with S = " + std::to_string(S));
+      m.kmax = static_cast<int>(dims[1]);
+    }
+    // The full shapes, not only the element counts: [S, 2, Kmax] has as many elements as
+    // [S, Kmax, 2] and would be read in the wrong order.
+    for (const auto& [name, last] : {std::pair{"means", 2}, std::pair{"covariances", 3}}) {
+      h5::Handle d = h5::open_dataset(id, name, where);
+      const std::vector<hsize_t> dims = h5::shape(d.get()), want = {S, hsize_t(m.kmax), hsize_t(last)};
+      if (dims != want)
+        throw InputError(where + "/" + name + ": shape [" + dims_text(dims) + "], expected [S, Kmax, " + std::to_string(last) +
+                         "] = [" + std::to_string(S) + ", " + std::to_string(m.kmax) + ", " + std::to_string(last) + "]");
+    }
+    m.weights = h5::read_floats(id, "weights", where);
+    m.means = h5::read_floats(id, "means", where);
+    m.covariances = h5::read_floats(id, "covariances", where);
+    if (h5::exists(id, "rgb_scale")) {  // optional: files written before colour have none
+      h5::Handle d = h5::open_dataset(id, "rgb_scale", where);
+      if (h5::shape(d.get()) != std::vector<hsize_t>{S, hsize_t(m.kmax), 3})
+        throw InputError(where + "/rgb_scale: expected shape [S, Kmax, 3] = [" + std::to_string(S) + ", " +
+                         std::to_string(m.kmax) + ", 3]");
+      m.storage.float32 = is_float32(d.get());
+      m.rgb_scale = h5::read_doubles(id, "rgb_scale", where);
     }
   }
-  m.weights = h5::read_floats(id, "weights", where);
-  m.means = h5::read_floats(id, "means", where);
-  m.covariances = h5::read_floats(id, "covariances", where);
   const std::size_t K = static_cast<std::size_t>(m.kmax);
-  if (h5::exists(id, "rgb_scale")) {  // optional: files written before colour have none
-    h5::Handle d = h5::open_dataset(id, "rgb_scale", where);
-    if (h5::shape(d.get()) != std::vector<hsize_t>{S, hsize_t(K), 3})
-      throw InputError(where + "/rgb_scale: expected shape [S, Kmax, 3] = [" + std::to_string(S) + ", " +
-                       std::to_string(K) + ", 3]");
-    m.rgb_scale = h5::read_doubles(id, "rgb_scale", where);
-  }
   if (h5::exists(id, "table_theta_o")) {
     m.table_theta_o = h5::read_doubles(id, "table_theta_o", where);
     m.table_phi_o = h5::read_doubles(id, "table_phi_o", where);

@@ -14,7 +14,23 @@
 
 namespace bsdfmix {
 
+// How a mixture file stores its per-component arrays (docs/formats.md, "Mixture file",
+// "Storage"): padded to [S, Kmax] (as every file before this option) or ragged, one flat
+// [sum k, ...] array with a per-slice `offset`; rgb_scale as float64 (as before) or float32.
+// Memory always holds the padded arrays in double (rgb_scale) and float (the rest); the
+// storage only changes what write_mixture_group writes and what payload_bytes counts.
+struct MixtureStorage {
+  bool ragged = false;
+  bool float32 = false;  // rgb_scale as float32 (weights, means, covariances always are)
+  bool operator==(const MixtureStorage& o) const { return ragged == o.ragged && float32 == o.float32; }
+};
+
+// "padded", "ragged", "padded_f32" or "ragged_f32"; parse throws InputError naming `where`.
+std::string storage_name(const MixtureStorage& s);
+MixtureStorage parse_storage(const std::string& name, const std::string& where);
+
 struct MixtureFile {
+  MixtureStorage storage;            // as written; read_mixture_file sets what it found
   Domain domain = Domain::Fiber;
   bool azimuthal = true;
   std::string table_source = "{}";   // the table's `source` attribute
@@ -42,8 +58,10 @@ struct MixtureFile {
   void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
   // The k used components' rgb_scale of slice s (3K, [component][channel]); empty without colour.
   std::vector<double> slice_rgb(std::size_t s) const;
-  // Bytes of the datasets as the file stores them (H5Dget_storage_size of each),
-  // padding to kmax included: the measure of compression.
+  // Components stored: S * kmax padded, sum k ragged.
+  std::uint64_t stored_components() const;
+  // Bytes of the datasets as the file stores them in `storage` (H5Dget_storage_size of
+  // each; with padding, the padding to kmax included): the measure of compression.
   std::uint64_t payload_bytes() const;
 };
 

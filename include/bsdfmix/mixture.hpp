@@ -346,7 +346,10 @@ class MixtureSet {
   }
 
   // The slices serving omega_o and their bilinear weights (thesis eq. 3.7): up to 4
-  // (2 with azimuthal symmetry). Weights of missing slices go to the present ones.
+  // (2 with azimuthal symmetry). A file may hold only some slices (every k-th theta_o, or
+  // those around some directions): along theta_o, omega_o is then blended linearly between
+  // the nearest fitted slices below and above it in its phi_o column (one alone beyond the
+  // last); a phi_o column without any fitted slice gives its weight to the other.
   struct Blend {
     int slice[4] = {-1, -1, -1, -1};
     double weight[4] = {0, 0, 0, 0};
@@ -360,24 +363,40 @@ class MixtureSet {
     Bracket p;
     if (azimuthal) b.rotate = phi_o;
     else p = bracket(grid_phi_o, wrap_phi(phi_o), true);
-    const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
-    const std::size_t ts[2] = {t.i0, t.i1}, ps[2] = {p.i0, p.i1};
-    const double wt[2] = {1 - t.f, t.f}, wp[2] = {1 - p.f, p.f};
+    const std::size_t np = azimuthal ? 1 : grid_phi_o.size(), nt = grid_theta_o.size();
+    const std::size_t ps[2] = {p.i0, p.i1};
+    const double wp[2] = {1 - p.f, p.f};
+    const double u = double(t.i0) + t.f;  // the position on the theta_o grid
     double total = 0;
-    for (int i = 0; i < 2; ++i)
-      for (int j = 0; j < (azimuthal ? 1 : 2); ++j) {
-        const double w = wt[i] * (azimuthal ? 1.0 : wp[j]);
-        const int s = slice_of[ts[i] * np + ps[j]];
-        if (w <= 0 || s < 0) continue;
-        int k = 0;
-        while (k < b.count && b.slice[k] != s) ++k;
-        if (k == b.count) {
-          b.slice[k] = s;
-          ++b.count;
-        }
-        b.weight[k] += w;
-        total += w;
+    auto add = [&](int s, double w) {
+      if (w <= 0 || s < 0) return;
+      int k = 0;
+      while (k < b.count && b.slice[k] != s) ++k;
+      if (k == b.count) {
+        b.slice[k] = s;
+        ++b.count;
       }
+      b.weight[k] += w;
+      total += w;
+    };
+    for (int j = 0; j < (azimuthal ? 1 : 2); ++j) {
+      const double w = azimuthal ? 1.0 : wp[j];
+      if (w <= 0) continue;
+      const std::size_t pj = ps[j];
+      // The nearest fitted slices at or below u and at or above it.
+      long lo = long(t.i0), hi = long(t.f > 0 ? t.i1 : t.i0);
+      while (lo >= 0 && slice_of[std::size_t(lo) * np + pj] < 0) --lo;
+      while (hi < long(nt) && slice_of[std::size_t(hi) * np + pj] < 0) ++hi;
+      const int s_lo = lo >= 0 ? slice_of[std::size_t(lo) * np + pj] : -1;
+      const int s_hi = hi < long(nt) ? slice_of[std::size_t(hi) * np + pj] : -1;
+      if (s_lo >= 0 && s_hi >= 0 && hi > lo) {
+        const double f = (u - double(lo)) / double(hi - lo);
+        add(s_lo, w * (1 - f));
+        add(s_hi, w * f);
+      } else {
+        add(s_lo >= 0 ? s_lo : s_hi, w);
+      }
+    }
     if (b.count == 0) throw std::out_of_range("bsdfmix::mix::MixtureSet: no fitted slice near this omega_o");
     for (int k = 0; k < b.count; ++k) b.weight[k] /= total;
     return b;
