@@ -27,6 +27,8 @@ void check_set(const ChannelSet& set) {
 
 }  // namespace
 
+bool is_noise(double negative, double abs_sum) { return negative > kNoiseShare * abs_sum; }
+
 double in_domain_mass(Domain d, double mu_t, double s_tt) {
   const double sd = std::sqrt(2.0 * s_tt);
   return 0.5 * (std::erf((theta_hi(d) - mu_t) / sd) - std::erf((theta_lo(d) - mu_t) / sd));
@@ -170,7 +172,8 @@ std::vector<double> nnls_normal(const std::vector<double>& G, const std::vector<
 std::vector<double> solve_channel(const std::vector<double>& G, const std::vector<double>& b,
                                   const std::vector<double>& z, double W, int K) {
   std::vector<double> a(std::size_t(K), 0.0);
-  if (!(W > 0)) return a;
+  const bool keep = !std::isnan(W);
+  if (keep && !(W > 0)) return a;
   // The constraint as one heavy row, mu (z . a - W)^2 beside the cells' sum: mu 1e4 times
   // the cells' mean diagonal over z's; a small ridge keeps overlapping components apart.
   double diag = 0, zz = 0;
@@ -180,14 +183,17 @@ std::vector<double> solve_channel(const std::vector<double>& G, const std::vecto
   }
   diag /= K;
   if (!(zz > 0)) return a;
-  const double mu = 1e4 * (diag > 0 ? diag : 1.0) * K / zz;
+  const double mu = keep ? 1e4 * (diag > 0 ? diag : 1.0) * K / zz : 0.0;
   std::vector<double> Gc = G, bc = b;
   for (int i = 0; i < K; ++i) {
-    bc[std::size_t(i)] += mu * W * z[std::size_t(i)];
+    bc[std::size_t(i)] += mu * (keep ? W : 0.0) * z[std::size_t(i)];
     for (int j = 0; j < K; ++j) Gc[std::size_t(i * K + j)] += mu * z[std::size_t(i)] * z[std::size_t(j)];
     Gc[std::size_t(i * K + i)] += 1e-10 * (diag > 0 ? diag : 1.0);
   }
   a = nnls_normal(Gc, bc, K);
+  for (double& x : a)
+    if (!std::isfinite(x)) x = 0;
+  if (!keep) return a;
   double e = 0;
   for (int i = 0; i < K; ++i) e += z[std::size_t(i)] * a[std::size_t(i)];
   if (e > 0 && std::isfinite(e))
@@ -218,12 +224,14 @@ std::vector<AmplitudeFit> fit_amplitudes(const AmplitudeEvaluator& evaluate, con
     for (int j = 0; j < s.K; ++j) s.z.push_back(in_domain_mass(set.grid.domain, pr.gmm.mean[2 * j], pr.gmm.cov[3 * j]));
     const std::vector<double>& w = set.values[pr.slice];
     for (int c = 0; c < C; ++c) {
-      double sum = 0, abs_sum = 0;
+      double sum = 0, abs_sum = 0, negative = 0;
       for (std::size_t i = 0; i < n; ++i) {
-        sum += w[std::size_t(c) * n + i];
-        abs_sum += std::abs(w[std::size_t(c) * n + i]);
+        const double x = w[std::size_t(c) * n + i];
+        sum += x;
+        abs_sum += std::abs(x);
+        if (x < 0) negative -= x;
       }
-      s.W.push_back(sum);
+      s.W.push_back(is_noise(negative, abs_sum) ? std::numeric_limits<double>::quiet_NaN() : sum);
       s.delta.push_back(settings.delta * abs_sum / double(n));
     }
     s.amp.assign(std::size_t(C * s.K), 0.0);

@@ -4,7 +4,10 @@
 // The cells are the domain, so mass a Gaussian leaks past the theta border is made up by
 // the amplitudes rather than lost, and each channel's integral is kept: the stand-in's
 // in-domain integral (the components' closed-form in-domain masses times their
-// amplitudes) equals the channel's sum over the cells. docs/fitting.md, "Colour and energy".
+// amplitudes) equals the channel's sum over the cells. A channel that is measurement noise
+// around zero (is_noise: its negative cells hold more than kNoiseShare of its absolute sum,
+// so its sum is uncertain by more than that) has no integral to keep: its amplitudes are
+// its least-L1 fit alone. docs/fitting.md, "Colour and energy".
 //
 // The objective is the L1 error of each channel, by iteratively reweighted least squares:
 // the first solve weighs every cell 1, every later one weighs cell i by
@@ -69,7 +72,7 @@ struct AmplitudeProblem {
 };
 
 struct AmplitudeFit {
-  std::vector<double> amp;  // channels x K, channel-major; a channel whose integral is <= 0 gets 0
+  std::vector<double> amp;  // channels x K, channel-major
   std::vector<double> l1;   // channels: sum |r| over the cells at amp
 };
 
@@ -79,6 +82,11 @@ struct AmplitudeFit {
 std::vector<AmplitudeFit> fit_amplitudes(const AmplitudeEvaluator& evaluate, const ChannelSet& set,
                                          const std::vector<AmplitudeProblem>& problems,
                                          const AmplitudeSettings& settings = {});
+
+// A channel whose negative cells hold more than this share of its absolute sum is noise
+// around zero: its integral is not kept.
+constexpr double kNoiseShare = 0.005;
+bool is_noise(double negative, double abs_sum);
 
 // The mass of a component inside the domain: theta within the domain's range, phi over one
 // period (all of it): 1/2 (erf((hi - mu) / (sqrt 2 sigma)) - erf((lo - mu) / (sqrt 2 sigma))).
@@ -90,7 +98,7 @@ std::vector<double> nnls_normal(const std::vector<double>& G, const std::vector<
 
 // The amplitudes of one channel from its normal equations, under the constraint z . a = W
 // (z the components' in-domain masses, W the channel's integral; exact after the solve).
-// All zero when W <= 0.
+// All zero when W <= 0; W NaN: no constraint (a noisy channel).
 std::vector<double> solve_channel(const std::vector<double>& G, const std::vector<double>& b,
                                   const std::vector<double>& z, double W, int K);
 

@@ -164,6 +164,7 @@ std::string describe_generic(const std::string& path) {
       for (int x : m.k) hist[x]++;
       s << "  slices     " << m.slices() << " fitted, all valid; components per slice:";
       for (auto [kk, n] : hist) s << " K=" << kk << " x" << n;
+      s << (m.has_rgb() ? "\n  colour     rgb_scale: R, G, B amplitudes per component" : "\n  colour     none (grey)");
       std::vector<double> l1 = m.l1_rel;
       std::sort(l1.begin(), l1.end());
       char buf[160];
