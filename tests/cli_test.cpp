@@ -43,7 +43,7 @@ std::size_t lines(const std::string& s) {
 
 TEST_CASE("every command has --help and exits 0 with it", "[cli]") {
   for (const char* c : {"", "devices", "inspect", "generate", "import", "fit", "sample", "converge", "run", "bench", "catalog",
-                        "render"}) {
+                        "render", "compare", "pack"}) {
     INFO(c);
     const Run r = run(std::string(c) + " --help");
     CHECK(r.code == 0);
