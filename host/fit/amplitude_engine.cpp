@@ -58,14 +58,8 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
   std::vector<AmplitudeSums> out(queries.size());
   std::map<int, std::vector<std::size_t>> groups;
   for (std::size_t i = 0; i < queries.size(); ++i) groups[k_bucket(queries[i].gmm.k())].push_back(i);
-  std::vector<std::pair<int, std::vector<std::size_t>>> batches;
-  for (auto& [bucket, list] : groups) {
-    // The basis (K_MAX rows) and the weights (kMaxChannels rows) of each problem stay on the device.
-    const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket + kMaxChannels);
-    const std::size_t cap = static_cast<std::size_t>(std::max<std::uint64_t>(1, batch_budget_ / per));
-    for (std::size_t b = 0; b < list.size(); b += cap)
-      batches.push_back({bucket, std::vector<std::size_t>(list.begin() + b, list.begin() + std::min(list.size(), b + cap))});
-  }
+  // The basis (K_MAX rows) and the weights (kMaxChannels rows) of each problem stay on the device.
+  const auto batches = bucket_batches(groups, stride, kMaxChannels, batch_budget_);
 
   std::vector<cl::CommandQueue> queues;
   std::vector<std::size_t> queue_device;
@@ -94,13 +88,7 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
       float* cp = &cparams[i * nconst];
       for (int j = 0; j < k; ++j) {  // em_l1's constants, the normalization with the cell area and no weight
         const double a = q.gmm.cov[3 * j], b = q.gmm.cov[3 * j + 1], c = q.gmm.cov[3 * j + 2];
-        const double det = a * c - b * b, l2e = 1.4426950408889634;
-        cp[0 * K + j] = static_cast<float>(q.gmm.mean[2 * j]);
-        cp[1 * K + j] = static_cast<float>(wrap_phi(q.gmm.mean[2 * j + 1]));
-        cp[2 * K + j] = static_cast<float>(-0.5 * l2e * c / det);
-        cp[3 * K + j] = static_cast<float>(l2e * b / det);
-        cp[4 * K + j] = static_cast<float>(-0.5 * l2e * a / det);
-        cp[5 * K + j] = static_cast<float>(std::log2(area) - std::log2(2 * kPi) - 0.5 * std::log2(det));
+        component_constants(q.gmm, j, K, std::log2(area), cp);
         images[i * K + j] = l1_images(c);
         sub[i * K + j] = sub_cell(a, b, c, dth, layout.dphi) ? 1 : 0;
         for (int ch = 0; ch < C; ++ch) amps[(i * kMaxChannels + ch) * K + j] = static_cast<float>(q.amp[ch * k + j]);

@@ -142,6 +142,30 @@ int k_bucket(int k) {
   return b;
 }
 
+std::vector<std::pair<int, std::vector<std::size_t>>> bucket_batches(
+    const std::map<int, std::vector<std::size_t>>& groups, std::size_t stride, int extra_rows,
+    std::uint64_t batch_budget) {
+  std::vector<std::pair<int, std::vector<std::size_t>>> batches;
+  for (const auto& [bucket, list] : groups) {
+    const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket + extra_rows);
+    const std::size_t cap = static_cast<std::size_t>(std::max<std::uint64_t>(1, batch_budget / per));
+    for (std::size_t b = 0; b < list.size(); b += cap)
+      batches.push_back({bucket, std::vector<std::size_t>(list.begin() + b, list.begin() + std::min(list.size(), b + cap))});
+  }
+  return batches;
+}
+
+void component_constants(const Gmm& gmm, int j, int K, double log2_weight, float* cp) {
+  const double a = gmm.cov[3 * j], b = gmm.cov[3 * j + 1], c = gmm.cov[3 * j + 2];
+  const double det = a * c - b * b, l2e = 1.4426950408889634;
+  cp[0 * K + j] = static_cast<float>(gmm.mean[2 * j]);
+  cp[1 * K + j] = static_cast<float>(wrap_phi(gmm.mean[2 * j + 1]));
+  cp[2 * K + j] = static_cast<float>(-0.5 * l2e * c / det);
+  cp[3 * K + j] = static_cast<float>(l2e * b / det);
+  cp[4 * K + j] = static_cast<float>(-0.5 * l2e * a / det);
+  cp[5 * K + j] = static_cast<float>(log2_weight - std::log2(2 * kPi) - 0.5 * std::log2(det));
+}
+
 namespace {
 
 struct Rng {

@@ -4,6 +4,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,17 @@ double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, cons
 
 // Smallest power of two >= max(k, 4): the K_MAX a problem of k components runs under.
 int k_bucket(int k);
+
+// Problems grouped by their k_bucket (bucket -> problem indices), cut into batches of at
+// most batch_budget / (stride * (bucket + extra_rows)) problems: (bucket, indices) each.
+std::vector<std::pair<int, std::vector<std::size_t>>> bucket_batches(
+    const std::map<int, std::vector<std::size_t>>& groups, std::size_t stride, int extra_rows,
+    std::uint64_t batch_budget);
+
+// The six E-step constants of component j of `gmm` (kernels/em.cl component_constants) into
+// rows 0..5 of `cp` (row stride K), computed in double then rounded to float: the mean, the
+// inverse covariance times -log2(e) / 2, and log2_weight - log2(2 pi) - log2(det) / 2.
+void component_constants(const Gmm& gmm, int j, int K, double log2_weight, float* cp);
 
 // Cells per chunk (one work-group): WG * CPW * VEC, the same on every device kind.
 constexpr std::size_t kChunkCells = 512;

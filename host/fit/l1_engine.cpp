@@ -46,13 +46,7 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
     if (slices.w[queries[i].slice].empty()) continue;  // a zero slice: objective 0
     groups[k_bucket(queries[i].gmm.k())].push_back(i);
   }
-  std::vector<std::pair<int, std::vector<std::size_t>>> batches;
-  for (auto& [bucket, list] : groups) {
-    const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket);
-    const std::size_t cap = static_cast<std::size_t>(std::max<std::uint64_t>(1, batch_budget_ / per));
-    for (std::size_t b = 0; b < list.size(); b += cap)
-      batches.push_back({bucket, std::vector<std::size_t>(list.begin() + b, list.begin() + std::min(list.size(), b + cap))});
-  }
+  const auto batches = bucket_batches(groups, stride, 0, batch_budget_);
 
   std::vector<cl::CommandQueue> queues;
   std::vector<std::size_t> queue_device;
@@ -79,16 +73,8 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
       prob_k[i] = q.gmm.k();
       // The E-step constants of kernels/em.cl component_constants, in double then float.
       for (int j = 0; j < q.gmm.k(); ++j) {
-        const double a = q.gmm.cov[3 * j], b = q.gmm.cov[3 * j + 1], c = q.gmm.cov[3 * j + 2];
-        const double det = a * c - b * b, l2e = 1.4426950408889634;
-        float* cp = &cparams[i * nconst];
-        cp[0 * K + j] = static_cast<float>(q.gmm.mean[2 * j]);
-        cp[1 * K + j] = static_cast<float>(wrap_phi(q.gmm.mean[2 * j + 1]));
-        cp[2 * K + j] = static_cast<float>(-0.5 * l2e * c / det);
-        cp[3 * K + j] = static_cast<float>(l2e * b / det);
-        cp[4 * K + j] = static_cast<float>(-0.5 * l2e * a / det);
-        cp[5 * K + j] = static_cast<float>(std::log2(q.gmm.weight[j]) - std::log2(2 * kPi) - 0.5 * std::log2(det));
-        images[i * K + j] = l1_images(c);
+        component_constants(q.gmm, j, K, std::log2(q.gmm.weight[j]), &cparams[i * nconst]);
+        images[i * K + j] = l1_images(q.gmm.cov[3 * j + 2]);
       }
     }
     std::vector<float> weights(local_slice.size() * stride, 0.0f);
