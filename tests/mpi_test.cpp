@@ -5,6 +5,8 @@
 // labels: scale fit
 #include <catch2/catch.hpp>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <signal.h>
@@ -363,6 +365,17 @@ TEST_CASE("a 2-rank fit killed with SIGKILL resumes to the 1-process file", "[sc
     while (fs::exists("/proc/" + std::to_string(rank)) &&
            slurp("/proc/" + std::to_string(rank) + "/stat").find(") Z") == std::string::npos)
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  // A rank's main thread shows as a zombie while its other threads (device, MPI) still
+  // tear down and keep its files open; the lock is free once the last of them is gone.
+  const std::string lock_path = out + ".lock";
+  auto lock_free = [&] {
+    const int fd = ::open(lock_path.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd < 0) return true;
+    const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+    ::close(fd);
+    return free;
+  };
+  while (!lock_free()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   CHECK_FALSE(fs::exists(out));
   const std::size_t done = committed();
   REQUIRE(done >= 1);
