@@ -1,13 +1,14 @@
 #!/usr/bin/python3
 """How small a stand-in can be: bytes against error for the shipped RGL materials.
 
-For each data/rgl/*.bsdf: import (30 theta_o x 90 x 180), fit stand-ins on every 1st,
+For each data/rgl/*.bsdf: import (30 theta_o x 90 x 180, or --rows theta_o), fit stand-ins on every 1st,
 2nd and 4th table theta_o slice at K max 4, 8, 16 (the fit settings of
 configs/converge_light_satin.yaml otherwise), pack each fit in every storage
 (padded / ragged, rgb_scale float64 / float32), compare each with its table at every
 table slice, and write bench/results/stand_in_bytes.csv and docs/images/stand_in_bytes.png.
 
     /usr/bin/python3 bench/stand_in_bytes.py [--materials a,b] [--steps 1,2,4] [--kmax 4,8,16]
+                                             [--rows 30] [--csv F] [--png P, "" for none]
 
 Storage does not change the mixtures (float32 rounding of rgb_scale aside), so each fit
 is compared once per rgb precision; padded and ragged files of one precision hold the
@@ -57,6 +58,7 @@ def main():
     ap.add_argument("--materials", default="satin_rosaline,paper_white,cg_sunflower")
     ap.add_argument("--steps", default="1,2,4")
     ap.add_argument("--kmax", default="4,8,16")
+    ap.add_argument("--rows", type=int, default=30, help="theta_o rows of the imported tables")
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "stand_in_bytes.csv"))
     ap.add_argument("--png", default=os.path.join(ROOT, "docs", "images", "stand_in_bytes.png"))
     ap.add_argument("--chart-only", action="store_true", help="redraw the chart from --csv")
@@ -77,14 +79,14 @@ def main():
     out = []
     for mat in a.materials.split(","):
         bsdf = os.path.join(ROOT, "data", "rgl", mat + "_rgb.bsdf")
-        table = os.path.join(WORK, mat + "_table.h5")
+        table = os.path.join(WORK, "%s_table%s.h5" % (mat, "" if a.rows == 30 else "_%d" % a.rows))
         if not os.path.exists(table):
-            run([BIN, "import", "rgl", bsdf, "--theta-o", "30", "--theta-i", "90", "--phi-i", "180", "-o", table, "--quiet"])
+            run([BIN, "import", "rgl", bsdf, "--theta-o", str(a.rows), "--theta-i", "90", "--phi-i", "180", "-o", table, "--quiet"])
         axis = table_theta_o(table)
         for step in [int(x) for x in a.steps.split(",")]:
             chosen = axis[::step]
             for kmax in [int(x) for x in a.kmax.split(",")]:
-                stem = os.path.join(WORK, "%s_s%d_k%d" % (mat, step, kmax))
+                stem = os.path.join(WORK, "%s_r%d_s%d_k%d" % (mat, a.rows, step, kmax))
                 mixture = stem + ".h5"
                 cfg = stem + ".yaml"
                 with open(cfg, "w") as f:  # converge_light_satin.yaml's fit, but k_max and theta_o
@@ -94,6 +96,9 @@ def main():
                 t0 = time.time()
                 if not os.path.exists(mixture):  # a cached fit keeps the seconds it took
                     run([BIN, "fit", cfg, "--quiet"])
+                    fitted = len(list(csv.DictReader(open(stem + "_fit.csv"))))
+                    if fitted != len(chosen):
+                        sys.exit("%s: %d slices fitted for %d planned" % (cfg, fitted, len(chosen)))
                     with open(stem + ".seconds", "w") as f:
                         f.write("%.1f\n" % (time.time() - t0))
                 fit_s = float(open(stem + ".seconds").read()) if os.path.exists(stem + ".seconds") else float("nan")
@@ -108,7 +113,7 @@ def main():
                         run([BIN, "compare", packed, table, "--csv", cmp_csv, "--quiet"])
                         stats[prec] = compare_stats(cmp_csv)
                     s = stats[prec]
-                    out.append(dict(material=mat, slices_fitted=len(chosen), every=step, k_max=kmax, storage=st,
+                    out.append(dict(material=mat, rows=len(axis), slices_fitted=len(chosen), every=step, k_max=kmax, storage=st,
                                     bytes=payload, file_bytes=os.path.getsize(packed),
                                     median_rgb_error=s["median_rgb"], p90_rgb_error=s["p90_rgb"],
                                     median_l1=s["median_l1"], max_energy_error=s["max_energy"],
@@ -121,7 +126,8 @@ def main():
         w.writeheader()
         for r in out:
             w.writerow({k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()})
-    chart(out, a.png)
+    if a.png:
+        chart(out, a.png)
     print("total %.0f s; wrote %s and %s" % (time.time() - t_start, a.csv, a.png))
 
 

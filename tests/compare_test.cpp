@@ -47,8 +47,9 @@ MixtureFile two_slice_mixture(double scale) {
   return m;
 }
 
-// The table whose every slice is the stand-in of `m` at its cell centers (grey rgb).
-std::string table_of(const MixtureFile& m, const std::string& name) {
+// The table whose every slice is the stand-in of `m` at its cell centers (grey rgb; with
+// `noisy_blue`, blue is instead alternating +-0.01 around zero, as a noisy measurement).
+std::string table_of(const MixtureFile& m, const std::string& name, bool noisy_blue = false) {
   TableMeta meta = make_grid(Domain::Hemisphere, 3, 1, 24, 48, true);
   meta.rgb = true;
   const mix::MixtureSet set = to_mixture_set(m);
@@ -60,6 +61,7 @@ std::string table_of(const MixtureFile& m, const std::string& name) {
       for (double ph : meta.phi_i) {
         v.push_back(float(set.eval_f(meta.theta_o[t], 0.0, th, ph)));
         for (int c = 0; c < 3; ++c) rgb.push_back(v.back());
+        if (noisy_blue) rgb.back() = (v.size() % 2 ? 0.01f : -0.01f);
       }
     w.write_slice(t, 0, v.data(), rgb.data());
   }
@@ -100,8 +102,31 @@ TEST_CASE("a table made of the stand-in compares to zero; a scaled stand-in by i
   }
   const std::string csv = comparison_csv(d);
   CHECK(csv.rfind("slice,theta_o,phi_o,fitted,l1_rel,l1_r,l1_g,l1_b,rgb_error,rgb_negative_share,energy,energy_r,"
-                  "energy_g,energy_b\n", 0) == 0);
+                  "energy_g,energy_b,noise\n", 0) == 0);
   CHECK_THAT(comparison_summary(d), Catch::Contains("between fitted (1 slices)"));
+}
+
+TEST_CASE("a channel of noise around zero is flagged and left out of the energy line", "[compare]") {
+  Progress::set_enabled(false);
+  const MixtureFile exact = two_slice_mixture(1.0);
+  const std::string mixture = (temp_dir() / "noise.h5").string();
+  write_mixture_file(mixture, exact);
+  const Comparison c = compare_stand_in(mixture, table_of(exact, "noise_table.h5", true));
+  for (const SliceComparison& s : c.slices) {
+    INFO("slice " << s.slice);
+    CHECK_FALSE(s.noise[0]);
+    CHECK_FALSE(s.noise[1]);
+    CHECK(s.noise[2]);
+    CHECK(std::abs(s.energy_rgb[2]) > 1);  // the stand-in's blue is the luminance's: far off zero
+    CHECK(s.negative_share > 0);
+  }
+  const std::string summary = comparison_summary(c);
+  CHECK_THAT(summary, Catch::Contains("largest energy error 0.00% (B is noise around zero in 3 slices, not compared)"));
+  CHECK_THAT(comparison_csv(c), Catch::Contains(",b\n"));
+  // the grey table: no channel flagged
+  const Comparison grey = compare_stand_in(mixture, table_of(exact, "table.h5"));
+  for (const SliceComparison& s : grey.slices) CHECK_FALSE(s.noise[2]);
+  CHECK_THAT(comparison_summary(grey), !Catch::Contains("noise"));
 }
 
 TEST_CASE("the CLI writes the compare CSV and refuses a mismatched pair with one line", "[compare]") {
@@ -117,7 +142,7 @@ TEST_CASE("the CLI writes the compare CSV and refuses a mismatched pair with one
   std::string header;
   std::getline(in, header);
   CHECK(header == "slice,theta_o,phi_o,fitted,l1_rel,l1_r,l1_g,l1_b,rgb_error,rgb_negative_share,energy,energy_r,"
-                  "energy_g,energy_b");
+                  "energy_g,energy_b,noise");
   // a fiber table against a hemisphere mixture
   TableMeta fiber = make_grid(Domain::Fiber, 3, 1, 8, 16, true);
   const std::string other = (temp_dir() / "fiber.h5").string();

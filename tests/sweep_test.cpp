@@ -196,6 +196,16 @@ TEST_CASE("scene-driven plans fit the slices around each direction", "[fit][plan
   CHECK(p[0].t_o == 3);
   CHECK(p[1].t_o == 4);
   CHECK(plan_slices(m, {m.theta_o[3]}, {}).size() == 1);
+  // an axis value a few ulps off (written out and read back) is still that one slice
+  const TableMeta r = make_grid(Domain::Hemisphere, 30, 1, 4, 8, true);
+  for (std::size_t t = 0; t < r.theta_o.size(); ++t)
+    for (double x : {std::nextafter(std::nextafter(r.theta_o[t], 0.0), 0.0), r.theta_o[t],
+                     std::nextafter(std::nextafter(r.theta_o[t], 9.0), 9.0)}) {
+      const auto one = plan_slices(r, {x}, {});
+      INFO("theta_o row " << t << " at " << x);
+      REQUIRE(one.size() == 1);
+      CHECK(one[0].t_o == t);
+    }
   CHECK(plan_slices(m, {-1.57}, {}).front().t_o == 0);
   const TableMeta n = make_grid(Domain::Hemisphere, 4, 8, 4, 8, false);
   const auto q = plan_slices(n, {n.theta_o[1] + 0.05}, {3.1});  // phi_o wraps around to cell 0

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/progress.hpp"
+#include "fit/amplitudes.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 
@@ -23,6 +24,14 @@ double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, std::size_t(std::ceil(q * double(v.size()))) - (q > 0 ? 1 : 0))];
+}
+
+// The channels that are noise around zero, as "rgb" letters ("" for none).
+std::string noise_channels(const SliceComparison& r) {
+  std::string s;
+  for (int q = 0; q < 3; ++q)
+    if (r.noise[q]) s += "rgb"[q];
+  return s;
 }
 
 }  // namespace
@@ -57,6 +66,7 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
       const std::vector<float> f = reader.read_slice(t, p);
       const std::vector<float> rgb = m.rgb ? reader.read_slice_rgb(t, p) : std::vector<float>{};
       double d = 0, tot = 0, est = 0, drgb[3] = {0, 0, 0}, trgb[3] = {0, 0, 0}, ergb[3] = {0, 0, 0}, dneg = 0;
+      double tneg[3] = {0, 0, 0};
       for (std::size_t i = 0; i < nt; ++i)
         for (std::size_t j = 0; j < np; ++j) {
           const std::size_t k = i * np + j;
@@ -74,7 +84,7 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
             drgb[q] += e;
             trgb[q] += g[k] * std::abs(tv);
             ergb[q] += g[k] * ch[q] - g[k] * tv;
-            if (tv < 0) dneg += e;
+            if (tv < 0) dneg += e, tneg[q] -= g[k] * tv;
           }
         }
       double table_int = 0;
@@ -86,6 +96,7 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
         for (int q = 0; q < 3; ++q) {
           c.l1_rgb[q] = trgb[q] > 0 ? drgb[q] / trgb[q] : 0;
           c.energy_rgb[q] = trgb[q] > 0 ? ergb[q] / trgb[q] : 0;
+          c.noise[q] = is_noise(tneg[q], trgb[q]);
         }
         c.rgb_error = tsum > 0 ? dsum / tsum : 0;
         c.negative_share = dsum > 0 ? dneg / dsum : 0;
@@ -100,12 +111,12 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
 std::string comparison_csv(const Comparison& c) {
   std::ostringstream s;
   s << "slice,theta_o,phi_o,fitted,l1_rel,l1_r,l1_g,l1_b,rgb_error,rgb_negative_share,energy,energy_r,energy_g,"
-       "energy_b\n";
+       "energy_b,noise\n";
   for (const SliceComparison& r : c.slices)
     s << r.slice << "," << num(r.theta_o) << "," << num(r.phi_o) << "," << (r.fitted ? 1 : 0) << "," << num(r.l1)
       << "," << num(r.l1_rgb[0]) << "," << num(r.l1_rgb[1]) << "," << num(r.l1_rgb[2]) << "," << num(r.rgb_error)
       << "," << num(r.negative_share) << "," << num(r.energy) << "," << num(r.energy_rgb[0]) << ","
-      << num(r.energy_rgb[1]) << "," << num(r.energy_rgb[2]) << "\n";
+      << num(r.energy_rgb[1]) << "," << num(r.energy_rgb[2]) << "," << noise_channels(r) << "\n";
   return s.str();
 }
 
@@ -113,12 +124,17 @@ std::string comparison_summary(const Comparison& c) {
   std::ostringstream s;
   auto line = [&](const char* what, bool pick_fitted, bool all) {
     std::vector<double> l1, rgb, energy;
+    std::size_t noisy[3] = {0, 0, 0};
     for (const SliceComparison& r : c.slices) {
       if (!all && r.fitted != pick_fitted) continue;
       l1.push_back(r.l1);
       rgb.push_back(r.rgb_error - r.rgb_error * r.negative_share);
-      energy.push_back(std::max({std::abs(r.energy), std::abs(r.energy_rgb[0]), std::abs(r.energy_rgb[1]),
-                                 std::abs(r.energy_rgb[2])}));
+      double e = std::abs(r.energy);  // a noise channel has no integral to keep: counted, not compared
+      for (int q = 0; q < 3; ++q) {
+        if (!r.noise[q]) e = std::max(e, std::abs(r.energy_rgb[q]));
+        noisy[q] += r.noise[q];
+      }
+      energy.push_back(e);
     }
     if (l1.empty()) return;
     s << "  " << what << " (" << l1.size() << " slices): relative L1 median " << format_number(100 * quantile(l1, 0.5), "%.2f")
@@ -126,7 +142,10 @@ std::string comparison_summary(const Comparison& c) {
     if (c.rgb)
       s << "; RGB error less its negative share median " << format_number(100 * quantile(rgb, 0.5), "%.2f") << "%, p90 "
         << format_number(100 * quantile(rgb, 0.9), "%.2f") << "%";
-    s << "; largest energy error " << format_number(100 * quantile(energy, 1.0), "%.2f") << "%\n";
+    s << "; largest energy error " << format_number(100 * quantile(energy, 1.0), "%.2f") << "%";
+    for (int q = 0; q < 3; ++q)
+      if (noisy[q]) s << " (" << "RGB"[q] << " is noise around zero in " << noisy[q] << " slices, not compared)";
+    s << "\n";
   };
   line("every table slice", false, true);
   line("fitted", true, false);

@@ -23,6 +23,9 @@ struct SliceComparison {
   double negative_share = 0;  // of that sum, the share in cells where the table's channel is negative
   double energy = 0;        // the stand-in's integral over the table's, minus 1 (luminance)
   double energy_rgb[3] = {0, 0, 0};
+  // per channel: noise around zero (its negative cells hold more than 0.5% of its absolute
+  // sum, the fit's rule, docs/fitting.md "A noisy channel"): no integral the stand-in keeps
+  bool noise[3] = {false, false, false};
 };
 
 struct Comparison {

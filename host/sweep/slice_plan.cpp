@@ -9,11 +9,14 @@ namespace bsdfmix {
 
 namespace {
 
-// The axis cells around x (bracket: clamped at the ends, periodic axes wrap); on a
-// clamped axis one cell when x is at its center.
+// The axis cells around x (bracket: clamped at the ends, periodic axes wrap); one cell
+// when x is at its center, to rounding (an axis value written out and read back lands a
+// few ulps to either side of it).
 std::vector<std::size_t> around(const std::vector<double>& axis, double x, bool periodic) {
   const Bracket b = bracket(axis, x, periodic);
-  if (b.i1 == b.i0 || (!periodic && b.f == 0)) return {b.i0};
+  constexpr double kAt = 1e-9;  // of a cell
+  if (b.i1 == b.i0 || b.f < kAt) return {b.i0};
+  if (b.f > 1 - kAt) return {b.i1};
   return {b.i0, b.i1};
 }
 
