@@ -43,6 +43,9 @@ RGL = {
     "paper": "paper_white_rgb.bsdf",
     "sunflower": "cg_sunflower_rgb.bsdf",
 }
+# The fiber presets, generated at --fiber-theta-o rows (90 x 180 cells) in their colours
+# (docs/fiber.md, "Colour"). The fiber domain's integrand weights have no cos theta_i.
+FIBERS = ("silk", "cotton", "polyester", "wool")
 
 
 def cpu_model():
@@ -92,8 +95,14 @@ def recompute(table_path, mixture_path):
     dth, dph = theta[1] - theta[0], phi[1] - phi[0]
     area = dth * dph
     tt, pp = np.meshgrid(theta, phi, indexing="ij")
-    jac = np.cos(tt) * np.sin(tt) * area  # hemisphere: f cos(theta_i) J dtheta dphi
-    lo, hi = 0.0, math.pi / 2
+    domain = t.attrs["domain"]
+    domain = domain.decode() if isinstance(domain, bytes) else str(domain)
+    if domain == "fiber":  # f J dtheta dphi, J = cos(theta_i), theta_i in [-pi/2, pi/2]
+        jac = np.cos(tt) * area
+        lo, hi = -math.pi / 2, math.pi / 2
+    else:  # hemisphere: f cos(theta_i) J dtheta dphi, J = sin(theta_i)
+        jac = np.cos(tt) * np.sin(tt) * area
+        lo, hi = 0.0, math.pi / 2
     has_rgb = "rgb_scale" in m
     rows = []
     for s in range(m["k"].shape[0]):
@@ -137,7 +146,10 @@ def run(args):
     results = []
     for name in [n for n in args.tables.split(",") if n]:
         table = os.path.join(args.work, name + ".h5")
-        if not os.path.exists(table):
+        if not os.path.exists(table) and name in FIBERS:
+            subprocess.run([args.bsdfmix, "generate", "fiber", "--preset", name, "--theta-o", str(args.fiber_theta_o),
+                            "-o", table, "--quiet"], check=True)
+        elif not os.path.exists(table):
             subprocess.run([args.bsdfmix, "import", "rgl", os.path.join(ROOT, "data", "rgl", RGL[name]), "-o", table,
                             "--quiet"], check=True)
         out = os.path.join(args.work, name)
@@ -192,7 +204,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bsdfmix", default=os.path.join(ROOT, "build", "bsdfmix"))
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "bench_rgb"))
-    ap.add_argument("--tables", default="satin,paper,sunflower")
+    ap.add_argument("--tables", default="satin,paper,sunflower," + ",".join(FIBERS))
+    ap.add_argument("--fiber-theta-o", type=int, default=45, help="theta_o rows of the generated fiber tables")
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "rgb_stand_in.csv"))
     args = ap.parse_args()
     results = run(args)
