@@ -271,4 +271,50 @@ std::vector<EmResult> split_merge_fit(const EmFitter& fitter, const SliceSet& se
   return best;
 }
 
+Gmm seed_at_residual(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm, int k_new, double floor) {
+  const std::size_t nt = grid.theta.size(), np = grid.phi.size();
+  if (nt < 2 || np < 2 || gmm.k() >= k_new) return gmm;
+  const double dt = grid.theta[1] - grid.theta[0], dp = grid.phi[1] - grid.phi[0];
+  double total = 0;
+  for (double x : w) total += std::max(x, 0.0);
+  if (!(total > 0)) return gmm;
+  std::vector<double> r(w.size());
+  for (std::size_t i = 0; i < w.size(); ++i)
+    r[i] = w[i] - total * gmm_density(gmm, grid.theta[i / np], grid.phi[i % np]) * dt * dp;
+  Gmm out = gmm;
+  constexpr int kHalf = 2;  // the 5 x 5 window
+  while (out.k() < k_new) {
+    const std::size_t at = std::size_t(std::max_element(r.begin(), r.end()) - r.begin());
+    if (!(r[at] > 0)) break;
+    const long ti = long(at / np), pj = long(at % np);
+    double m0 = 0, mt = 0, mp = 0, stt = 0, stp = 0, spp = 0;
+    std::vector<std::size_t> window;
+    for (long a = std::max(0L, ti - kHalf); a <= std::min(long(nt) - 1, ti + kHalf); ++a)
+      for (long b = -kHalf; b <= kHalf; ++b) {
+        const std::size_t j = std::size_t((pj + b + long(np)) % long(np)), i = std::size_t(a) * np + j;
+        window.push_back(i);
+        if (!(r[i] > 0)) continue;
+        const double x = grid.theta[std::size_t(a)] - grid.theta[std::size_t(ti)], y = double(b) * dp;
+        m0 += r[i];
+        mt += r[i] * x;
+        mp += r[i] * y;
+        stt += r[i] * x * x;
+        stp += r[i] * x * y;
+        spp += r[i] * y * y;
+      }
+    mt /= m0;
+    mp /= m0;
+    double a = stt / m0 - mt * mt, b = stp / m0 - mt * mp, c = spp / m0 - mp * mp;
+    em_detail::floor_covariance(a, b, c, floor);
+    const double share = std::min(0.5, m0 / total);
+    for (double& x : out.weight) x *= 1 - share;
+    out.weight.push_back(share);
+    out.mean.push_back(grid.theta[std::size_t(ti)] + mt);
+    out.mean.push_back(wrap_phi(grid.phi[std::size_t(pj)] + mp));
+    for (double x : {a, b, c}) out.cov.push_back(x);
+    for (std::size_t i : window) r[i] = 0;
+  }
+  return out;
+}
+
 }  // namespace bsdfmix

@@ -52,6 +52,15 @@ Gmm merge_components(const Gmm& gmm, int i, int j);
 // parent and splits along its major axis).
 Gmm grow_mixture(const Gmm& gmm, const ComponentScores& scores, int k_new, double floor);
 
+// `gmm` grown to k_new components by components seeded where the slice holds most that
+// the mixture does not: each new component sits at the cell of the largest residual
+// w_i - W m_i (m_i the mixture's cell mass, W = sum w), with the mean and covariance
+// (eigenvalues raised to `floor`) of the positive residual in the 5 x 5 cells around it
+// and that residual's share of W as its weight (the others scaled to keep the sum 1);
+// that window is then spent and the next component seeded. A sharp peak that EM's
+// growth by splitting never reaches gets a component of its own this way.
+Gmm seed_at_residual(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm, int k_new, double floor);
+
 // Up to `count` split-and-merge candidates of the same K: the pairs in `scores.merge`
 // order merged, each with the worst-scoring other component split. Needs K >= 3.
 std::vector<Gmm> smem_candidates(const Gmm& gmm, const ComponentScores& scores, int count, double floor);

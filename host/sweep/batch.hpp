@@ -53,10 +53,10 @@ struct Batch {
   std::vector<SliceWork> work;
   SliceSet full_set;  // every slice of the batch at full resolution
   // Per slice: the K chosen, the K it was reduced from (0: not), the fit kept so far,
-  // with `search: smem` the search's fit of the candidate K below the chosen one, the
-  // first failure seen, and its rows of the search CSV in the order searched.
+  // with `search: smem` the search's fits of the candidate Ks below and above the chosen
+  // one, the first failure seen, and its rows of the search CSV in the order searched.
   std::vector<int> chosen, reduced_from;
-  std::vector<Fitted> best, below;
+  std::vector<Fitted> best, below, above;
   std::vector<std::string> failure;
   std::vector<std::vector<SearchRow>> search_rows;
 
@@ -75,8 +75,9 @@ struct Batch {
   void run(const std::vector<EmTask>& tasks);
   // The chosen K of every slice at full resolution, with final_restarts and final_iterations.
   void final_fits();
-  // The L1 refinement of every kept fit and, with `with_below`, of every fit below it.
-  void refine(bool with_below);
+  // The L1 refinement of every kept fit and, with `with_neighbours`, of every fit below
+  // and above it.
+  void refine(bool with_neighbours);
   // A slice with fewer non-zero cells than K is refitted with one component per cell.
   void reduce_k();
 };

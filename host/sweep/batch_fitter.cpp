@@ -124,11 +124,11 @@ void Batch::final_fits() {
   run(tasks);
 }
 
-// The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `with_below`,
-// of the candidate K below it (final_smem compares the two after). A refined mixture
+// The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `with_neighbours`,
+// of the candidate Ks below and above it (final_smem compares the three after). A refined mixture
 // replaces its start only when its relative L1 error (sweep/fit_error.cpp, the exact
 // periodic density) is lower; its log-likelihood is recomputed.
-void Batch::refine(bool with_below) {
+void Batch::refine(bool with_neighbours) {
   if (fit.refine != "l1") return;
   std::vector<L1Query> queries;
   std::vector<Fitted*> owners;
@@ -137,10 +137,11 @@ void Batch::refine(bool with_below) {
       queries.push_back({s, best[s].gmm});
       owners.push_back(&best[s]);
     }
-    if (with_below && s < below.size() && below[s].ok) {
-      queries.push_back({s, below[s].gmm});
-      owners.push_back(&below[s]);
-    }
+    for (std::vector<Fitted>* side : {&below, &above})
+      if (with_neighbours && s < side->size() && (*side)[s].ok) {
+        queries.push_back({s, (*side)[s].gmm});
+        owners.push_back(&(*side)[s]);
+      }
   }
   if (queries.empty()) return;
   const EmEngine::L1Slices slices = EmEngine::l1_prepare(full_set);  // once, not per evaluation
@@ -235,6 +236,7 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
   b.reduced_from.assign(n, 0);
   b.best.assign(n, Fitted{});
   b.below.assign(n, Fitted{});
+  b.above.assign(n, Fitted{});
   b.failure.assign(n, std::string());
   b.search_rows.assign(n, {});
 }

@@ -31,7 +31,11 @@ EmFitter engine_fitter(EmEngine& engine) {
 // engine call over the slices still walking. A slice stops walking once no larger K can
 // win: its best score is at most k_penalty times the next K (l1_rel >= 0), or, with an
 // error target, once a K meets it; and (a heuristic) when its best score has not
-// improved over the last kWalkPatience candidates.
+// improved over the last kWalkPatience candidates that were tried well. Once a K has
+// not improved the best score, the walk does not grow the last fit (a local optimum):
+// each later K starts twice from the best fit so far, grown by splitting and grown by
+// components seeded at the slice's largest residual (a sharp peak the splits miss), and
+// keeps the better; only such K count toward the patience.
 void search_smem(Batch& b) {
   const FitSection& fit = b.fit;
   const std::vector<int>& ks = b.ks;
@@ -48,7 +52,9 @@ void search_smem(Batch& b) {
     std::vector<Candidate> cands;
     std::vector<Fitted> per_k;
     double best_score = 1e300;
+    Gmm best_gmm;        // the fit of the best score so far
     int since_best = 0;  // candidates walked since the best score last improved
+    int tried_well = 0;  // of those, the ones started twice from the best fit
   };
   std::vector<Walk> walk(n);
   for (std::size_t s = 0; s < n; ++s) walk[s].active = !b.zero(s);
@@ -59,38 +65,64 @@ void search_smem(Batch& b) {
       if (walk[s].active) live.push_back(s);
     if (live.empty()) break;
     // The start of K for every walking slice (grown on the host, in parallel).
-    std::vector<EmTask> tasks(live.size());
+    // A stalled slice (its last K did not improve the best score) gets two starts.
+    std::vector<int> starts(live.size());
+    std::vector<std::size_t> first(live.size());  // its first task
+    std::size_t n_tasks = 0;
+    for (std::size_t i = 0; i < live.size(); ++i) {
+      const Walk& wk = walk[live[i]];
+      starts[i] = ki > 0 && wk.since_best > 0 && wk.best_gmm.k() > 0 && wk.best_gmm.k() < k ? 2 : 1;
+      first[i] = n_tasks;
+      n_tasks += std::size_t(starts[i]);
+    }
+    std::vector<EmTask> tasks(n_tasks);
     run_on_workers(live.size(), std::min(threads, live.size()), [&](std::size_t, std::size_t i) {
       const std::size_t s = live[i];
-      EmTask t = make_task(s, k, fit.iterations, fit.tolerance, task_seed(fit.seed, b.work[s].ref.index, k, 0));
-      const EmResult& prev = walk[s].cur;
-      if (ki > 0 && prev.ok && prev.gmm.k() < k) {
-        const ComponentScores sc = score_components(set.grid, set.weights[s], prev.gmm, 0);
-        t.init = grow_mixture(prev.gmm, sc, k, em_detail::cov_floor(set.grid, t.settings));
-      } else {
-        t.settings.restarts = fit.restarts;  // no fit to grow: k-means++ restarts
+      const Walk& wk = walk[s];
+      for (int r = 0; r < starts[i]; ++r) {
+        EmTask t = make_task(s, k, fit.iterations, fit.tolerance, task_seed(fit.seed, b.work[s].ref.index, k, r));
+        const double floor = em_detail::cov_floor(set.grid, t.settings);
+        const Gmm& from = starts[i] == 2 ? wk.best_gmm : wk.cur.gmm;
+        if (ki > 0 && (starts[i] == 2 || wk.cur.ok) && from.k() < k) {
+          const ComponentScores sc = score_components(set.grid, set.weights[s], from, 0);
+          if (r == 0) {
+            t.init = grow_mixture(from, sc, k, floor);
+          } else {
+            t.init = seed_at_residual(set.grid, set.weights[s], from, k, floor);
+            if (t.init.k() < k) t.init = grow_mixture(t.init, score_components(set.grid, set.weights[s], t.init, 0), k, floor);
+          }
+        } else {
+          t.settings.restarts = fit.restarts;  // no fit to grow: k-means++ restarts
+        }
+        tasks[first[i] + std::size_t(r)] = std::move(t);
       }
-      tasks[i] = std::move(t);
     });
     const std::vector<EmResult> res = split_merge_fit(fitter, set, tasks, smem);
-    std::vector<Fitted> fitted(live.size());
-    run_on_workers(live.size(), std::min(threads, live.size()),
-                   [&](std::size_t, std::size_t i) { fitted[i] = evaluate(res[i], b.work[live[i]].full); });
+    std::vector<Fitted> fitted(n_tasks);
+    run_on_workers(n_tasks, std::min(threads, n_tasks),
+                   [&](std::size_t, std::size_t i) { fitted[i] = evaluate(res[i], b.work[tasks[i].slice].full); });
     for (std::size_t i = 0; i < live.size(); ++i) {
       const std::size_t s = live[i];
       Walk& wk = walk[s];
-      wk.cur = res[i];
-      const Fitted& f = fitted[i];
+      std::size_t pick = first[i];
+      for (int r = 1; r < starts[i]; ++r) {
+        const Fitted& g = fitted[first[i] + std::size_t(r)];
+        if (g.ok && (!fitted[pick].ok || g.l1 < fitted[pick].l1)) pick = first[i] + std::size_t(r);
+      }
+      wk.cur = res[pick];
+      const Fitted& f = fitted[pick];
       wk.cands.push_back(Candidate{k, f.ok ? f.l1 : 1e300, f.ok});
       wk.per_k.push_back(f);
       if (f.ok && candidate_score(k, f.l1, fit.k_penalty) < wk.best_score) {
         wk.best_score = candidate_score(k, f.l1, fit.k_penalty);
-        wk.since_best = 0;
+        wk.best_gmm = f.gmm;
+        wk.since_best = wk.tried_well = 0;
       } else {
         ++wk.since_best;
+        wk.tried_well += starts[i] == 2;
       }
-      if (!fit.error_target && wk.since_best >= kWalkPatience) wk.active = false;
-      b.search_rows[s].push_back(b.search_row(s, k, 0, f));
+      if (!fit.error_target && wk.tried_well >= kWalkPatience) wk.active = false;
+      for (int r = 0; r < starts[i]; ++r) b.search_rows[s].push_back(b.search_row(s, k, r, fitted[first[i] + std::size_t(r)]));
       if (fit.error_target ? f.ok && f.l1 <= *fit.error_target
                            : ki + 1 < ks.size() && wk.best_score <= fit.k_penalty * ks[ki + 1])
         wk.active = false;
@@ -108,19 +140,22 @@ void search_smem(Batch& b) {
     b.chosen[s] = wk.cands[pick].k;
     b.best[s] = wk.per_k[pick];
     if (pick > 0 && wk.per_k[pick - 1].ok) b.below[s] = wk.per_k[pick - 1];
+    if (pick + 1 < wk.per_k.size() && wk.per_k[pick + 1].ok) b.above[s] = wk.per_k[pick + 1];
   }
 }
 
 // The final fits of the walk: as Batch::final_fits, but restart 0 starts from the
 // search's fit of the chosen K (when K is pinned: k-means++ followed by split-and-merge
-// rounds), and the candidate K just below the chosen one is refitted as long, from its
-// search fit, and chosen instead when its score is now the better one (EM separates
-// overlapping lobes slowly: a search fit of the true K can stop short of it).
+// rounds), and the candidate Ks just below and just above the chosen one are refitted as
+// long, from their search fits, refined like it, and chosen instead when the score is
+// now the better one (EM separates overlapping lobes slowly: a search fit of the true K
+// can stop short of it; and the search compares EM's fits, whose L1 error the
+// refinement can cut by more at the K above than the penalty of its components).
 void final_smem(Batch& b) {
   const FitSection& fit = b.fit;
   const std::size_t n = b.size();
   std::vector<EmTask> tasks, first;
-  std::vector<int> role;  // per task: 0 a restart of the chosen K, 1 the K below
+  std::vector<int> role;  // per task: 0 a restart of the chosen K, 1 the K below, 2 the K above
   for (std::size_t s = 0; s < n; ++s) {
     if (b.zero(s)) continue;
     for (int r = 0; r < fit.final_restarts; ++r) {
@@ -151,6 +186,15 @@ void final_smem(Batch& b) {
         }
       }
     }
+    if (b.above[s].ok) {  // from its search fit, and from one k-means++ restart
+      for (int r = 0; r < 2; ++r) {
+        EmTask t = make_task(s, b.above[s].gmm.k(), fit.final_iterations, fit.tolerance,
+                             task_seed(fit.seed, b.work[s].ref.index, b.above[s].gmm.k(), -1 - r));
+        if (r == 0) t.init = b.above[s].gmm;
+        tasks.push_back(std::move(t));
+        role.push_back(2);
+      }
+    }
   }
   if (!first.empty()) {  // pinned K
     const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, first, SmemSettings{});
@@ -163,17 +207,25 @@ void final_smem(Batch& b) {
                    [&](std::size_t, std::size_t i) { fitted[i] = evaluate(results[i], b.work[tasks[i].slice].full); });
     for (std::size_t i = 0; i < results.size(); ++i) {
       const std::size_t s = tasks[i].slice;
+      Fitted& side = role[i] == 1 ? b.below[s] : b.above[s];
       if (role[i] == 0) b.offer(s, fitted[i]);
-      else if (fitted[i].ok && fitted[i].l1 < b.below[s].l1) b.below[s] = fitted[i];
+      else if (fitted[i].ok && fitted[i].l1 < side.l1) side = fitted[i];
     }
   }
   b.refine(true);
   for (std::size_t s = 0; s < n; ++s) {
-    if (b.below[s].ok && b.best[s].ok) {
-      const std::vector<Candidate> two = {{b.below[s].gmm.k(), b.below[s].l1, true}, {b.chosen[s], b.best[s].l1, true}};
-      if (choose_candidate(two, fit.k_penalty, fit.error_target) == 0) {
-        b.chosen[s] = b.below[s].gmm.k();
-        b.best[s] = b.below[s];
+    if (b.best[s].ok) {
+      std::vector<Candidate> three;
+      std::vector<const Fitted*> fits;
+      for (const Fitted* f : {&b.below[s], &b.best[s], &b.above[s]})
+        if (f->ok) {
+          three.push_back({f->gmm.k(), f->l1, true});
+          fits.push_back(f);
+        }
+      const Fitted* won = fits[choose_candidate(three, fit.k_penalty, fit.error_target)];
+      if (won != &b.best[s]) {
+        b.chosen[s] = won->gmm.k();
+        b.best[s] = *won;
       }
     }
     b.mark_chosen(s);

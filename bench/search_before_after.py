@@ -1,0 +1,75 @@
+#!/usr/bin/python3
+"""The Gaussian-count search of two builds side by side, in one run (docs/fitting.md,
+"A walk that does not give up"): for each table, each build fits it with the default
+settings and the script reads the fit report: slices, mean K, median, p90 and max
+relative L1 error, and the wall time. Rows alternate between the builds table by table,
+so that the machine's load falls on both alike.
+
+    /usr/bin/python3 bench/search_before_after.py --before B/bsdfmix --after build/bsdfmix \\
+        --tables satin=out/bench_rgb/satin.h5,... [--csv bench/results/search_before_after.csv]
+
+The tables are made by bench/rgb_stand_in.py (the RGL materials at 90 theta_o, the fiber
+presets at 45) and by bench/hard_table.py (a sharp peak on a broad base with fringes).
+"""
+import argparse
+import csv
+import os
+import statistics
+import subprocess
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def cpu_model():
+    out = subprocess.run("lscpu | grep 'Model name'", shell=True, capture_output=True, text=True).stdout
+    return out.split(":", 1)[-1].strip().replace(",", ";") or "unknown"
+
+
+def fit(binary, table, stem):
+    cfg = stem + ".yaml"
+    with open(cfg, "w") as f:
+        f.write(f"table: {table}\nfit:\n  output: {stem}_mixture.h5\n  report: {stem}_fit.csv\n"
+                f"  search_report: {stem}_search.csv\n")
+    for suffix in ("_mixture.h5",):
+        if os.path.exists(stem + suffix):
+            os.remove(stem + suffix)
+    start = time.monotonic()
+    subprocess.run([binary, "fit", "-q", cfg], check=True, stdout=subprocess.DEVNULL)
+    seconds = time.monotonic() - start
+    rows = list(csv.DictReader(open(stem + "_fit.csv")))
+    l1 = sorted(float(r["l1_rel"]) for r in rows)
+    return dict(slices=len(rows), mean_k=statistics.mean(int(r["k"]) for r in rows),
+                l1_median=statistics.median(l1), l1_p90=l1[min(len(l1) - 1, int(0.9 * len(l1)))],
+                l1_max=l1[-1], seconds=seconds)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--before", required=True)
+    ap.add_argument("--after", default=os.path.join(ROOT, "build", "bsdfmix"))
+    ap.add_argument("--tables", required=True, help="name=path,...")
+    ap.add_argument("--work", default=os.path.join(ROOT, "out", "search_before_after"))
+    ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "search_before_after.csv"))
+    a = ap.parse_args()
+    os.makedirs(a.work, exist_ok=True)
+    out = []
+    cpu, cores = cpu_model(), os.cpu_count()
+    for item in a.tables.split(","):
+        name, path = item.split("=", 1)
+        for label, binary in (("before", a.before), ("after", a.after)):
+            r = fit(binary, path, os.path.join(a.work, f"{name}_{label}"))
+            r = dict(table=name, build=label, **r, cpu=cpu, cores=cores)
+            out.append(r)
+            print(f"{name:10s} {label:6s} K {r['mean_k']:.2f}  L1 median {100 * r['l1_median']:.2f}% p90 "
+                  f"{100 * r['l1_p90']:.2f}% max {100 * r['l1_max']:.2f}%  {r['seconds']:.1f} s", flush=True)
+    with open(a.csv, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(out[0].keys()), lineterminator="\n")
+        w.writeheader()
+        for r in out:
+            w.writerow({k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()})
+    print("wrote", a.csv)
+
+
+if __name__ == "__main__":
+    main()
