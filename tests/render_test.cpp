@@ -594,3 +594,35 @@ TEST_CASE("bad render configs are rejected with one line naming the key", "[rend
   p.weave = "satin";
   CHECK_THROWS_WITH(make_cloth(p, "scene.yaml: render.cloth"), Catch::Contains("weave"));
 }
+
+TEST_CASE("a measured channel's cells below zero reflect nothing", "[render][color]") {
+  // cg_sunflower's blue is noise around zero; rendered as it is, its negative cells
+  // made negative pixels, which no image may hold.
+  const std::string path = (temp_dir() / "negative_rgb_table.h5").string();
+  TableMeta meta = make_grid(Domain::Hemisphere, 4, 1, 8, 16, true);
+  meta.rgb = true;
+  {
+    TableWriter w(path, meta);
+    const std::vector<float> v(meta.cells_per_slice(), 0.2f);
+    std::vector<float> rgb(3 * v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      rgb[3 * i] = 0.3f;
+      rgb[3 * i + 1] = 0.2f;
+      rgb[3 * i + 2] = i % 2 ? 0.01f : -0.01f;
+    }
+    for (std::size_t t = 0; t < meta.theta_o.size(); ++t) w.write_slice(t, 0, v.data(), rgb.data());
+    w.commit();
+  }
+  TableBsdf bsdf(path);
+  std::size_t zero = 0, positive = 0;
+  for (double th : meta.theta_i)
+    for (double ph : meta.phi_i) {
+      const Rgb c = bsdf.f_rgb(FSource::Table, meta.theta_o[1], th, ph);
+      CHECK(c[2] >= 0);
+      CHECK(c[0] == Approx(0.3));
+      zero += c[2] == 0;
+      positive += c[2] > 0;
+    }
+  CHECK(zero == meta.cells_per_slice() / 2);  // the negative half, read as 0
+  CHECK(positive == meta.cells_per_slice() / 2);
+}

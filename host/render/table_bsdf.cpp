@@ -75,8 +75,11 @@ TableBsdf::TableBsdf(const std::string& table_path) {
   if (meta_.rgb) {
     rgb_.resize(3 * no * cells);
     for (std::size_t s = 0; s < no; ++s) {
+      // A measured channel's cells below zero are noise (cg_sunflower's blue): a
+      // reflectance is never negative, so they reflect nothing (docs/render.md).
       const std::vector<float> v = table.read_slice_rgb(s, 0);
-      std::copy(v.begin(), v.end(), rgb_.begin() + std::ptrdiff_t(3 * s * cells));
+      std::transform(v.begin(), v.end(), rgb_.begin() + std::ptrdiff_t(3 * s * cells),
+                     [](float x) { return std::max(x, 0.0f); });
     }
   }
   dth_ = axis_step(meta_.theta_i);
