@@ -31,11 +31,11 @@ EmFitter engine_fitter(EmEngine& engine) {
 // engine call over the slices still walking. A slice stops walking once no larger K can
 // win: its best score is at most k_penalty times the next K (l1_rel >= 0), or, with an
 // error target, once a K meets it; and (a heuristic) when its best score has not
-// improved over the last kWalkPatience candidates that were tried well. Once a K has
-// not improved the best score, the walk does not grow the last fit (a local optimum):
-// each later K starts twice from the best fit so far, grown by splitting and grown by
-// components seeded at the slice's largest residual (a sharp peak the splits miss), and
-// keeps the better; only such K count toward the patience.
+// improved over the last kWalkPatience candidates, one of them at least tried well.
+// Once a K has not improved the best score, the walk does not grow the last fit (a
+// local optimum): each later K starts twice from the best fit so far, grown by
+// splitting and grown by components seeded at the slice's largest residual (a sharp
+// peak the splits miss), and keeps the better: that K was tried well.
 void search_smem(Batch& b) {
   const FitSection& fit = b.fit;
   const std::vector<int>& ks = b.ks;
@@ -121,7 +121,7 @@ void search_smem(Batch& b) {
         ++wk.since_best;
         wk.tried_well += starts[i] == 2;
       }
-      if (!fit.error_target && wk.tried_well >= kWalkPatience) wk.active = false;
+      if (!fit.error_target && wk.since_best >= kWalkPatience && wk.tried_well > 0) wk.active = false;
       for (int r = 0; r < starts[i]; ++r) b.search_rows[s].push_back(b.search_row(s, k, r, fitted[first[i] + std::size_t(r)]));
       if (fit.error_target ? f.ok && f.l1 <= *fit.error_target
                            : ki + 1 < ks.size() && wk.best_score <= fit.k_penalty * ks[ki + 1])
