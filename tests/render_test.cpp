@@ -217,7 +217,7 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
   std::printf("render_test: furnace: the table's albedo is within %.4f of 1\n", worst);
   REQUIRE(worst < 0.02);
   auto s = make_scene(bsdf, default_lighting(Domain::Hemisphere, 1.0), false, 16);
-  const int spp = 64;
+  const int spp = 256;
   // Uniform sampling is left out of the full furnace: its path weight is a product of
   // f / pdf up to about 60 per bounce over tens of bounces, so heavy-tailed that a finite
   // render's mean sits far below 1 (0.42 +- 0.05 measured). It is checked below on paths
@@ -233,8 +233,10 @@ TEST_CASE("white furnace: lossless fibers under a constant environment render 1"
     for (double v : sum) var += (v / spp - mean) * (v / spp - mean) / double(sum.size() - 1);
     const double se = std::sqrt(var / double(sum.size()));
     std::printf("render_test: furnace %-13s: image mean %.4f +- %.4f\n", path_estimator_name(e), mean, se);
-    // a path keeps bouncing: allow the table's albedo error a few times over
-    CHECK(std::abs(mean - 1) <= 4 * se + 4 * worst + 0.005);
+    // the table's albedo error once (its mean over the slices is smaller than the worst
+    // slice's), and 0.2% more: a BCSDF 2% short of its energy takes 2% or more at every
+    // vertex of a path and fails
+    CHECK(std::abs(mean - 1) <= 4 * se + worst + 0.002);
   }
   SceneView v = s->view;
   v.max_depth = 3;

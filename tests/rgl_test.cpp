@@ -200,8 +200,9 @@ TEST_CASE("the sampling density of the warps integrates to at most 1", "[rgl]") 
           sum += b.pdf(wo, {std::sin(ti) * std::cos(pi), std::sin(ti) * std::sin(pi), std::cos(ti)}) *
                  std::sin(ti) * dt * dp;
       INFO(stem << " theta_o " << to << ": integral of pdf = " << sum);
-      CHECK(sum <= 1.02);
-      CHECK(sum >= 0.9);
+      std::printf("rgl_test: %s theta_o %2.0f: integral of the pdf %.5f\n", stem, to, sum);
+      CHECK(sum <= 1.005);  // measured 0.983 to 1.002 (docs/rgl.md); a pdf 10% off fails
+      CHECK(sum >= 0.975);
     }
   }
 }
