@@ -2,7 +2,8 @@
 """Charts of a bsdfmix fitting sweep, PNG and SVG (matplotlib).
 
   fit_speed_accuracy   relative L1 error and fit time against K, for a few slice
-                       types, on one chart (needs --timing, from the K-timing CSV)
+                       types, on one chart (needs --timing, from the K-timing CSV: the
+                       sweep's own fits with K pinned, as its final fits make them)
   fit_chosen_k         the chosen K (and the fit error) over theta_o
   fit_slices           original, mixture and error images of a few slices
                        (the thesis's figures 4.1 and 4.2)
@@ -87,7 +88,8 @@ def chart_speed_accuracy(timing, out):
     ax.set_yscale("log")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper center", fontsize=8)
-    ax.set_title("Fit error and fit time against K")
+    ax.set_title("Fit error and fit time against K\n(the sweep's fits with K pinned: split-and-merge, final restarts, L1 refinement)",
+                 fontsize=10)
     save(fig, out, "fit_speed_accuracy")
 
 

@@ -62,6 +62,15 @@ TEST_CASE("a bare section takes every default", "[config]") {
   CHECK(c.converge->product_light == 0.1);
   CHECK(c.converge->light_fraction == 0.5);
   CHECK_FALSE(c.converge->power_heuristic);
+  // the default estimators: the BSDF-only six; under a scene, the lighting's five too
+  CHECK(c.converge->estimators ==
+        std::vector<std::string>{"us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab"});
+  const Config lit = parse_config("table: " + existing_table() + "\nfit:\nconverge:\n  scene:\n    constant: 1\n",
+                                  "cfg.yaml");
+  REQUIRE(lit.converge);
+  CHECK(lit.converge->estimators == std::vector<std::string>{"us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab",
+                                                             "cdf_tab", "light", "mis_light_cdf", "mis_light_gmm",
+                                                             "product", "mis_product"});
 }
 
 TEST_CASE("unknown keys are rejected with their full path", "[config]") {

@@ -125,3 +125,19 @@ TEST_CASE("a second render of the same output directory is refused while the fir
   CHECK(text.find("render") != std::string::npos);
   CHECK(std::count(text.begin(), text.end(), '\n') == 1);
 }
+
+TEST_CASE("bsdfmix run fits every slice and renders from that file", "[render][cli]") {
+  // `run` on a config with fit and render sections: the sweep of every slice first, then
+  // the render, which takes the slices it needs out of the sweep's file, fitting none.
+  const std::string cfg = config("run");
+  const fs::path d = temp_dir(), out = d / "run", log = d / "run.log";
+  fs::remove(d / "run_mixture.h5");
+  const std::string cmd = std::string(BSDFMIX_BINARY) + " run " + cfg + " > /dev/null 2> " + log.string();
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const std::string text = slurp(log);
+  INFO(text);
+  CHECK(text.find("render: fitting") == std::string::npos);
+  CHECK(text.find("slices needed, from " + (d / "run_mixture.h5").string()) != std::string::npos);
+  CHECK(fs::exists(out / "render.csv"));
+  CHECK(fs::exists(out / "render.json"));
+}

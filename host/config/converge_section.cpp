@@ -55,8 +55,13 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   c.seed = static_cast<std::uint64_t>(n.integer("seed", 0, INT64_MAX));
   c.csv = n.str("csv");
   if (n.has("mixture")) c.mixture = n.str("mixture");
-  const YAML::Node est = n.raw("estimators");
-  if (est.IsScalar()) {
+  const YAML::Node est = n.has("estimators") ? n.raw("estimators") : YAML::Node();
+  if (!n.has("estimators")) {
+    // The default: the BSDF-only estimators, and under a scene the lighting's too
+    c.estimators = {"us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab"};
+    if (!c.scenes.empty())
+      for (const char* e : {"light", "mis_light_cdf", "mis_light_gmm", "product", "mis_product"}) c.estimators.push_back(e);
+  } else if (est.IsScalar()) {
     c.estimators.push_back(est.Scalar());
   } else if (est.IsSequence() && est.size() > 0) {
     for (const auto& e : est) {

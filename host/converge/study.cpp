@@ -148,7 +148,9 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     if (td.missed_is > 0)
       msg += "; is_tab never samples " + num(td.missed_is) + " of the integral (biased by that much: use mis_tab)";
     log_line(msg);
-    if (!(td.relvar_is <= td.relvar_us))
+    const bool studies_is = std::find(spec.estimators.begin(), spec.estimators.end(), Estimator::IsTab) !=
+                            spec.estimators.end();
+    if (studies_is && !(td.relvar_is <= td.relvar_us))
       log_line("converge: warning: at theta_o " + fixed(theta_o, 4) +
                " is_tab has more variance than uniform sampling (the Gaussians' tails fall faster than f): "
                "use mis_tab, the robust default");

@@ -21,6 +21,7 @@ std::string format_seconds(double s) {
 }  // namespace
 
 void Progress::set_enabled(bool on) { g_enabled = on; }
+bool Progress::enabled() { return g_enabled; }
 
 void log_line(const std::string& text) {
   if (g_enabled) std::fprintf(stderr, "bsdfmix: %s\n", text.c_str());

@@ -19,6 +19,7 @@ class Progress {
 
   // Off: nothing printed (tests, --quiet). Default: on.
   static void set_enabled(bool on);
+  static bool enabled();
 
  private:
   void print(bool final_line);

@@ -7,10 +7,11 @@
 
 #include "core/atomic_file.hpp"
 #include "core/progress.hpp"
-#include "fit/em.hpp"
+#include "device/device.hpp"
 #include "io/table.hpp"
 #include "sweep/criterion.hpp"
-#include "sweep/fit_error.hpp"
+#include "sweep/fit_slices.hpp"
+#include "sweep/slice_source.hpp"
 
 namespace bsdfmix {
 
@@ -18,38 +19,34 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& 
                                const std::vector<std::size_t>& slices, const std::vector<std::string>& types) {
   TableReader reader(table_path);
   const TableMeta& meta = reader.meta();
-  EmEngine engine(select_devices(device_selector));
+  const TableSlices source(reader);
+  const std::vector<Device> devices = select_devices(device_selector);
   const std::vector<int> ks = candidate_ks(fit.k_min, fit.k_max);
   std::vector<KTimingRow> rows;
   Progress progress("time K on " + table_path, slices.size() * ks.size(), "fits");
+  const bool quiet = !Progress::enabled();
   for (std::size_t i = 0; i < slices.size(); ++i) {
     const std::size_t s = slices[i];
     const std::size_t t_o = s / meta.phi_o.size(), p_o = s % meta.phi_o.size();
-    const auto f = reader.read_slice(t_o, p_o);
-    WeightedSlice ws{meta.theta_i, meta.phi_i, integrand_weights(meta.domain, meta.theta_i, meta.phi_i, f.data())};
-    SliceSet set;
-    set.grid.domain = meta.domain;
-    set.grid.theta = meta.theta_i;
-    set.grid.phi = meta.phi_i;
-    set.weights.push_back(ws.w);
     for (int k : ks) {
-      EmTask task;
-      task.slice = 0;
-      task.k = k;
-      task.settings.iterations = fit.final_iterations;
-      task.settings.tolerance = fit.tolerance;
-      task.settings.restarts = fit.final_restarts;
-      task.settings.seed = fit.seed + s;
+      // The sweep's own fit of this slice with K pinned: what the search's final fits do
+      // at that K (k-means++ and split-and-merge, final restarts and iterations, the L1
+      // refinement when `refine: l1`).
+      FitSection pinned = fit;
+      pinned.k_min = pinned.k_max = k;
+      Progress::set_enabled(false);
       const auto t0 = std::chrono::steady_clock::now();
-      const EmResult r = engine.fit(set, {task}).front();
+      const SweepResult r = fit_slices(source, {SliceRef{s, t_o, p_o}}, pinned, devices, "time K");
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      Progress::set_enabled(!quiet);
       KTimingRow row;
-      row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      row.seconds = seconds;
       row.slice = s;
       row.type = i < types.size() ? types[i] : "slice";
       row.theta_o = meta.theta_o[t_o];
       row.k = k;
-      row.iterations = r.iterations;
-      row.l1_rel = r.ok ? l1_rel_error(ws, make_slice_mixture(r.gmm.weight, r.gmm.mean, r.gmm.cov)) : 2.0;
+      row.iterations = r.report.front().iterations;
+      row.l1_rel = r.report.front().failed() ? 2.0 : r.report.front().l1_rel;
       rows.push_back(row);
       progress.advance();
     }

@@ -1,5 +1,6 @@
 // Fit time and fit error against K for chosen slices: the data of the speed-against-
-// accuracy chart. Each (slice, K) is fitted alone, with the final-fit settings, and timed.
+// accuracy chart. Each (slice, K) is fitted alone by the sweep with K pinned (the search's
+// final fits at that K: split-and-merge, the final settings, the L1 refinement) and timed.
 #pragma once
 
 #include <cstddef>

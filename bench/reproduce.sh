@@ -1,0 +1,163 @@
+#!/usr/bin/env bash
+# Reruns the studies behind the committed results with the current build and writes their
+# files under bench/results/ again (bench/results/README.md says which command makes which
+# file). Every file it writes gets a row in bench/results/provenance.csv: the file, the
+# study, the commit it came from (with "+dirty" when the work tree had changes), the
+# machine (CPU model, logical CPUs), and when.
+#
+#   bench/reproduce.sh [--quick] [--list] [--help] [STUDY ...]
+#
+# With no STUDY, every study in order. --quick runs the short studies only (about 15
+# minutes on 2 cores). The full run is about 4 hours on 2 cores (AMD EPYC, PoCL; estimated
+# from the studies' last runs, not timed end to end); the
+# longest studies are converge_light (about 70 minutes), render (about 60), converge and
+# fit_sweep. Run from the repository root after scripts/setup; the em study wants a build
+# with the peers (-DBSDFMIX_BUILD_BENCH=ON, bench/README.md) in build-bench/.
+#
+# The search_before_after study compares this build with another: set BEFORE to that
+# build's bsdfmix (it is skipped otherwise).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=build/bsdfmix
+py=/usr/bin/python3
+results=bench/results
+provenance=$results/provenance.csv
+
+# name : minutes on 2 cores : quick? : what
+studies=(
+  "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
+  "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
+  "render_rgl:8:quick:the RGL materials on a sphere under the sky map, and the small polyester render (render/*_skymap/, render/polyester_sky_small/)"
+  "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv)"
+  "search_compare:25:no:the Gaussian-count search methods (search_compare*.csv, docs/images/search_l1_vs_k.png)"
+  "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
+  "catalog:10:no:the catalog job (catalog_summary.csv)"
+  "scale:15:no:the MPI farm (scale_amd-epyc-2c.csv)"
+  "converge:30:no:the convergence studies under constant light (converge/)"
+  "converge_light:70:no:the convergence studies with the lighting (converge_light/)"
+  "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
+  "render:60:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
+  "em:10:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+)
+
+usage() {
+  sed -n '2,/^set -euo/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'
+  echo
+  echo "Studies:"
+  for s in "${studies[@]}"; do
+    IFS=: read -r name minutes quick what <<<"$s"
+    printf "  %-20s %4s min%s  %s\n" "$name" "$minutes" "$([ "$quick" = quick ] && echo ', quick' || echo '       ')" "$what"
+  done
+}
+
+commit=$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)
+git diff --quiet HEAD 2>/dev/null || commit="$commit+dirty"
+cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -1 | tr ',' ';')
+cores=$(nproc)
+
+# Records that `file` was written by `study` now.
+record() {
+  local file=$1 study=$2
+  [ -f "$provenance" ] || echo "file,study,commit,cpu,logical_cpus,utc" > "$provenance"
+  grep -v "^$file," "$provenance" > "$provenance.tmp" || true
+  echo "$file,$study,$commit,${cpu:-unknown},$cores,$(date -u +%Y-%m-%dT%H:%M:%SZ)" >> "$provenance.tmp"
+  mv "$provenance.tmp" "$provenance"
+}
+record_all() {  # every file under bench/results/ newer than the marker
+  local study=$1 marker=$2
+  while IFS= read -r f; do record "${f#./}" "$study"; done < <(find $results docs/images -newer "$marker" -type f \
+    ! -name provenance.csv ! -name '*.tmp' | sort)
+}
+
+run_study() {
+  local name=$1
+  case $name in
+    rgb_stand_in) $py bench/rgb_stand_in.py ;;
+    stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
+    render_rgl)
+      for m in satin paper sunflower; do
+        rm -f out/render_$m/${m}_mixture.h5
+        $bin render configs/render/${m}_skymap.yaml
+        mkdir -p $results/render/${m}_skymap
+        cp out/render_$m/skymap/render.csv out/render_$m/skymap/render.json $results/render/${m}_skymap/
+        $bin compare -q out/render_$m/${m}_mixture.h5 out/render_$m/${m}_table.h5 --csv $results/render/${m}_skymap/compare.csv
+        cp out/render_$m/skymap/figures/stand_in.png docs/images/render_${m}_skymap_stand_in.png
+      done
+      rm -f out/render_polyester/polyester_small_mixture.h5
+      $bin render configs/render/polyester_sky_small.yaml
+      cp out/render_polyester/sky_small/render.csv out/render_polyester/sky_small/render.json $results/render/polyester_sky_small/
+      cp out/render_polyester/sky_small/figures/stand_in.png docs/images/render_polyester_sky_small_stand_in.png ;;
+    search_before_after)
+      if [ -z "${BEFORE:-}" ]; then echo "reproduce: search_before_after skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
+      [ -f out/hard.h5 ] || $py bench/hard_table.py out/hard.h5
+      [ -f out/bench_rgb/wool.h5 ] || { echo "reproduce: search_before_after needs the tables of rgb_stand_in (run it first)" >&2; return 1; }
+      local t="hard=out/hard.h5"
+      for m in satin paper sunflower silk cotton polyester wool; do t="$t,$m=out/bench_rgb/$m.h5"; done
+      $py bench/search_before_after.py --before "$BEFORE" --tables "$t" ;;
+    search_compare)
+      $py bench/search_compare.py --runs 1 --chart
+      $py bench/search_compare.py --tables polyester --csv $results/search_compare_polyester_best3.csv ;;
+    fit_sweep) RUNS=3 bench/fit_sweep.sh ;;
+    catalog) $bin catalog configs/catalog.yaml && cp out/catalog/summary.csv $results/catalog_summary.csv ;;
+    scale) RUNS=3 bench/scale.sh ;;
+    converge)
+      for m in polyester cotton satin; do
+        $bin run configs/converge_$m.yaml
+        cp out/converge_$m/${m}_convergence.csv out/converge_$m/${m}_convergence_tail.csv $results/converge/
+      done ;;
+    converge_light)
+      for m in polyester cotton satin paper; do
+        $bin run configs/converge_light_$m.yaml
+        cp out/converge_light_$m/${m}_convergence*.csv $results/converge_light/
+      done ;;
+    mis_heuristic) bench/mis_heuristic.sh ;;
+    render)
+      for f in silk cotton wool polyester; do
+        for s in sky skymap; do
+          $bin render configs/render/${f}_${s}.yaml
+          mkdir -p $results/render/${f}_${s}
+          cp out/render_$f/$s/render.csv out/render_$f/$s/render.json $results/render/${f}_${s}/
+        done
+      done ;;
+    em)
+      local b=build-bench/bsdfmix
+      [ -x $b ] || { echo "reproduce: em needs build-bench/ (bench/README.md)"; return 1; }
+      for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_amd-epyc-2c.csv > $results/em_k${k}_amd-epyc-2c.txt 2>&1; done ;;
+    *) echo "reproduce: unknown study '$name' (bench/reproduce.sh --list)" >&2; exit 2 ;;
+  esac
+}
+
+quick=0
+chosen=()
+for a in "$@"; do
+  case $a in
+    -h|--help) usage; exit 0 ;;
+    --list) usage | sed -n '/^Studies:/,$p'; exit 0 ;;
+    --quick) quick=1 ;;
+    -*) echo "reproduce: unknown option '$a' (bench/reproduce.sh --help)" >&2; exit 2 ;;
+    *) chosen+=("$a") ;;
+  esac
+done
+if [ ${#chosen[@]} -eq 0 ]; then
+  for s in "${studies[@]}"; do
+    IFS=: read -r name minutes q what <<<"$s"
+    if [ $quick = 0 ] || [ "$q" = quick ]; then chosen+=("$name"); fi
+  done
+fi
+for name in "${chosen[@]}"; do
+  known=0
+  for s in "${studies[@]}"; do [ "${s%%:*}" = "$name" ] && known=1; done
+  [ $known = 1 ] || { echo "reproduce: unknown study '$name' (bench/reproduce.sh --list)" >&2; exit 2; }
+done
+
+[ -x $bin ] || { echo "reproduce: $bin missing: run scripts/setup first" >&2; exit 1; }
+marker=$(mktemp)
+trap 'rm -f "$marker"' EXIT
+for name in "${chosen[@]}"; do
+  start=$(date +%s)
+  echo "reproduce: $name (commit $commit)"
+  touch -d '-1 second' "$marker"  # file times of one-second resolution: a file of this second counts
+  run_study "$name"
+  record_all "$name" "$marker"
+  echo "reproduce: $name done in $(( $(date +%s) - start )) s"
+done

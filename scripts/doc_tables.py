@@ -1,0 +1,153 @@
+#!/usr/bin/python3
+"""Writes the results tables of README.md and docs/ from the committed CSVs under
+bench/results/, between markers:
+
+    <!-- table: NAME -->
+    | ... the table, as this script writes it ... |
+    <!-- /table -->
+
+    scripts/doc_tables.py           rewrite every marked table in place
+    scripts/doc_tables.py --check   exit 1, naming each table that differs from what its CSV gives
+
+The tables (NAME: CSV):
+  rgb_stand_in         bench/results/rgb_stand_in.csv (docs/fitting.md, "Colour and energy")
+  stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
+  search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
+  render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
+"""
+import csv
+import json
+import os
+import re
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+RESULTS = os.path.join(ROOT, "bench", "results")
+DOCS = ["README.md"] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
+
+
+def rows(name):
+    with open(os.path.join(RESULTS, name), newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def pct(x, digits=2):
+    return "%.*f%%" % (digits, 100 * float(x))
+
+
+def rgb_stand_in():
+    names = {"satin": "satin_rosaline", "paper": "paper_white", "sunflower": "cg_sunflower", "silk": "silk (fiber)",
+             "cotton": "cotton (fiber)", "polyester": "polyester (fiber, dyed red)", "wool": "wool (fiber)"}
+    out = ["| table | luminance L1 median | RGB error median | RGB error less the negative part, median | ratio "
+           "(target <= 1.2) | largest energy error, Y / R / G / B (target 0.5%) | largest difference, reported - "
+           "recomputed l1_rel (target 0.2 points) |", "|---|---|---|---|---|---|---|"]
+    by = {r["table"]: r for r in rows("rgb_stand_in.csv")}
+    for key, label in names.items():
+        if key not in by:
+            continue
+        r = by[key]
+        ratio = float(r["ratio"])
+        energy = max(float(r["energy_max_" + c]) for c in "yrgb")
+        e = "%.0e" % energy
+        if int(r["noise_channels"]) > 0:
+            e += " (Y, R, G); B is noise in all %s slices, not compared" % r["slices"]
+        out.append("| %s | %s | %s | %s | %s | %s | %.0e points |" % (
+            label, pct(r["l1_median"]), pct(r["rgb_median"]), pct(r["rgb_less_negative_median"]),
+            ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio, e, float(r["l1_diff_points"])))
+    return out
+
+
+def stand_in_smallest():
+    every = {"1": "every row (30)", "2": "every 2nd (15)", "4": "every 4th (8)"}
+    out = ["| material | slices fitted | K max | storage | bytes | file bytes | median / p90 RGB error | median L1 | "
+           "largest energy error |", "|---|---|---|---|---|---|---|---|---|"]
+    all_rows = rows("stand_in_bytes.csv")
+    for m in ("satin_rosaline", "paper_white", "cg_sunflower"):
+        ok = sorted((r for r in all_rows if r["material"] == m and float(r["median_rgb_error"]) <= 0.05),
+                    key=lambda r: int(r["bytes"]))
+        if not ok:
+            out.append("| %s | none at 5%% or less in this grid | | | | | | | |" % m)
+            continue
+        r = ok[0]
+        out.append("| %s | %s | %s | %s | %s | %s | %s / %s | %s | %.2g%% |" % (
+            m, every.get(r["every"], "every %s" % r["every"]), r["k_max"], r["storage"], r["bytes"], r["file_bytes"],
+            pct(r["median_rgb_error"]), pct(r["p90_rgb_error"], 1), pct(r["median_l1"]),
+            100 * float(r["max_energy_error"])))
+    return out
+
+
+def search_before_after():
+    label = {"hard": "hard (bench/hard_table.py)", "satin": "satin_rosaline", "paper": "paper_white",
+             "sunflower": "cg_sunflower"}
+    out = ["| table | mean K, before / after | L1 median | L1 p90 | L1 max | fit time, after / before |",
+           "|---|---|---|---|---|---|"]
+    by = {}
+    for r in rows("search_before_after.csv"):
+        by.setdefault(r["table"], {})[r["build"]] = r
+    for t, pair in by.items():
+        b, a = pair["before"], pair["after"]
+        out.append("| %s | %.2f / %.2f | %s / %s | %s / %s | %s / %s | %.2fx |" % (
+            label.get(t, t), float(b["mean_k"]), float(a["mean_k"]), pct(b["l1_median"]), pct(a["l1_median"]),
+            pct(b["l1_p90"]), pct(a["l1_p90"]), pct(b["l1_max"]), pct(a["l1_max"]),
+            float(a["seconds"]) / float(b["seconds"])))
+    return out
+
+
+def render_measured():
+    out = ["| table | stand-in bytes | difference, pixels / 4 x 4 blocks | the table image's own noise (4 x 4) | image "
+           "mean, luminance / R / G / B |", "|---|---|---|---|---|"]
+    for folder, label in (("satin_skymap", "satin_rosaline"), ("paper_skymap", "paper_white"),
+                          ("sunflower_skymap", "cg_sunflower"), ("polyester_sky_small", "polyester cloth (sky)")):
+        with open(os.path.join(RESULTS, "render", folder, "render.json")) as f:
+            j = json.load(f)
+        means = [j["stand_in_mean_difference"]] + list(j["stand_in_channel_mean_difference"])
+        cells = [("**%+.2f%%**" if abs(m) > 0.005 else "%+.2f%%") % (100 * m) for m in means]
+        out.append("| %s | %.0f KiB | %.2f%% / %.2f%% | %.2f%% | %s |" % (
+            label, j["mixture_bytes"] / 1024, 100 * j["stand_in_difference"], 100 * j["stand_in_difference_4x4"],
+            100 * j["table_noise_4x4"], " / ".join(cells)))
+    return out
+
+
+TABLES = {"rgb_stand_in": rgb_stand_in, "stand_in_smallest": stand_in_smallest,
+          "search_before_after": search_before_after, "render_measured": render_measured}
+MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
+
+
+def main():
+    check = "--check" in sys.argv[1:]
+    if any(a not in ("--check",) for a in sys.argv[1:]):
+        sys.exit(__doc__)
+    stale, seen = [], set()
+    for doc in DOCS:
+        path = os.path.join(ROOT, doc)
+        with open(path) as f:
+            text = f.read()
+
+        def fill(m):
+            name = m.group(2)
+            if name not in TABLES:
+                sys.exit("%s: unknown table '%s' (scripts/doc_tables.py --help)" % (doc, name))
+            seen.add(name)
+            body = "\n".join(TABLES[name]()) + "\n"
+            if body != m.group(3):
+                stale.append("%s: table '%s'" % (doc, name))
+            return m.group(1) + body + m.group(4)
+
+        new = MARKER.sub(fill, text)
+        if not check and new != text:
+            with open(path + ".tmp", "w") as f:
+                f.write(new)
+            os.replace(path + ".tmp", path)
+    missing = sorted(set(TABLES) - seen)
+    if missing:
+        sys.exit("doc_tables: no marker for %s in README.md or docs/" % ", ".join(missing))
+    if check and stale:
+        for s in stale:
+            print("doc_tables: %s differs from its CSV (run scripts/doc_tables.py)" % s, file=sys.stderr)
+        sys.exit(1)
+    if not check:
+        print("doc_tables: %d table(s) written, %d changed" % (len(seen), len(stale)))
+
+
+if __name__ == "__main__":
+    main()
