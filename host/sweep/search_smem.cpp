@@ -32,9 +32,9 @@ EmFitter engine_fitter(EmEngine& engine) {
 // win: its best score is at most k_penalty times the next K (l1_rel >= 0), or, with an
 // error target, once a K meets it; and (a heuristic) when its best score has not
 // improved over the last kWalkPatience candidates, one of them at least tried well.
-// Once a K has not improved the best score, the walk does not grow the last fit (a
-// local optimum): each later K starts twice from the best fit so far, grown by
-// splitting and grown by components seeded at the slice's largest residual (a sharp
+// Once a K has not improved the best score, the walk may be in a local optimum: each
+// later K starts twice, from the last fit grown by splitting (as before) and from the
+// best fit so far grown by components seeded at the slice's largest residual (a sharp
 // peak the splits miss), and keeps the better: that K was tried well.
 void search_smem(Batch& b) {
   const FitSection& fit = b.fit;
@@ -82,11 +82,12 @@ void search_smem(Batch& b) {
       for (int r = 0; r < starts[i]; ++r) {
         EmTask t = make_task(s, k, fit.iterations, fit.tolerance, task_seed(fit.seed, b.work[s].ref.index, k, r));
         const double floor = em_detail::cov_floor(set.grid, t.settings);
-        const Gmm& from = starts[i] == 2 ? wk.best_gmm : wk.cur.gmm;
-        if (ki > 0 && (starts[i] == 2 || wk.cur.ok) && from.k() < k) {
-          const ComponentScores sc = score_components(set.grid, set.weights[s], from, 0);
+        // start 0 grows the last fit by splits; start 1 seeds the best fit at the residual
+        const bool from_last = r == 0;
+        const Gmm& from = from_last ? wk.cur.gmm : wk.best_gmm;
+        if (ki > 0 && (!from_last || wk.cur.ok) && from.k() < k) {
           if (r == 0) {
-            t.init = grow_mixture(from, sc, k, floor);
+            t.init = grow_mixture(from, score_components(set.grid, set.weights[s], from, 0), k, floor);
           } else {
             t.init = seed_at_residual(set.grid, set.weights[s], from, k, floor);
             if (t.init.k() < k) t.init = grow_mixture(t.init, score_components(set.grid, set.weights[s], t.init, 0), k, floor);
