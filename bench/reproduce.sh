@@ -28,7 +28,7 @@ studies=(
   "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:8:quick:the RGL materials on a sphere under the sky map, and the small polyester render (render/*_skymap/, render/polyester_sky_small/)"
-  "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv)"
+  "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
   "search_compare:25:no:the Gaussian-count search methods (search_compare*.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
   "catalog:10:no:the catalog job (catalog_summary.csv)"
@@ -50,8 +50,10 @@ usage() {
   done
 }
 
+# The commit, "+dirty" when the code that makes results differs from it (docs do not count)
 commit=$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)
-git diff --quiet HEAD 2>/dev/null || commit="$commit+dirty"
+git diff --quiet HEAD -- host kernels include configs data bench scripts CMakeLists.txt ':!bench/results' 2>/dev/null ||
+  commit="$commit+dirty"
 cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -1 | tr ',' ';')
 cores=$(nproc)
 
@@ -63,10 +65,30 @@ record() {
   echo "$file,$study,$commit,${cpu:-unknown},$cores,$(date -u +%Y-%m-%dT%H:%M:%SZ)" >> "$provenance.tmp"
   mv "$provenance.tmp" "$provenance"
 }
-record_all() {  # every file under bench/results/ newer than the marker
-  local study=$1 marker=$2
-  while IFS= read -r f; do record "${f#./}" "$study"; done < <(find $results docs/images -newer "$marker" -type f \
-    ! -name provenance.csv ! -name '*.tmp' | sort)
+# The files a study writes (globs under the repository root).
+outputs() {
+  case $1 in
+    rgb_stand_in) echo "$results/rgb_stand_in.csv" ;;
+    stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
+    render_rgl) echo "$results/render/*_skymap/* $results/render/polyester_sky_small/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
+    search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
+    search_compare) echo "$results/search_compare*.csv docs/images/search_l1_vs_k.png" ;;
+    fit_sweep) echo "$results/fit_sweep.csv" ;;
+    catalog) echo "$results/catalog_summary.csv" ;;
+    scale) echo "$results/scale_*.csv" ;;
+    converge) echo "$results/converge/*" ;;
+    converge_light) echo "$results/converge_light/*" ;;
+    mis_heuristic) echo "$results/mis_heuristic.csv" ;;
+    render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
+    em) echo "$results/em_k*_amd-epyc-2c.*" ;;
+  esac
+}
+record_all() {  # the study's files written since the marker
+  local study=$1 marker=$2 f
+  for f in $(outputs "$study"); do
+    [ -f "$f" ] && [ "$f" -nt "$marker" ] && record "$f" "$study"
+  done
+  return 0
 }
 
 run_study() {
@@ -93,7 +115,14 @@ run_study() {
       [ -f out/bench_rgb/wool.h5 ] || { echo "reproduce: search_before_after needs the tables of rgb_stand_in (run it first)" >&2; return 1; }
       local t="hard=out/hard.h5"
       for m in satin paper sunflower silk cotton polyester wool; do t="$t,$m=out/bench_rgb/$m.h5"; done
-      $py bench/search_before_after.py --before "$BEFORE" --tables "$t" ;;
+      $py bench/search_before_after.py --before "$BEFORE" --tables "$t"
+      rm -f $results/search_before_after_chi_square.csv
+      for m in hard satin paper sunflower silk cotton polyester wool; do
+        local tb=out/bench_rgb/$m.h5
+        [ $m = hard ] && tb=out/hard.h5
+        $py bench/mixture_chi_square.py $tb out/search_before_after/${m}_before_mixture.h5 \
+          out/search_before_after/${m}_after_mixture.h5 --label $m --csv $results/search_before_after_chi_square.csv
+      done ;;
     search_compare)
       $py bench/search_compare.py --runs 1 --chart
       $py bench/search_compare.py --tables polyester --csv $results/search_compare_polyester_best3.csv ;;
@@ -156,7 +185,7 @@ trap 'rm -f "$marker"' EXIT
 for name in "${chosen[@]}"; do
   start=$(date +%s)
   echo "reproduce: $name (commit $commit)"
-  touch -d '-1 second' "$marker"  # file times of one-second resolution: a file of this second counts
+  touch "$marker"
   run_study "$name"
   record_all "$name" "$marker"
   echo "reproduce: $name done in $(( $(date +%s) - start )) s"
