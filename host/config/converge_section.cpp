@@ -55,8 +55,9 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   c.seed = static_cast<std::uint64_t>(n.integer("seed", 0, INT64_MAX));
   c.csv = n.str("csv");
   if (n.has("mixture")) c.mixture = n.str("mixture");
-  const YAML::Node est = n.has("estimators") ? n.raw("estimators") : YAML::Node();
-  if (!n.has("estimators")) {
+  const bool given = n.has("estimators");
+  const YAML::Node est = given ? n.raw("estimators") : YAML::Node();
+  if (!given) {
     // The default: the BSDF-only estimators, and under a scene the lighting's too
     c.estimators = {"us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab"};
     if (!c.scenes.empty())

@@ -73,6 +73,26 @@ std::vector<double> MixtureFile::slice_rgb(std::size_t s) const {
   return std::vector<double>(rgb_scale.begin() + long(s * K * 3), rgb_scale.begin() + long((s * K + k[s]) * 3));
 }
 
+void MixtureFile::add_slice_from(const MixtureFile& from, std::size_t s) {
+  std::vector<double> w, mean, cov;
+  from.slice_params(s, w, mean, cov);
+  const std::vector<double> rgb = from.slice_rgb(s);
+  add_slice(from.theta_o[s], from.phi_o[s], from.scale[s], from.loglik[s], from.l1_rel[s], w, mean, cov,
+            from.has_rgb() ? &rgb : nullptr);
+}
+
+MixtureFile MixtureFile::header_only() const {
+  MixtureFile h;
+  h.storage = storage;
+  h.domain = domain;
+  h.azimuthal = azimuthal;
+  h.table_source = table_source;
+  h.fit_settings = fit_settings;
+  h.table_theta_o = table_theta_o;
+  h.table_phi_o = table_phi_o;
+  return h;
+}
+
 std::string storage_name(const MixtureStorage& s) {
   return std::string(s.ragged ? "ragged" : "padded") + (s.float32 ? "_f32" : "");
 }

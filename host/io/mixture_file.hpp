@@ -58,6 +58,11 @@ struct MixtureFile {
   void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
   // The k used components' rgb_scale of slice s (3K, [component][channel]); empty without colour.
   std::vector<double> slice_rgb(std::size_t s) const;
+  // Appends slice s of `from` as it is (components, rgb_scale, per-slice values).
+  void add_slice_from(const MixtureFile& from, std::size_t s);
+  // This file's header (storage, domain, symmetry, table source, fit settings, omega_o
+  // axes) with no slices.
+  MixtureFile header_only() const;
   // Components stored: S * kmax padded, sum k ragged.
   std::uint64_t stored_components() const;
   // Bytes of the datasets as the file stores them in `storage` (H5Dget_storage_size of

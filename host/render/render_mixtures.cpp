@@ -51,19 +51,11 @@ MixtureFile render_mixtures(const std::string& table, const FitSection& fit_sect
     MixtureFile mf = read_mixture_file(fit.output);
     if (mf.table_source == meta.source && mf.fit_settings == fit_settings_json(fit)) {
       if (mf.theta_o == thetas) return mf;
-      MixtureFile sub = mf;
-      sub.theta_o.clear(), sub.phi_o.clear(), sub.scale.clear(), sub.loglik.clear(), sub.l1_rel.clear(), sub.k.clear();
-      sub.weights.clear(), sub.means.clear(), sub.covariances.clear(), sub.rgb_scale.clear();
-      sub.kmax = 0;
+      MixtureFile sub = mf.header_only();
       for (double t : thetas) {
         const auto at = std::find(mf.theta_o.begin(), mf.theta_o.end(), t);
         if (at == mf.theta_o.end()) break;
-        const std::size_t s = std::size_t(at - mf.theta_o.begin());
-        std::vector<double> w, mean, cov;
-        mf.slice_params(s, w, mean, cov);
-        const std::vector<double> rgb = mf.slice_rgb(s);
-        sub.add_slice(mf.theta_o[s], mf.phi_o[s], mf.scale[s], mf.loglik[s], mf.l1_rel[s], w, mean, cov,
-                      mf.has_rgb() ? &rgb : nullptr);
+        sub.add_slice_from(mf, std::size_t(at - mf.theta_o.begin()));
       }
       if (sub.slices() == thetas.size()) {
         log_line("render: the " + std::to_string(thetas.size()) + " slices needed, from " + fit.output);

@@ -13,15 +13,21 @@ namespace {
 
 constexpr double kUniformPdfSphere = 1 / (4 * kPi), kUniformPdfHemisphere = 1 / (2 * kPi);
 
+// The unit vector along wo's part perpendicular to the unit `axis` (c = dot(wo, axis)),
+// or any unit vector perpendicular to it where wo lies along it: the phi = 0 direction.
+Vec3 phi_zero(const Vec3& axis, const Vec3& wo, double c) {
+  Vec3 p{wo[0] - c * axis[0], wo[1] - c * axis[1], wo[2] - c * axis[2]};
+  if (dot(p, p) < 1e-20) p = std::abs(axis[0]) < 0.9 ? cross(axis, {1, 0, 0}) : cross(axis, {0, 1, 0});
+  return normalized(p);
+}
+
 }  // namespace
 
 FiberFrame::FiberFrame(const Vec3& tangent, const Vec3& wo) {
   t = normalized(tangent);
   const double s = std::clamp(dot(wo, t), -1.0, 1.0);
   theta_o = std::asin(s);
-  Vec3 p{wo[0] - s * t[0], wo[1] - s * t[1], wo[2] - s * t[2]};
-  if (dot(p, p) < 1e-20) p = std::abs(t[0]) < 0.9 ? cross(t, {1, 0, 0}) : cross(t, {0, 1, 0});
-  n = normalized(p);
+  n = phi_zero(t, wo, s);
   b = cross(t, n);
 }
 
@@ -42,9 +48,7 @@ SurfaceFrame::SurfaceFrame(const Vec3& normal, const Vec3& wo) {
   n = normalized(normal);
   const double c = std::clamp(dot(wo, n), -1.0, 1.0);
   theta_o = std::acos(c);
-  Vec3 p{wo[0] - c * n[0], wo[1] - c * n[1], wo[2] - c * n[2]};
-  if (dot(p, p) < 1e-20) p = std::abs(n[0]) < 0.9 ? cross(n, {1, 0, 0}) : cross(n, {0, 1, 0});
-  x = normalized(p);
+  x = phi_zero(n, wo, c);
   y = cross(n, x);
 }
 

@@ -334,14 +334,7 @@ SweepResult empty_result(const TableMeta& meta, const FitSection& fit) {
 }
 
 void append_part(SweepResult& result, const BatchPart& part) {
-  const MixtureFile& m = part.mixture;
-  for (std::size_t s = 0; s < m.slices(); ++s) {
-    std::vector<double> w, mean, cov;
-    m.slice_params(s, w, mean, cov);
-    const std::vector<double> rgb = m.slice_rgb(s);
-    result.mixture.add_slice(m.theta_o[s], m.phi_o[s], m.scale[s], m.loglik[s], m.l1_rel[s], w, mean, cov,
-                             m.has_rgb() ? &rgb : nullptr);
-  }
+  for (std::size_t s = 0; s < part.mixture.slices(); ++s) result.mixture.add_slice_from(part.mixture, s);
   result.slice_index.insert(result.slice_index.end(), part.slice_index.begin(), part.slice_index.end());
   result.report.insert(result.report.end(), part.report.begin(), part.report.end());
   result.search.insert(result.search.end(), part.search.begin(), part.search.end());
