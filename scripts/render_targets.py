@@ -2,12 +2,16 @@
 """Targets of `bsdfmix render` (docs/render.md, "Measured"), from render.csv and render.json.
 
 For every render directory given, one row:
-  equal-time rel MSE   of uniform, of the best mixture estimator (mis_tab, mis_light_gmm)
+  equal-time rel MSE   of uniform, of the best mixture estimator (mis_tab, mis_light_gmm,
+                       mis_product)
                        and of the best table-CDF estimator (cdf_tab, mis_light_cdf)
   vs uniform           uniform's rel MSE over the best mixture estimator's (target >= 5
                        under the sky)
   vs table CDF         the best mixture estimator's rel MSE over the best table CDF
                        estimator's (target <= 1.5)
+  product vs light CDF mis_product's rel MSE over mis_light_cdf's (the renderers' baseline;
+                       target <= 0.5 on the sky and sky-map renders, never above 1.1)
+  ns per vertex        the cost of a path vertex of mis_light_cdf and of mis_product
   memory               table bytes / mixture bytes (target >= 100) and full 4D table bytes /
                        mixture bytes (target >= 1000)
   stand-in             sum |stand-in - table| / sum table per pixel and over 4 x 4 blocks
@@ -27,7 +31,7 @@ import os
 from targets_common import failer, fmt, print_table
 
 fail = failer("render_targets")
-MIXTURE = ["mis_tab", "mis_light_gmm"]
+MIXTURE = ["mis_tab", "mis_light_gmm", "mis_product"]
 TABLE_CDF = ["cdf_tab", "mis_light_cdf"]
 
 
@@ -47,12 +51,16 @@ def row_for(d):
     mix, mix_name = best(MIXTURE)
     cdf, cdf_name = best(TABLE_CDF)
     mb = float(meta["mixture_bytes"])
+    ns = {r["estimator"]: float(r["ns_per_vertex"]) for r in eq_spp if r.get("ns_per_vertex")}
+    ratio = lambda a, b: eq_time[a] / eq_time[b] if a in eq_time and b in eq_time and eq_time[b] > 0 else None
     return dict(
         fiber=meta["fiber"].replace("_table", ""), scene=meta["scene"],
         size="%dx%d" % (meta["width"], meta["height"]),
         uniform=eq_time["uniform"], mixture=mix, mixture_name=mix_name, cdf=cdf, cdf_name=cdf_name,
         vs_uniform=eq_time["uniform"] / mix if mix else None,
         vs_cdf=mix / cdf if mix and cdf else None,
+        product_vs_cdf=ratio("mis_product", "mis_light_cdf"),
+        ns_cdf=ns.get("mis_light_cdf"), ns_product=ns.get("mis_product"),
         memory=float(meta["table_bytes"]) / mb, memory_full=float(meta["full_table_bytes"]) / mb,
         stand_in=100 * float(meta.get("stand_in_difference", -1)),
         stand_in_4x4=100 * float(meta.get("stand_in_difference_4x4", -1)),
@@ -76,6 +84,8 @@ def main():
             ("its rel MSE", "mixture", None), ("best table CDF", "cdf_name", None), ("its rel MSE", "cdf", None),
             ("vs uniform", "vs_uniform", lambda x, r: x >= 5 or r["scene"] != "sky"),
             ("vs table CDF", "vs_cdf", lambda x, r: x <= 1.5),
+            ("mis_product / mis_light_cdf", "product_vs_cdf", lambda x, r: x <= 0.5),
+            ("ns/vertex mis_light_cdf", "ns_cdf", None), ("ns/vertex mis_product", "ns_product", None),
             ("table / mixtures", "memory", lambda x, r: x >= 100),
             ("full 4D / mixtures", "memory_full", lambda x, r: x >= 1000),
             ("slices fitted", "slices", None),

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include "chi_square.hpp"
+#include "gaussians.hpp"
 
 #include <bsdfmix/mixture.hpp>
 
@@ -21,21 +22,13 @@ using namespace bsdfmix::mix;
 
 namespace {
 
+using bsdfmix::test::gaussian;
+
 // Fixed seed (printed); PRODUCT_TEST_SEED overrides it to re-check with other streams.
 const std::uint64_t kSeed = std::getenv("PRODUCT_TEST_SEED")
                                 ? std::strtoull(std::getenv("PRODUCT_TEST_SEED"), nullptr, 10)
                                 : 20240611ull;
 
-Gaussian gauss(double w, double mt, double mp, double st, double sp, double rho) {
-  Gaussian g;
-  g.weight = w;
-  g.mu_t = mt;
-  g.mu_p = mp;
-  g.s_tt = st * st;
-  g.s_tp = rho * st * sp;
-  g.s_pp = sp * sp;
-  return g;
-}
 
 SliceMixture mixture(std::vector<Gaussian> comps) {
   SliceMixture m;
@@ -219,18 +212,18 @@ double quadrature_mass(const SliceMixture& m, double lo, double hi) {
 
 // Two mixtures with broad phi lobes (sigma_phi 1.5) and a lobe across the seam.
 SliceMixture broad_a() {
-  return mixture({gauss(0.35, 0.3, 0.5, 0.25, 1.5, 0.4), gauss(0.25, -0.6, 2.9, 0.2, 0.35, -0.3),
-                  gauss(0.25, 0.9, -1.8, 0.3, 0.8, 0.2), gauss(0.15, -0.2, -3.0, 0.4, 1.6, -0.5)});
+  return mixture({gaussian(0.35, 0.3, 0.5, 0.25, 1.5, 0.4), gaussian(0.25, -0.6, 2.9, 0.2, 0.35, -0.3),
+                  gaussian(0.25, 0.9, -1.8, 0.3, 0.8, 0.2), gaussian(0.15, -0.2, -3.0, 0.4, 1.6, -0.5)});
 }
 SliceMixture broad_b() {
-  return mixture({gauss(0.5, 0.1, -2.5, 0.35, 1.5, 0.3), gauss(0.3, -0.5, 3.0, 0.3, 0.4, 0.1),
-                  gauss(0.2, 0.7, 0.8, 0.25, 1.2, -0.6)});
+  return mixture({gaussian(0.5, 0.1, -2.5, 0.35, 1.5, 0.3), gaussian(0.3, -0.5, 3.0, 0.3, 0.4, 0.1),
+                  gaussian(0.2, 0.7, 0.8, 0.25, 1.2, -0.6)});
 }
 
 }  // namespace
 
 TEST_CASE("product of two correlated Gaussians equals the closed form", "[sample][product]") {
-  const Gaussian ga = gauss(1.0, 0.3, 0.4, 0.2, 0.35, 0.5), gb = gauss(1.0, -0.1, -0.2, 0.25, 0.3, -0.4);
+  const Gaussian ga = gaussian(1.0, 0.3, 0.4, 0.2, 0.35, 0.5), gb = gaussian(1.0, -0.1, -0.2, 0.25, 0.3, -0.4);
   const SliceMixture a = mixture({ga}), b = mixture({gb});
   double mass = 0, kept = 0;
   const SliceMixture p = product(a, 0.0, b, ProductOptions{1.0, 1000}, &mass, &kept);
@@ -252,7 +245,7 @@ TEST_CASE("product of two correlated Gaussians equals the closed form", "[sample
 }
 
 TEST_CASE("product across the phi seam and with a rotation of a: pdf * mass = a * b pointwise", "[sample][product]") {
-  const Gaussian ga = gauss(1.0, 0.2, 3.0, 0.15, 0.2, 0.3), gb = gauss(1.0, 0.35, -3.0, 0.2, 0.25, -0.2);
+  const Gaussian ga = gaussian(1.0, 0.2, 3.0, 0.15, 0.2, 0.3), gb = gaussian(1.0, 0.35, -3.0, 0.2, 0.25, -0.2);
   const SliceMixture a = mixture({ga}), b = mixture({gb});
   const ProductOptions all{1.0, 1000};
   std::vector<double> thetas, phis;
@@ -328,15 +321,15 @@ TEST_CASE("mixture product with broad phi lobes: pdf * mass = a * b on a 120 x 2
 
 TEST_CASE("chi-square of product samples, pruned and unpruned, both domains", "[sample][product]") {
   // fiber: the heaviest pair sits near theta = 1.4, cut by theta = pi/2; one lobe across the seam
-  const SliceMixture fa = mixture({gauss(0.5, 1.4, 0.5, 0.15, 0.3, 0.2), gauss(0.3, 0.0, -2.0, 0.3, 0.8, -0.3),
-                                   gauss(0.2, -0.8, 2.8, 0.2, 0.4, 0.1)});
-  const SliceMixture fb = mixture({gauss(0.6, 1.35, 0.8, 0.2, 0.5, 0.0), gauss(0.4, -0.3, -2.8, 0.4, 1.5, 0.3),
-                                   gauss(0.3, -0.5, 3.1, 0.3, 0.3, -0.2)});
+  const SliceMixture fa = mixture({gaussian(0.5, 1.4, 0.5, 0.15, 0.3, 0.2), gaussian(0.3, 0.0, -2.0, 0.3, 0.8, -0.3),
+                                   gaussian(0.2, -0.8, 2.8, 0.2, 0.4, 0.1)});
+  const SliceMixture fb = mixture({gaussian(0.6, 1.35, 0.8, 0.2, 0.5, 0.0), gaussian(0.4, -0.3, -2.8, 0.4, 1.5, 0.3),
+                                   gaussian(0.3, -0.5, 3.1, 0.3, 0.3, -0.2)});
   // hemisphere: lobes cut by theta = 0 and by pi/2
-  const SliceMixture ha = mixture({gauss(0.6, 0.1, 1.0, 0.2, 0.5, 0.3), gauss(0.4, 1.3, -1.5, 0.15, 0.8, -0.2),
-                                   gauss(0.3, 0.7, 2.9, 0.3, 1.5, 0.0)});
-  const SliceMixture hb = mixture({gauss(0.5, 0.05, 1.4, 0.25, 0.7, -0.1), gauss(0.3, 1.2, -1.0, 0.3, 1.0, 0.4),
-                                   gauss(0.2, 0.6, -3.0, 0.35, 1.2, 0.2), gauss(0.2, 0.9, 0.0, 0.4, 2.0, 0.0)});
+  const SliceMixture ha = mixture({gaussian(0.6, 0.1, 1.0, 0.2, 0.5, 0.3), gaussian(0.4, 1.3, -1.5, 0.15, 0.8, -0.2),
+                                   gaussian(0.3, 0.7, 2.9, 0.3, 1.5, 0.0)});
+  const SliceMixture hb = mixture({gaussian(0.5, 0.05, 1.4, 0.25, 0.7, -0.1), gaussian(0.3, 1.2, -1.0, 0.3, 1.0, 0.4),
+                                   gaussian(0.2, 0.6, -3.0, 0.35, 1.2, 0.2), gaussian(0.2, 0.9, 0.0, 0.4, 2.0, 0.0)});
   struct Case {
     const char* what;
     const SliceMixture *a, *b;
@@ -363,10 +356,10 @@ TEST_CASE("chi-square of product samples, pruned and unpruned, both domains", "[
 }
 
 TEST_CASE("the product's pdf integrates to its analytic mass inside the theta range", "[sample][product]") {
-  const SliceMixture fa = mixture({gauss(0.5, 1.4, 0.5, 0.15, 0.3, 0.2), gauss(0.3, 0.0, -2.0, 0.3, 0.8, -0.3),
-                                   gauss(0.2, -0.8, 2.8, 0.2, 0.4, 0.1)});
-  const SliceMixture fb = mixture({gauss(0.6, 1.35, 0.8, 0.2, 0.5, 0.0), gauss(0.4, -0.3, -2.8, 0.4, 1.5, 0.3),
-                                   gauss(0.3, -0.5, 3.1, 0.3, 0.3, -0.2)});
+  const SliceMixture fa = mixture({gaussian(0.5, 1.4, 0.5, 0.15, 0.3, 0.2), gaussian(0.3, 0.0, -2.0, 0.3, 0.8, -0.3),
+                                   gaussian(0.2, -0.8, 2.8, 0.2, 0.4, 0.1)});
+  const SliceMixture fb = mixture({gaussian(0.6, 1.35, 0.8, 0.2, 0.5, 0.0), gaussian(0.4, -0.3, -2.8, 0.4, 1.5, 0.3),
+                                   gaussian(0.3, -0.5, 3.1, 0.3, 0.3, -0.2)});
   const SliceMixture a = broad_a(), b = broad_b();
   struct Case {
     const char* what;
@@ -392,9 +385,9 @@ TEST_CASE("the product's pdf integrates to its analytic mass inside the theta ra
 TEST_CASE("pruning keeps the heaviest pairs; MixtureSet::product_with is the product of the blend",
           "[sample][product]") {
   // a: 3 components, b: 2; narrow enough that each pair has one dominant phi image
-  const Gaussian as[3] = {gauss(0.5, 0.2, 0.3, 0.2, 0.3, 0.3), gauss(0.3, -0.4, 2.9, 0.25, 0.35, -0.2),
-                          gauss(0.2, 0.0, 1.0, 0.3, 0.5, 0.1)};
-  const Gaussian bs[2] = {gauss(0.6, 0.1, 0.6, 0.3, 0.4, -0.3), gauss(0.4, -0.2, -2.9, 0.3, 0.6, 0.4)};
+  const Gaussian as[3] = {gaussian(0.5, 0.2, 0.3, 0.2, 0.3, 0.3), gaussian(0.3, -0.4, 2.9, 0.25, 0.35, -0.2),
+                          gaussian(0.2, 0.0, 1.0, 0.3, 0.5, 0.1)};
+  const Gaussian bs[2] = {gaussian(0.6, 0.1, 0.6, 0.3, 0.4, -0.3), gaussian(0.4, -0.2, -2.9, 0.3, 0.6, 0.4)};
   const SliceMixture a = mixture({as[0], as[1], as[2]}), b = mixture({bs[0], bs[1]});
   // independent pair weights w_i w_j N(mu_i; mu_j, S_i + S_j): each pair's nearest image,
   // and the total over every image (|d| <= 4)
@@ -434,15 +427,15 @@ TEST_CASE("pruning keeps the heaviest pairs; MixtureSet::product_with is the pro
   SliceMixture s0, s1;
   s0.theta_o = -0.4;
   s0.scale = 0.8;
-  s0.components = {gauss(0.6, 0.3, 2.8, 0.2, 0.4, 0.3), gauss(0.4, -0.7, -0.5, 0.3, 1.2, -0.2)};
+  s0.components = {gaussian(0.6, 0.3, 2.8, 0.2, 0.4, 0.3), gaussian(0.4, -0.7, -0.5, 0.3, 1.2, -0.2)};
   s1.theta_o = 0.6;
   s1.scale = 1.2;
-  s1.components = {gauss(0.7, -0.1, 0.4, 0.15, 0.3, 0.5), gauss(0.3, 1.1, -2.7, 0.25, 0.9, 0.0),
-                   gauss(0.2, 0.5, 1.5, 0.3, 1.5, 0.1)};
+  s1.components = {gaussian(0.7, -0.1, 0.4, 0.15, 0.3, 0.5), gaussian(0.3, 1.1, -2.7, 0.25, 0.9, 0.0),
+                   gaussian(0.2, 0.5, 1.5, 0.3, 1.5, 0.1)};
   set.slices = {s0, s1};
   set.prepare();
-  const SliceMixture light = mixture({gauss(0.5, 0.4, -2.6, 0.3, 0.5, 0.2), gauss(0.3, -0.2, 1.2, 0.5, 1.4, -0.1),
-                                      gauss(0.2, 0.9, 3.0, 0.2, 0.3, 0.0)});
+  const SliceMixture light = mixture({gaussian(0.5, 0.4, -2.6, 0.3, 0.5, 0.2), gaussian(0.3, -0.2, 1.2, 0.5, 1.4, -0.1),
+                                      gaussian(0.2, 0.9, 3.0, 0.2, 0.3, 0.0)});
   const double to = 0.1, po = 1.0;
   for (const ProductOptions& o : {ProductOptions{}, ProductOptions{1.0, 1000}}) {
     double m1 = 0, k1 = 0, m2 = 0, k2 = 0;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <tuple>
 
 #include "config/config.hpp"
 #include "core/error.hpp"
@@ -124,8 +125,31 @@ struct Scene {
   std::unique_ptr<Tracer> tracer;
   Lighting lighting;
   LightSampler light;
+  std::vector<mix::Gaussian> world_light;  // mis_product's: any mixture serves, its pdf is exact
   SceneView view;
 };
+
+// A world lighting mixture for mis_product (render/light_carry.hpp): a compact component
+// at each lobe of the lighting (or, without lobes, one up high), with a broad one that
+// compact_components leaves out.
+std::vector<mix::Gaussian> world_mixture(const Lighting& l) {
+  mix::SliceMixture m;
+  auto add = [&](double w, const Vec3& d, double sigma) {
+    mix::Gaussian g;
+    g.weight = w;
+    world_angles(d, g.mu_t, g.mu_p);
+    g.s_tt = sigma * sigma;
+    g.s_pp = sigma * sigma / std::max(0.05, std::cos(g.mu_t) * std::cos(g.mu_t));
+    m.components.push_back(g);
+  };
+  for (const LightLobe& lb : l.lobes) add(1.0, lb.direction, 0.06);
+  if (l.lobes.empty()) add(1.0, normalized({0.2, -0.6, 0.5}), 0.15);
+  add(0.5, {0, 0, 1}, 1.2);
+  m.prepare();
+  const std::vector<mix::Gaussian> compact = compact_components(m);
+  REQUIRE(compact.size() == std::max<std::size_t>(l.lobes.size(), 1));
+  return compact;
+}
 
 std::unique_ptr<Scene> make_scene(const TableBsdf& bsdf, const Lighting& lighting, bool ground, int size) {
   auto s = std::make_unique<Scene>();
@@ -142,7 +166,9 @@ std::unique_ptr<Scene> make_scene(const TableBsdf& bsdf, const Lighting& lightin
   s->tracer = std::make_unique<Tracer>(s->cloth, g);
   s->lighting = lighting;
   s->light = make_light_sampler(lighting);
+  s->world_light = world_mixture(lighting);
   SceneView& v = s->view;
+  v.world_light = &s->world_light;
   v.tracer = s->tracer.get();
   v.bsdf = &bsdf;
   v.lighting = &s->lighting;
@@ -173,8 +199,8 @@ Lighting sky() {
   return l;
 }
 
-const PathEstimator kAll[] = {PathEstimator::Uniform, PathEstimator::MisTab, PathEstimator::CdfTab,
-                              PathEstimator::MisLightCdf, PathEstimator::MisLightGmm};
+const PathEstimator kAll[] = {PathEstimator::Uniform,     PathEstimator::MisTab,      PathEstimator::CdfTab,
+                              PathEstimator::MisLightCdf, PathEstimator::MisLightGmm, PathEstimator::MisProduct};
 
 // The sums of a render of a table without color, one per pixel: every pixel's R, G and B
 // are required to be equal (a grey table renders grey), and R is returned.
@@ -194,6 +220,23 @@ double image_mean(const std::vector<double>& sum, int spp) {
   double m = 0;
   for (double v : sum) m += v;
   return m / double(sum.size()) / spp;
+}
+
+// The image mean of `runs` renders of `spp` passes with seeds seed0, seed0 + 1, ..., and
+// its standard error from their spread.
+std::pair<double, double> mean_over_seeds(const SceneView& view, PathEstimator e, int runs, int spp, std::uint64_t seed0) {
+  std::vector<double> per_run;
+  for (int r = 0; r < runs; ++r) {
+    SceneView v = view;
+    v.seed = seed0 + std::uint64_t(r);
+    std::vector<double> sum;
+    render_passes(v, e, FSource::Table, 0, spp, sum, nullptr);
+    per_run.push_back(image_mean(grey(sum), spp));
+  }
+  double m = 0, var = 0;
+  for (double x : per_run) m += x / runs;
+  for (double x : per_run) var += (x - m) * (x - m) / (runs - 1);
+  return {m, std::sqrt(var / runs)};
 }
 
 }  // namespace
@@ -265,21 +308,10 @@ TEST_CASE("every path estimator is unbiased: image means over independent seeds 
   const int runs = 24, spp = 8;
   std::vector<double> means, ses;
   for (const PathEstimator e : kAll) {
-    std::vector<double> per_run;
-    for (int r = 0; r < runs; ++r) {
-      SceneView v = s->view;
-      v.seed = 1000 + std::uint64_t(r);
-      std::vector<double> sum;
-      render_passes(v, e, FSource::Table, 0, spp, sum, nullptr);
-      sum = grey(sum);
-      per_run.push_back(image_mean(sum, spp));
-    }
-    double m = 0, var = 0;
-    for (double x : per_run) m += x / runs;
-    for (double x : per_run) var += (x - m) * (x - m) / (runs - 1);
+    const auto [m, se] = mean_over_seeds(s->view, e, runs, spp, 1000);
     means.push_back(m);
-    ses.push_back(std::sqrt(var / runs));
-    std::printf("render_test: unbiased %-13s: image mean %.5f +- %.5f\n", path_estimator_name(e), m, ses.back());
+    ses.push_back(se);
+    std::printf("render_test: unbiased %-13s: image mean %.5f +- %.5f\n", path_estimator_name(e), m, se);
   }
   // against the lowest-noise estimator
   std::size_t best = 0;
@@ -290,6 +322,26 @@ TEST_CASE("every path estimator is unbiased: image means over independent seeds 
     INFO(path_estimator_name(kAll[i]) << " z " << z);
     CHECK(std::abs(z) < 4.5);
   }
+}
+
+TEST_CASE("mis_product with a fitted mixture agrees with mis_light_cdf over seeds, with the power to tell", "[render]") {
+  Progress::set_enabled(false);
+  const std::string table = small_table("silk");
+  TableBsdf bsdf(table);
+  bsdf.set_mixture(fitted_mixture(table));
+  auto s = make_scene(bsdf, sky(), true, 8);
+  s->view.max_depth = 24;
+  const int runs = 64, spp = 24;
+  double m[2], se[2];
+  int k = 0;
+  for (const PathEstimator e : {PathEstimator::MisLightCdf, PathEstimator::MisProduct}) {
+    std::tie(m[k], se[k]) = mean_over_seeds(s->view, e, runs, spp, 2000);
+    std::printf("render_test: fitted mixture, %-13s: image mean %.5f +- %.5f\n", path_estimator_name(e), m[k], se[k]);
+    ++k;
+  }
+  // the power to see a bias of a few percent: each standard error under 2 % of the mean
+  CHECK(se[1] < 0.02 * m[0]);
+  CHECK(std::abs(m[1] - m[0]) < 4.5 * std::sqrt(se[0] * se[0] + se[1] * se[1]));
 }
 
 TEST_CASE("the table lookup returns the generator's cells, linear between theta_o slices", "[render]") {
@@ -590,6 +642,8 @@ TEST_CASE("bad render configs are rejected with one line naming the key", "[rend
   CHECK_THAT(error("  scene: nowhere.yaml\n"), Catch::Contains("render.scene") && Catch::Contains("not found"));
   CHECK_THAT(error("  width: 0\n"), Catch::Contains("render.width (line 3)"));
   CHECK_THAT(error("  ground: {albedo: 2}\n"), Catch::Contains("render.ground.albedo"));
+  CHECK_THAT(error("  product_share: 1\n"), Catch::Contains("render.product_share (line 3)") &&
+                                                Catch::Contains("strictly between 0 and 1"));
   CHECK_THAT(error("  cloth: {weave: satin}\n"),
              Catch::Contains("no error"));  // parsed here; make_cloth rejects it, below
   ClothParams p;

@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include "chi_square.hpp"
+#include "gaussians.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -25,20 +26,12 @@ using namespace bsdfmix;
 
 namespace {
 
+using bsdfmix::test::gaussian;
+
 // Fixed seed (printed); SAMPLE_TEST_SEED overrides it to re-check with other streams.
 const std::uint64_t kSeed = std::getenv("SAMPLE_TEST_SEED") ? std::strtoull(std::getenv("SAMPLE_TEST_SEED"), nullptr, 10)
                                                              : 20240611ull;
 
-mix::Gaussian gauss(double w, double mt, double mp, double st, double sp, double rho) {
-  mix::Gaussian g;
-  g.weight = w;
-  g.mu_t = mt;
-  g.mu_p = mp;
-  g.s_tt = st * st;
-  g.s_tp = rho * st * sp;
-  g.s_pp = sp * sp;
-  return g;
-}
 
 // Fiber set on a 3-slice theta_o grid (azimuthal): slice 0 has a lobe across phi = +-pi
 // and one cut by theta = pi/2; slice 1 a correlated lobe; slice 2 a broad one cut by -pi/2.
@@ -51,14 +44,14 @@ mix::MixtureSet fiber_set() {
   mix::SliceMixture a, b, c;
   a.theta_o = -0.6;
   a.scale = 0.8;
-  a.components = {gauss(0.5, 0.2, 3.0, 0.15, 0.3, 0.2), gauss(0.3, 1.45, -0.5, 0.12, 0.4, -0.3),
-                  gauss(0.2, -0.3, 0.8, 0.3, 0.8, 0.0)};
+  a.components = {gaussian(0.5, 0.2, 3.0, 0.15, 0.3, 0.2), gaussian(0.3, 1.45, -0.5, 0.12, 0.4, -0.3),
+                  gaussian(0.2, -0.3, 0.8, 0.3, 0.8, 0.0)};
   b.theta_o = 0.0;
   b.scale = 1.1;
-  b.components = {gauss(0.7, 0.1, -2.9, 0.08, 0.2, 0.6), gauss(0.3, 0.0, 1.0, 0.4, 1.2, -0.4)};
+  b.components = {gaussian(0.7, 0.1, -2.9, 0.08, 0.2, 0.6), gaussian(0.3, 0.0, 1.0, 0.4, 1.2, -0.4)};
   c.theta_o = 0.6;
   c.scale = 0.5;
-  c.components = {gauss(1.0, -1.3, 0.0, 0.35, 2.5, 0.1)};
+  c.components = {gaussian(1.0, -1.3, 0.0, 0.35, 2.5, 0.1)};
   set.slices = {a, b, c};
   set.prepare();
   return set;
@@ -79,8 +72,8 @@ mix::MixtureSet hemisphere_set() {
       s.theta_o = tos[i];
       s.phi_o = pos[j];
       s.scale = 0.5 + 0.1 * (2 * i + j);
-      s.components = {gauss(0.6, 0.1 + 0.3 * i, pos[j] + kPi, 0.2, 0.5, 0.3),
-                      gauss(0.4, 1.4, pos[j] - 0.5 * i, 0.15, 0.6, -0.2)};
+      s.components = {gaussian(0.6, 0.1 + 0.3 * i, pos[j] + kPi, 0.2, 0.5, 0.3),
+                      gaussian(0.4, 1.4, pos[j] - 0.5 * i, 0.15, 0.6, -0.2)};
       set.slices.push_back(s);
     }
   set.prepare();
@@ -282,9 +275,9 @@ TEST_CASE("eval kernel: phi images about the conditional mean (strong correlatio
   set.grid_phi_o = {0.0};
   mix::SliceMixture s;
   s.scale = 0.7;
-  s.components = {gauss(0.3, 0.2, 2.9, 0.3, 1.4, 0.95),   gauss(0.2, -0.5, -3.5, 0.2, 2.2, -0.95),
-                  gauss(0.2, 0.9, 0.3, 0.1, 0.05, 0.5),   gauss(0.1, 0.0, 4.0, 0.5, 4.0, 0.3),
-                  gauss(0.1, -1.2, -1.0, 0.25, 0.9, -0.7), gauss(0.1, 1.3, 3.1, 0.15, 0.6, 0.9)};
+  s.components = {gaussian(0.3, 0.2, 2.9, 0.3, 1.4, 0.95),   gaussian(0.2, -0.5, -3.5, 0.2, 2.2, -0.95),
+                  gaussian(0.2, 0.9, 0.3, 0.1, 0.05, 0.5),   gaussian(0.1, 0.0, 4.0, 0.5, 4.0, 0.3),
+                  gaussian(0.1, -1.2, -1.0, 0.25, 0.9, -0.7), gaussian(0.1, 1.3, 3.1, 0.15, 0.6, 0.9)};
   set.slices = {s};
   set.prepare();
   std::vector<std::pair<double, double>> dirs;

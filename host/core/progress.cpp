@@ -63,7 +63,8 @@ void Progress::print(bool final_line) {
                   (unsigned long long)done_, (unsigned long long)total_, unit_.c_str(),
                   format_seconds(elapsed).c_str(), rate, unit_.c_str());
   } else {
-    const double eta = rate > 0 ? double(total_ - done_) / rate : 0.0;
+    // a total that is an estimate (a render's passes in a time budget) may be passed
+    const double eta = rate > 0 && done_ < total_ ? double(total_ - done_) / rate : 0.0;
     std::snprintf(line, sizeof line, "%s: %llu/%llu %s (%.0f%%), %.1f %s/s, ETA %s", what_.c_str(),
                   (unsigned long long)done_, (unsigned long long)total_, unit_.c_str(),
                   total_ ? 100.0 * double(done_) / double(total_) : 100.0, rate, unit_.c_str(),

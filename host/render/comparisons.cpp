@@ -45,7 +45,8 @@ class PassRunner {
     });
     prog.finish();
     log_line("render: " + what + ": " + std::to_string(st.spp) + " spp in " + format_number(st.seconds, "%.1f") + " s, " +
-             format_number(rays_per_second(st) / 1e6, "%.2f") + " M rays/s");
+             format_number(rays_per_second(st) / 1e6, "%.2f") + " M rays/s, " + format_number(st.ns_per_vertex(), "%.0f") +
+             " ns per vertex");
     return {mean_image(sum, st.spp, view_.width, view_.height), st};
   }
 
@@ -91,9 +92,12 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
     auto [im, st] = passes.run(e, FSource::Table, s.spp, 0, name + " (" + std::to_string(s.spp) + " spp)", &prog);
     save_image(s.output, name + "_spp", im);
     passes.record(e, st);
-    for (RenderRow& pr : prog) pr.rays_per_second = rays_per_second(st);
+    for (RenderRow& pr : prog) {
+      pr.rays_per_second = rays_per_second(st);
+      pr.ns_per_vertex = st.ns_per_vertex();
+    }
     out.rows.push_back({name, "equal_spp", name + "_spp.exr", st.spp, st.seconds, rays_per_second(st),
-                        relative_mse(im, reference)});
+                        relative_mse(im, reference), st.ns_per_vertex()});
     out.rows.insert(out.rows.end(), prog.begin(), prog.end());
     slowest = std::max(slowest, st.seconds);
   }
@@ -104,7 +108,7 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
     auto [im, st] = passes.run(e, FSource::Table, 0, budget, name + " (" + format_number(budget, "%.1f") + " s)", nullptr);
     save_image(s.output, name + "_time", im);
     out.rows.push_back({name, "equal_time", name + "_time.exr", st.spp, st.seconds, rays_per_second(st),
-                        relative_mse(im, reference)});
+                        relative_mse(im, reference), st.ns_per_vertex()});
   }
 
   // The stand-in against the table: the same estimator, seed and samples.
@@ -125,8 +129,10 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   for (int c = 0; c < 3; ++c) out.stand_in_channel_mean[c] = ma[c] > 0 ? mb[c] / ma[c] - 1 : 0;
   const double ya = Rgb(ma[0], ma[1], ma[2]).luminance(), yb = Rgb(mb[0], mb[1], mb[2]).luminance();
   out.stand_in_mean = ya > 0 ? yb / ya - 1 : 0;
-  out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), relative_mse(a, reference)});
-  out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), relative_mse(b, reference)});
+  out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), relative_mse(a, reference),
+                      sa.ns_per_vertex()});
+  out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), relative_mse(b, reference),
+                      sb.ns_per_vertex()});
   log_line("render: the stand-in image differs from the table image by " + format_number(100 * out.stand_in_difference, "%.2f") +
            " % per pixel, " + format_number(100 * out.stand_in_difference_4x4, "%.2f") +
            " % over 4 x 4 blocks (the table image's own noise against the reference there: " +

@@ -16,6 +16,7 @@ struct RenderRow {
   std::string estimator, mode, image;
   int spp = 0;
   double seconds = 0, rays_per_second = 0, rel_mse = -1;  // rel_mse < 0: none
+  double ns_per_vertex = 0;  // thread-nanoseconds per path vertex; 0: none
 };
 
 struct Comparisons {

@@ -30,7 +30,8 @@ BsdfSampler sampler_of(PathEstimator e) {
   switch (e) {
     case PathEstimator::Uniform: return BsdfSampler::Uniform;
     case PathEstimator::MisTab:
-    case PathEstimator::MisLightGmm: return BsdfSampler::Mixture;
+    case PathEstimator::MisLightGmm:
+    case PathEstimator::MisProduct: return BsdfSampler::Mixture;
     case PathEstimator::CdfTab:
     case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
   }
@@ -38,6 +39,24 @@ BsdfSampler sampler_of(PathEstimator e) {
 }
 
 double power_weight(double a, double b) { return a * a / (a * a + b * b); }
+
+// The light sample's density per steradian: light sampling alone, or at a fiber or a
+// surface under mis_product the one-sample mixture of product sampling (share a) and
+// light sampling (1 - a).
+struct LightPdf {
+  const LightSampler* light = nullptr;
+  bool product = false;
+  double share = 0;
+  mix::SliceMixture prod;
+  LocalAxes axes;
+  double operator()(const Vec3& w) const {
+    const double pl = light->pdf(w);
+    if (!product) return pl;
+    double th, ph;
+    local_angles(axes, w, th, ph);
+    return share * prod.pdf_omega(axes.domain, th, ph) + (1 - share) * pl;
+  }
+};
 
 int thread_count(int asked) {
   if (asked > 0) return asked;
@@ -50,21 +69,26 @@ int thread_count(int asked) {
 // largest channel, so a grey path is exactly the luminance path). `theta_out`, when
 // given, receives theta_o of every fiber vertex (the pre-pass).
 Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, const Rng& rng, std::uint64_t& rays,
-               std::vector<double>* theta_out) {
+               std::uint64_t& vertices, std::vector<double>* theta_out) {
   const BsdfSampler fs = sampler_of(est);
+  const bool product = est == PathEstimator::MisProduct && v.world_light && !v.world_light->empty();
   const bool nee = uses_light_sampling(est);
   Rgb L, beta(1.0);
   double prev_pdf = 0;
   bool prev_nee = false;
+  LightPdf lp, prev_lp;  // the light sample's density at this vertex and at the one before
+  lp.light = prev_lp.light = v.light;
+  lp.share = prev_lp.share = v.product_share;
   for (int depth = 0; depth < v.max_depth; ++depth) {
     const Hit hit = v.tracer->intersect(ray);
     ++rays;
     if (hit.kind == HitKind::None) {
       const double Le = v.lighting->radiance_world(ray.dir);  // the lighting is grey
       if (!prev_nee) L += beta * Le;
-      else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, v.light->pdf(ray.dir));
+      else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, prev_lp(ray.dir));
       break;
     }
+    ++vertices;
     const Vec3 wo = neg(ray.dir);
     double u[4];
     const std::uint32_t dim = std::uint32_t(depth) * 4;
@@ -119,8 +143,30 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     // next-event estimation
     if (nee) {
       rng.draw(dim + 1, u);
-      const Vec3 wl = v.light->sample(u[0], u[1], u[2], u[3]);
-      const double pl = v.light->pdf(wl);
+      lp.product = false;
+      if (product && (fiber || surface)) {
+        // the lighting carried into the hit's frame, times the BSDF mixture at theta_o
+        lp.axes = fiber ? LocalAxes{frame.t, frame.n, frame.b, Domain::Fiber}
+                        : LocalAxes{sframe.n, sframe.x, sframe.y, Domain::Hemisphere};
+        try {
+          lp.prod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(*v.world_light, lp.axes),
+                                    v.product);
+          lp.product = true;
+        } catch (const std::invalid_argument&) {
+          // no overlap: light sampling alone
+        }
+      }
+      Vec3 wl;
+      bool drawn = true;
+      if (lp.product && u[0] < lp.share) {
+        const mix::Sample m = lp.prod.sample(lp.axes.domain, u[0] / lp.share, u[1], u[2]);
+        drawn = m.valid;
+        if (drawn) wl = local_direction(lp.axes, m.theta, m.phi);
+      } else {
+        const double u0 = lp.product ? (u[0] - lp.share) / (1 - lp.share) : u[0];
+        wl = v.light->sample(std::min(u0, 1 - 1e-12), u[1], u[2], u[3]);
+      }
+      const double pl = drawn ? lp(wl) : 0.0;
       const Rgb fv = pl > 0 ? value(wl) : Rgb();
       if (fv.max() > 0) {
         Ray shadow = next;
@@ -162,6 +208,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     }
     prev_pdf = pdf;
     prev_nee = nee;
+    if (nee) std::swap(prev_lp, lp);
     next.dir = wi;
     ray = next;
   }
@@ -191,9 +238,9 @@ RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, 
   const int nt = thread_count(v.threads);
   for (int pass = first; pass < first + max_passes; ++pass) {
     std::atomic<int> next_row{0};
-    std::atomic<std::uint64_t> rays{0};
+    std::atomic<std::uint64_t> rays{0}, vertices{0};
     auto work = [&]() {
-      std::uint64_t local = 0;
+      std::uint64_t local = 0, local_vertices = 0;
       for (int y = next_row++; y < v.height; y = next_row++)
         for (int x = 0; x < v.width; ++x) {
           const std::uint32_t p = std::uint32_t(y * v.width + x);
@@ -201,16 +248,19 @@ RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, 
           double u[4];
           rng.draw(0, u);
           const Ray ray = camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]);
-          const Rgb L = trace_path(v, est, which, ray, rng, local, nullptr);
+          const Rgb L = trace_path(v, est, which, ray, rng, local, local_vertices, nullptr);
           for (int c = 0; c < 3; ++c) sum[3 * std::size_t(p) + std::size_t(c)] += L[c];
         }
       rays += local;
+      vertices += local_vertices;
     };
     std::vector<std::thread> pool;
     for (int i = 1; i < nt; ++i) pool.emplace_back(work);
     work();
     for (auto& t : pool) t.join();
     st.rays += rays;
+    st.vertices += vertices;
+    st.threads = nt;
     st.spp = pass - first + 1;
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (pass_done && !pass_done(st.spp, st.seconds)) break;
@@ -225,7 +275,7 @@ std::vector<double> collect_theta_o(const SceneView& v, int spp) {
   std::atomic<int> next_row{0};
   auto work = [&]() {
     std::vector<double> local;
-    std::uint64_t rays = 0;
+    std::uint64_t rays = 0, vertices = 0;
     for (int y = next_row++; y < v.height; y = next_row++)
       for (int x = 0; x < v.width; ++x)
         for (int s = 0; s < spp; ++s) {
@@ -233,7 +283,7 @@ std::vector<double> collect_theta_o(const SceneView& v, int spp) {
           double u[4];
           rng.draw(0, u);
           trace_path(v, PathEstimator::Uniform, FSource::Table, camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]),
-                     rng, rays, &local);
+                     rng, rays, vertices, &local);
         }
     std::lock_guard<std::mutex> lock(m);
     out.insert(out.end(), local.begin(), local.end());

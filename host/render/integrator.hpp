@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 
+#include "render/light_carry.hpp"
 #include "render/table_bsdf.hpp"
 #include "render/image_io.hpp"
 #include "render/render_settings.hpp"
@@ -31,12 +32,21 @@ struct SceneView {
   int width = 64, height = 64, max_depth = 24, rr_depth = 3;
   int threads = 0;  // 0: every core
   std::uint64_t seed = 1;
+  // mis_product: the compact components of the lighting's mixture over world directions
+  // (render/light_carry.hpp), the product's share of the light samples, and its pruning
+  const std::vector<mix::Gaussian>* world_light = nullptr;
+  double product_share = 0.5;
+  mix::ProductOptions product{0.99, 32};
 };
 
 struct RenderStats {
   int spp = 0;
   double seconds = 0;
   std::uint64_t rays = 0;
+  std::uint64_t vertices = 0;  // path vertices (fiber, surface and ground hits)
+  int threads = 1;
+  // the cost of a vertex: thread-seconds per vertex, in nanoseconds
+  double ns_per_vertex() const { return vertices ? seconds * threads * 1e9 / double(vertices) : 0.0; }
 };
 
 // Passes of one sample per pixel, from pass `first` on, accumulated into `sum` (R, G, B

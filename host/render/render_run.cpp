@@ -13,6 +13,7 @@
 #include "render/render_mixtures.hpp"
 #include "render/render_report.hpp"
 #include "render/render_scene.hpp"
+#include "render/world_lighting.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -44,9 +45,17 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   const MixtureFile mixtures = render_mixtures(config.table, *config.fit, need, device_selector);
   bsdf.set_mixture(to_mixture_set(mixtures));
 
+  // mis_product's lighting, over world directions
+  SceneView view = scene.view();
+  std::vector<mix::Gaussian> compact;
+  if (needs_world_lighting(s)) {
+    compact = compact_components(world_lighting(s, *config.fit, device_selector).mixture);
+    view.world_light = &compact;
+  }
+
   // 3. The converged image (cached under its key); 4. the comparisons against it.
-  const Image converged = converged_image(scene.view(), s, scene_key(s, config.table));
-  const Comparisons comparisons = run_comparisons(scene.view(), s, converged);
+  const Image converged = converged_image(view, s, scene_key(s, config.table));
+  const Comparisons comparisons = run_comparisons(view, s, converged);
 
   // 5. The report, the cloth's pixels and the figures.
   write_pfm((fs::path(s.output) / "cloth_mask.pfm").string(), scene.cloth_mask());

@@ -41,6 +41,7 @@ RenderScene::RenderScene(const RenderSettings& s, const TableBsdf& bsdf, const s
   view_.rr_depth = s.rr_depth;
   view_.threads = s.threads;
   view_.seed = s.seed;
+  view_.product_share = s.product_share;
   view_.width = s.width;
   view_.height = s.height;
 }

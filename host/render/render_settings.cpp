@@ -13,12 +13,13 @@ namespace render {
 
 namespace {
 
-const char* kNames[] = {"uniform", "mis_tab", "cdf_tab", "mis_light_cdf", "mis_light_gmm"};
+const char* kNames[] = {"uniform", "mis_tab", "cdf_tab", "mis_light_cdf", "mis_light_gmm", "mis_product"};
 
 PathEstimator parse_estimator_name(const ConfigNode& n, const std::string& key, const std::string& name) {
-  for (int i = 0; i < 5; ++i)
+  for (int i = 0; i < 6; ++i)
     if (name == kNames[i]) return PathEstimator(i);
-  n.fail(key, "unknown estimator '" + name + "' (expected uniform, mis_tab, cdf_tab, mis_light_cdf or mis_light_gmm)");
+  n.fail(key, "unknown estimator '" + name +
+                  "' (expected uniform, mis_tab, cdf_tab, mis_light_cdf, mis_light_gmm or mis_product)");
 }
 
 // A nested mapping with its defaults merged under it and unknown keys rejected.
@@ -48,7 +49,9 @@ Vec3 vec3(const ConfigNode& n, const std::string& key) {
 
 const char* path_estimator_name(PathEstimator e) { return kNames[int(e)]; }
 
-bool uses_light_sampling(PathEstimator e) { return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm; }
+bool uses_light_sampling(PathEstimator e) {
+  return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm || e == PathEstimator::MisProduct;
+}
 
 RenderSettings parse_render(const RenderSection& section) {
   const ConfigNode n(section.file, "render", section.node);
@@ -70,6 +73,9 @@ RenderSettings parse_render(const RenderSection& section) {
   r.stand_in = n.boolean("stand_in");
   r.stand_in_spp = int(n.integer("stand_in_spp", 1, 1 << 20));
   r.stand_in_estimator = parse_estimator_name(n, "stand_in_estimator", n.str("stand_in_estimator"));
+  r.product_share = n.number("product_share", 0, 1);
+  if (!(r.product_share > 0 && r.product_share < 1))
+    n.fail("product_share", "expected a share strictly between 0 and 1 (the rest of the light samples go to the light sampler)");
   r.max_depth = int(n.integer("max_depth", 1, 1000));
   r.rr_depth = int(n.integer("rr_depth", 1, 1000));
   r.seed = std::uint64_t(n.integer("seed", 0, INT64_MAX));

@@ -15,7 +15,7 @@ namespace bsdfmix {
 namespace render {
 
 // How a path's next direction at a fiber is drawn (docs/render.md, "Estimators").
-enum class PathEstimator { Uniform, MisTab, CdfTab, MisLightCdf, MisLightGmm };
+enum class PathEstimator { Uniform, MisTab, CdfTab, MisLightCdf, MisLightGmm, MisProduct };
 const char* path_estimator_name(PathEstimator e);
 bool uses_light_sampling(PathEstimator e);
 
@@ -32,6 +32,7 @@ struct RenderSettings {
   PathEstimator reference_estimator = PathEstimator::MisLightGmm, stand_in_estimator = PathEstimator::MisLightGmm;
   std::vector<PathEstimator> estimators;
   bool stand_in = true;
+  double product_share = 0.5;  // mis_product: the product's share of the light samples, in (0, 1)
   int max_depth = 24, rr_depth = 3;
   std::uint64_t seed = 1;
   int threads = 0;

@@ -230,6 +230,19 @@ double TableBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
   return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(meta_.domain, theta, phi);
 }
 
+mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& lighting,
+                                     const mix::ProductOptions& o) const {
+  if (!has_set_) throw InputError("render: product sampling needs the mixtures");
+  // the nearer of the two slices around theta_o when it is fitted (half the pairs of the
+  // blend; the product's pdf is its own, so this costs variance, never bias)
+  std::size_t i0, i1;
+  double w;
+  bracket(theta_o, i0, i1, w);
+  const std::size_t near = w < 0.5 ? i0 : i1;
+  const int k = fitted_[near] >= 0 ? fitted_[near] : nearest_fitted(theta_o);
+  return mix::product(set_.slices[std::size_t(k)], 0.0, lighting, o);
+}
+
 void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double& theta, double& phi,
                        double& pdf_out) const {
   pdf_out = 0;

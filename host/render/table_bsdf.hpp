@@ -58,6 +58,11 @@ class TableBsdf {
   mix::Sample mixture_sample(double theta_o, const double u[4]) const;
   double mixture_pdf(double theta_o, double theta, double phi) const;
 
+  // The mixture of the fitted slice nearest theta_o times `lighting`, a mixture over the
+  // same (theta, phi) of the hit's frame: the header's product, pruned by `o`.
+  // Throws std::invalid_argument when the two do not overlap.
+  mix::SliceMixture product(double theta_o, const mix::SliceMixture& lighting, const mix::ProductOptions& o) const;
+
  private:
   void bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const;
   int nearest_fitted(double theta_o) const;

@@ -1,0 +1,35 @@
+// The world lighting mixture of a render: its grid, the frame, the fit and the cache.
+#include "render/world_lighting.hpp"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/format.hpp"
+#include "core/progress.hpp"
+#include "render/light_carry.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+TableMeta world_lighting_grid() { return make_grid(Domain::Fiber, 1, 1, 90, 180, true); }
+
+bool needs_world_lighting(const RenderSettings& s) {
+  const auto is = [](PathEstimator e) { return e == PathEstimator::MisProduct; };
+  return std::any_of(s.estimators.begin(), s.estimators.end(), is) || is(s.reference_estimator) ||
+         (s.stand_in && is(s.stand_in_estimator));
+}
+
+LightMixture world_lighting(const RenderSettings& s, const FitSection& fit, const std::string& device_selector) {
+  Lighting world = s.lighting;
+  world.domain = Domain::Fiber;
+  set_frame(world, {0, 0, 1}, {1, 0, 0}, s.file + ": render.scene");
+  LightMixture m = lighting_mixture(world, world_lighting_grid(), fit,
+                                    (std::filesystem::path(s.output) / "light_mixtures").string(), device_selector);
+  log_line("render: the lighting '" + s.lighting.name + "' over world directions: K " + std::to_string(m.k) + " (" +
+           std::to_string(compact_components(m.mixture).size()) + " compact), L1 " + format_number(100 * m.l1_rel, "%.2f") +
+           "%" + (m.cached ? " (cached)" : ""));
+  return m;
+}
+
+}  // namespace render
+}  // namespace bsdfmix

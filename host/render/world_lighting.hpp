@@ -1,0 +1,27 @@
+// The scene's lighting as a mixture over world directions, for mis_product
+// (render/light_carry.hpp): fitted once by the sweep's in-memory entry on a latitude-
+// longitude grid, z up, and cached in the render's output directory
+// (scene/light_mixture.hpp).
+#pragma once
+
+#include <string>
+
+#include "config/config.hpp"
+#include "render/render_settings.hpp"
+#include "scene/light_mixture.hpp"
+
+namespace bsdfmix {
+namespace render {
+
+// The grid the world lighting is fitted on: the fiber domain's (theta in [-pi/2, pi/2],
+// phi in [-pi, pi)), 90 x 180 cells of 2 degrees.
+TableMeta world_lighting_grid();
+
+// True when some estimator of the render (equal-sample, reference or stand-in) is mis_product.
+bool needs_world_lighting(const RenderSettings& s);
+
+// The lighting of `s` fitted with `fit`'s settings, or read from its cache under s.output.
+LightMixture world_lighting(const RenderSettings& s, const FitSection& fit, const std::string& device_selector);
+
+}  // namespace render
+}  // namespace bsdfmix

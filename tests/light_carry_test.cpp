@@ -1,0 +1,228 @@
+// The lighting carried into a hit's frame for mis_product (host/render/light_carry.hpp,
+// world_lighting.hpp): the carried mixture keeps the world mixture's value per direction
+// (at random fiber and surface frames), the product of a BSDF mixture with it, sampled and
+// taken to world directions as the renderer does, follows the density the renderer
+// evaluates (Pearson chi-square over equal-area world bins; a density 10 % off is caught),
+// broad components are left out, and the sky's fit over world directions finds its sun.
+// labels: render sample
+#include <catch2/catch.hpp>
+
+#include "chi_square.hpp"
+#include "gaussians.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "config/config.hpp"
+#include "core/progress.hpp"
+#include "render/light_carry.hpp"
+#include "render/world_lighting.hpp"
+#include "scene/scene.hpp"
+
+using namespace bsdfmix;
+using namespace bsdfmix::render;
+
+namespace {
+
+constexpr std::uint64_t kSeed = 20261201ull;
+
+mix::Gaussian gauss(double w, double mt, double mp, double st, double sp, double rho) {
+  mix::Gaussian g = test::gaussian(w, mt, mp, st, sp, rho);
+  g.prepare();
+  return g;
+}
+
+// A random frame from uniforms: the axis uniform on the sphere, e1 perpendicular to it.
+LocalAxes random_frame(std::uint32_t index, Domain d) {
+  double u[4];
+  mix::uniforms(kSeed, 7, index, u);
+  const double z = 2 * u[0] - 1, a = 2 * kPi * u[1], r = std::sqrt(std::max(0.0, 1 - z * z));
+  LocalAxes f;
+  f.domain = d;
+  f.axis = {r * std::cos(a), r * std::sin(a), z};
+  const Vec3 any = std::abs(f.axis[2]) < 0.9 ? Vec3{0, 0, 1} : Vec3{1, 0, 0};
+  const Vec3 p = normalized(cross(f.axis, any)), q = cross(f.axis, p);
+  const double b = 2 * kPi * u[2];
+  for (int i = 0; i < 3; ++i) f.e1[i] = std::cos(b) * p[i] + std::sin(b) * q[i];
+  f.e2 = cross(f.axis, f.e1);
+  return f;
+}
+
+// The world mixture's value (sum of weight x density over (theta, phi)) at a direction.
+double world_value(const std::vector<mix::Gaussian>& comps, const Vec3& w) {
+  double th, ph, v = 0;
+  world_angles(w, th, ph);
+  for (const auto& g : comps) v += g.weight * g.density(th, ph);
+  return v;
+}
+
+// The carried mixture's value at the same direction, in the frame's (theta, phi).
+double local_value(const mix::SliceMixture& m, const LocalAxes& f, const Vec3& w) {
+  double th, ph;
+  local_angles(f, w, th, ph);
+  return m.pdf_param(th, ph);
+}
+
+// The angle between a direction and the nearest pole of the frame.
+double pole_angle(const LocalAxes& f, const Vec3& w) {
+  const double z = std::abs(std::clamp(dot(w, f.axis), -1.0, 1.0));
+  return std::acos(z);
+}
+
+}  // namespace
+
+TEST_CASE("the carried lighting keeps the world mixture's value per direction", "[render][sample]") {
+  int frames = 0;
+  double worst = 0;
+  for (std::uint32_t k = 0; k < 40; ++k) {
+    const Domain d = k % 2 ? Domain::Hemisphere : Domain::Fiber;
+    const LocalAxes f = random_frame(k, d);
+    double u[4];
+    mix::uniforms(kSeed, 8, k, u);
+    // two compact components at random places, one of them correlated
+    const std::vector<mix::Gaussian> world = {gauss(0.7, -1.1 + 2.2 * u[0], -kPi + 2 * kPi * u[1], 0.06, 0.09, 0.4),
+                                              gauss(0.3, -1.1 + 2.2 * u[2], -kPi + 2 * kPi * u[3], 0.04, 0.05, 0.0)};
+    const Vec3 m0 = world_direction(world[0].mu_t, world[0].mu_p), m1 = world_direction(world[1].mu_t, world[1].mu_p);
+    // the linearization holds away from the frame's pole
+    if (pole_angle(f, m0) < 0.5 || pole_angle(f, m1) < 0.5) continue;
+    const mix::SliceMixture carried = carry_lighting(world, f);
+    REQUIRE(carried.components.size() == 2);
+    ++frames;
+    // the values at the two means and at one standard deviation around each, relative to
+    // the value at the first mean: the carried mixture is normalized, the world one not
+    const double ref_w = world_value(world, m0), ref_l = local_value(carried, f, m0);
+    for (const auto& g : world)
+      for (const auto& off : {std::pair<double, double>{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        const Vec3 w = world_direction(g.mu_t + off.first * std::sqrt(g.s_tt), g.mu_p + off.second * std::sqrt(g.s_pp));
+        const double a = world_value(world, w) / ref_w, b = local_value(carried, f, w) / ref_l;
+        if (a < 0.05) continue;
+        worst = std::max(worst, std::abs(b / a - 1));
+      }
+  }
+  std::printf("light_carry_test: %d frames, worst relative value error %.4f\n", frames, worst);
+  REQUIRE(frames >= 20);
+  // the linearization's own error at one standard deviation, half a radian or more from
+  // the pole: a few percent (a transposed Jacobian or a wrong weight is off by tens)
+  CHECK(worst < 0.06);
+}
+
+TEST_CASE("broad components are left out of the carried lighting", "[render][sample]") {
+  mix::SliceMixture world;
+  world.components = {gauss(0.5, 0.6, 0.7, 0.05, 0.05, 0), gauss(0.5, 0.0, 0.0, 0.9, 1.5, 0)};
+  world.prepare();
+  const std::vector<mix::Gaussian> compact = compact_components(world);
+  REQUIRE(compact.size() == 1);
+  CHECK(compact[0].mu_t == Approx(0.6));
+}
+
+TEST_CASE("the carried product, sampled as the renderer does, follows its density in world directions",
+          "[render][sample]") {
+  const std::vector<mix::Gaussian> world = {gauss(0.8, 0.9, 0.6, 0.05, 0.07, 0.2), gauss(0.2, -0.3, -2.0, 0.2, 0.3, -0.3)};
+  const int nz = 20, np = 40;
+  const std::size_t n = 200000;
+  int checked = 0;
+  for (std::uint32_t k = 0; k < 8; ++k) {
+    const Domain d = k < 6 ? Domain::Fiber : Domain::Hemisphere;
+    const LocalAxes f = random_frame(100 + k, d);
+    // a BSDF mixture: a lobe at the specular cone or mirror and a broad one
+    double u[4];
+    mix::uniforms(kSeed, 9, k, u);
+    const double to = d == Domain::Fiber ? -1.2 + 2.4 * u[0] : 1.2 * u[0];
+    mix::SliceMixture bsdf;
+    bsdf.components = {gauss(0.6, d == Domain::Fiber ? -to : to, d == Domain::Fiber ? 0.0 : kPi - 0.01, 0.15, 0.8, 0.1),
+                       gauss(0.4, d == Domain::Fiber ? 0.0 : 0.7, 0.5, 0.7, 2.0, 0.0)};
+    bsdf.prepare();
+    const mix::SliceMixture carried = carry_lighting(world, f);
+    if (carried.components.empty()) continue;
+    mix::SliceMixture prod;
+    try {
+      prod = mix::product(bsdf, 0.0, carried, mix::ProductOptions{0.99, 32});
+    } catch (const std::invalid_argument&) {
+      continue;
+    }
+    // the renderer's density of a world direction: the product's pdf_omega at its local angles
+    auto pdf = [&](const Vec3& w) {
+      double th, ph;
+      local_angles(f, w, th, ph);
+      return prod.pdf_omega(d, th, ph);
+    };
+    std::vector<double> obs(std::size_t(nz * np + 1), 0.0), expct(obs.size(), 0.0), skew(obs.size(), 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      double v[4];
+      mix::uniforms(kSeed, 10 + k, i, v);
+      const mix::Sample s = prod.sample(d, v[0], v[1], v[2]);
+      if (!s.valid) {
+        obs.back() += 1;
+        continue;
+      }
+      const Vec3 w = local_direction(f, s.theta, s.phi);
+      const int a = std::clamp(int((w[2] + 1) / 2 * nz), 0, nz - 1);
+      const int b = std::clamp(int((std::atan2(w[1], w[0]) + kPi) / (2 * kPi) * np), 0, np - 1);
+      obs[std::size_t(a * np + b)] += 1;
+    }
+    // expected: the density over each equal-area bin (z uniform, phi uniform), 12 x 12 points;
+    // `skew`: the same with the density 10 % off along z, which the test must reject
+    double mass = 0, mass_skew = 0;
+    const double bin = 4 * kPi / double(nz * np);
+    for (int a = 0; a < nz; ++a)
+      for (int b = 0; b < np; ++b) {
+        double acc = 0, acc_skew = 0;
+        for (int i = 0; i < 12; ++i)
+          for (int j = 0; j < 12; ++j) {
+            const double z = -1 + 2 * (a + (i + 0.5) / 12) / nz, ph = -kPi + 2 * kPi * (b + (j + 0.5) / 12) / np;
+            const double r = std::sqrt(std::max(0.0, 1 - z * z));
+            const double p = pdf({r * std::cos(ph), r * std::sin(ph), z});
+            acc += p;
+            acc_skew += p * (1 + 0.1 * z);
+          }
+        expct[std::size_t(a * np + b)] = acc / 144 * bin * double(n);
+        skew[std::size_t(a * np + b)] = acc_skew / 144 * bin * double(n);
+        mass += acc / 144 * bin;
+        mass_skew += acc_skew / 144 * bin;
+      }
+    expct.back() = std::max(0.0, 1 - mass) * double(n);
+    skew.back() = std::max(0.0, 1 - mass_skew) * double(n);
+    const test::ChiSquare c = test::pearson(obs, expct), cs = test::pearson(obs, skew);
+    std::printf("light_carry_test: frame %u (%s, %zu components): chi2 %.1f, dof %d, p-value %.4f; 10%% off: p-value %.2g\n",
+                k, d == Domain::Fiber ? "fiber" : "surface", prod.components.size(), c.stat, c.dof, c.p, cs.p);
+    INFO("frame " << k << ": chi2 " << c.stat << " dof " << c.dof);
+    CHECK(c.p > 0.001);
+    CHECK(cs.p < 1e-6);
+    ++checked;
+  }
+  CHECK(checked >= 6);
+}
+
+TEST_CASE("the sky fitted over world directions holds its sun in a compact component", "[render]") {
+  Progress::set_enabled(false);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "bsdfmix_light_carry_test";
+  std::filesystem::remove_all(dir);
+  RenderSettings s;
+  s.file = "light_carry_test";
+  s.output = dir.string();
+  s.estimators = {PathEstimator::MisProduct};
+  s.lighting = parse_scene(YAML::Load("name: sun\nconstant: 0.05\nlobes:\n  - direction: [0.35, 0.25, 0.9]\n"
+                                      "    radius_deg: 4\n    radiance: 40\n"),
+                           "sun.yaml", "", Domain::Hemisphere);
+  REQUIRE(needs_world_lighting(s));
+  FitSection fit;
+  fit.k_max = 6;
+  const LightMixture m = world_lighting(s, fit, "");
+  const std::vector<mix::Gaussian> compact = compact_components(m.mixture);
+  const Vec3 sun = s.lighting.lobes.at(0).direction;
+  double best = 10, weight = 0;
+  for (const auto& g : compact) {
+    const double a = std::acos(std::clamp(dot(world_direction(g.mu_t, g.mu_p), sun), -1.0, 1.0));
+    if (a < best) {
+      best = a;
+      weight = g.weight;
+    }
+  }
+  std::printf("light_carry_test: the sun: K %d, %zu compact, the nearest %.2f deg off, weight %.3f\n", m.k,
+              compact.size(), best * 180 / kPi, weight);
+  CHECK(best < 1.0 * kPi / 180);
+  CHECK(weight > 0.1);
+  std::filesystem::remove_all(dir);
+}
