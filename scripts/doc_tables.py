@@ -14,6 +14,7 @@ The tables (NAME: CSV):
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
+  render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
 """
 import csv
 import json
@@ -108,8 +109,16 @@ def render_measured():
     return out
 
 
+def render_cloth():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import render_targets
+    return render_targets.markdown([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
+                                    for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
+
+
 TABLES = {"rgb_stand_in": rgb_stand_in, "stand_in_smallest": stand_in_smallest,
-          "search_before_after": search_before_after, "render_measured": render_measured}
+          "search_before_after": search_before_after, "render_measured": render_measured,
+          "render_cloth": render_cloth}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 

@@ -73,35 +73,48 @@ def row_for(d):
     )
 
 
+COLS = [("fiber", "fiber", None), ("scene", "scene", None), ("size", "size", None),
+        ("uniform rel MSE", "uniform", None), ("best mixture", "mixture_name", None),
+        ("its rel MSE", "mixture", None), ("best table CDF", "cdf_name", None), ("its rel MSE", "cdf", None),
+        ("vs uniform", "vs_uniform", lambda x, r: x >= 5 or r["scene"] != "sky"),
+        ("vs table CDF", "vs_cdf", lambda x, r: x <= 1.5),
+        ("mis_product / mis_light_cdf", "product_vs_cdf", lambda x, r: x <= 0.5),
+        ("ns/vertex mis_light_cdf", "ns_cdf", None), ("ns/vertex mis_product", "ns_product", None),
+        ("table / mixtures", "memory", lambda x, r: x >= 100),
+        ("full 4D / mixtures", "memory_full", lambda x, r: x >= 1000),
+        ("slices fitted", "slices", None),
+        ("stand-in diff % (pixels)", "stand_in", None),
+        ("stand-in diff % (4x4)", "stand_in_4x4", lambda x, r: x <= 2),
+        ("stand-in mean %", "stand_in_mean", None),
+        ("slowest 64 spp (s)", "slowest", lambda x, r: x <= 120 or r["size"] != "256x256"),
+        ("rays/s (2 cores)", "rays", None)]
+
+
+def cell(r, name, ok):
+    x = r[name]
+    if ok is None or x is None or isinstance(x, str):
+        return fmt(x)
+    return fmt(x) if ok(x, r) else fmt(x) + " !"
+
+
+def markdown(dirs):
+    """The Markdown table of the render directories, as lines (scripts/doc_tables.py)."""
+    rows = [row_for(d) for d in dirs]
+    out = ["| " + " | ".join(c[0] for c in COLS) + " |", "|" + "---|" * len(COLS)]
+    for r in rows:
+        out.append("| " + " | ".join(cell(r, n, ok) for _, n, ok in COLS) + " |")
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dirs", nargs="+", help="render output directories (render.csv, render.json)")
     ap.add_argument("--markdown", action="store_true")
     a = ap.parse_args()
-    rows = [row_for(d) for d in a.dirs]
-    cols = [("fiber", "fiber", None), ("scene", "scene", None), ("size", "size", None),
-            ("uniform rel MSE", "uniform", None), ("best mixture", "mixture_name", None),
-            ("its rel MSE", "mixture", None), ("best table CDF", "cdf_name", None), ("its rel MSE", "cdf", None),
-            ("vs uniform", "vs_uniform", lambda x, r: x >= 5 or r["scene"] != "sky"),
-            ("vs table CDF", "vs_cdf", lambda x, r: x <= 1.5),
-            ("mis_product / mis_light_cdf", "product_vs_cdf", lambda x, r: x <= 0.5),
-            ("ns/vertex mis_light_cdf", "ns_cdf", None), ("ns/vertex mis_product", "ns_product", None),
-            ("table / mixtures", "memory", lambda x, r: x >= 100),
-            ("full 4D / mixtures", "memory_full", lambda x, r: x >= 1000),
-            ("slices fitted", "slices", None),
-            ("stand-in diff % (pixels)", "stand_in", None),
-            ("stand-in diff % (4x4)", "stand_in_4x4", lambda x, r: x <= 2),
-            ("stand-in mean %", "stand_in_mean", None),
-            ("slowest 64 spp (s)", "slowest", lambda x, r: x <= 120 or r["size"] != "256x256"),
-            ("rays/s (2 cores)", "rays", None)]
-
-    def cell(r, name, ok):
-        x = r[name]
-        if ok is None or x is None or isinstance(x, str):
-            return fmt(x)
-        return fmt(x) if ok(x, r) else fmt(x) + " !"
-
-    print_table(rows, cols, cell, a.markdown)
+    if a.markdown:
+        print("\n".join(markdown(a.dirs)))
+        return
+    print_table([row_for(d) for d in a.dirs], COLS, cell, False)
 
 
 if __name__ == "__main__":
