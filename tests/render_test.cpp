@@ -137,7 +137,7 @@ std::vector<mix::Gaussian> world_mixture(const Lighting& l) {
   auto add = [&](double w, const Vec3& d, double sigma) {
     mix::Gaussian g;
     g.weight = w;
-    world_angles(d, g.mu_t, g.mu_p);
+    local_angles(kWorldAxes, d, g.mu_t, g.mu_p);
     g.s_tt = sigma * sigma;
     g.s_pp = sigma * sigma / std::max(0.05, std::cos(g.mu_t) * std::cos(g.mu_t));
     m.components.push_back(g);

@@ -146,8 +146,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       lp.product = false;
       if (product && (fiber || surface)) {
         // the lighting carried into the hit's frame, times the BSDF mixture at theta_o
-        lp.axes = fiber ? LocalAxes{frame.t, frame.n, frame.b, Domain::Fiber}
-                        : LocalAxes{sframe.n, sframe.x, sframe.y, Domain::Hemisphere};
+        lp.axes = fiber ? frame.axes() : sframe.axes();
         try {
           lp.prod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(*v.world_light, lp.axes),
                                     v.product);

@@ -7,31 +7,6 @@
 namespace bsdfmix {
 namespace render {
 
-void local_angles(const LocalAxes& f, const Vec3& w, double& theta, double& phi) {
-  const double z = std::clamp(dot(w, f.axis), -1.0, 1.0);
-  theta = f.domain == Domain::Fiber ? std::asin(z) : std::acos(z);
-  phi = wrap_phi(std::atan2(dot(w, f.e2), dot(w, f.e1)));
-}
-
-Vec3 local_direction(const LocalAxes& f, double theta, double phi) {
-  const bool fiber = f.domain == Domain::Fiber;
-  const double a = fiber ? std::sin(theta) : std::cos(theta), r = fiber ? std::cos(theta) : std::sin(theta);
-  const double cp = std::cos(phi), sp = std::sin(phi);
-  Vec3 w;
-  for (int i = 0; i < 3; ++i) w[i] = a * f.axis[i] + r * (cp * f.e1[i] + sp * f.e2[i]);
-  return w;
-}
-
-Vec3 world_direction(double theta, double phi) {
-  const double c = std::cos(theta);
-  return {c * std::cos(phi), c * std::sin(phi), std::sin(theta)};
-}
-
-void world_angles(const Vec3& w, double& theta, double& phi) {
-  theta = std::asin(std::clamp(w[2], -1.0, 1.0));
-  phi = wrap_phi(std::atan2(w[1], w[0]));
-}
-
 std::vector<mix::Gaussian> compact_components(const mix::SliceMixture& world) {
   std::vector<mix::Gaussian> out;
   for (const mix::Gaussian& g : world.components) {

@@ -15,27 +15,10 @@
 
 #include <vector>
 
-#include "core/domain.hpp"
-#include "core/vec3.hpp"
+#include "render/local_axes.hpp"
 
 namespace bsdfmix {
 namespace render {
-
-// A hit's local frame: `axis` is the fiber tangent (fiber domain: sin(theta) = dot(w,
-// axis)) or the surface normal (hemisphere domain: cos(theta) = dot(w, axis)); phi is
-// measured from e1 toward e2 = axis x e1.
-struct LocalAxes {
-  Vec3 axis, e1, e2;
-  Domain domain = Domain::Fiber;
-};
-
-// A direction's (theta, phi) in the frame, and back.
-void local_angles(const LocalAxes& f, const Vec3& w, double& theta, double& phi);
-Vec3 local_direction(const LocalAxes& f, double theta, double phi);
-
-// The world direction of lat-long (theta, phi), z up, and back.
-Vec3 world_direction(double theta, double phi);
-void world_angles(const Vec3& w, double& theta, double& phi);
 
 // Components broader than this (the larger standard deviation, radians) are left out of
 // the product: a light much broader than the BSDF's lobes changes little of their shape,

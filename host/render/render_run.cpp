@@ -49,7 +49,7 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   SceneView view = scene.view();
   std::vector<mix::Gaussian> compact;
   if (needs_world_lighting(s)) {
-    compact = compact_components(world_lighting(s, *config.fit, device_selector).mixture);
+    compact = world_lighting(s, *config.fit, device_selector);
     view.world_light = &compact;
   }
 

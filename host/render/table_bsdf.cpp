@@ -31,37 +31,12 @@ FiberFrame::FiberFrame(const Vec3& tangent, const Vec3& wo) {
   b = cross(t, n);
 }
 
-void FiberFrame::to_local(const Vec3& w, double& theta, double& phi) const {
-  theta = std::asin(std::clamp(dot(w, t), -1.0, 1.0));
-  phi = std::atan2(dot(w, b), dot(w, n));
-  phi = wrap_phi(phi);
-}
-
-Vec3 FiberFrame::to_world(double theta, double phi) const {
-  const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
-  Vec3 w;
-  for (int i = 0; i < 3; ++i) w[i] = st * t[i] + ct * (cp * n[i] + sp * b[i]);
-  return w;
-}
-
 SurfaceFrame::SurfaceFrame(const Vec3& normal, const Vec3& wo) {
   n = normalized(normal);
   const double c = std::clamp(dot(wo, n), -1.0, 1.0);
   theta_o = std::acos(c);
   x = phi_zero(n, wo, c);
   y = cross(n, x);
-}
-
-void SurfaceFrame::to_local(const Vec3& w, double& theta, double& phi) const {
-  theta = std::acos(std::clamp(dot(w, n), -1.0, 1.0));
-  phi = wrap_phi(std::atan2(dot(w, y), dot(w, x)));
-}
-
-Vec3 SurfaceFrame::to_world(double theta, double phi) const {
-  const double st = std::sin(theta), ct = std::cos(theta), cp = std::cos(phi), sp = std::sin(phi);
-  Vec3 w;
-  for (int i = 0; i < 3; ++i) w[i] = ct * n[i] + st * (cp * x[i] + sp * y[i]);
-  return w;
 }
 
 TableBsdf::TableBsdf(const std::string& table_path) {

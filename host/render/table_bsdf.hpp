@@ -20,6 +20,7 @@
 #include "core/color.hpp"
 #include "io/table.hpp"
 #include "render/cloth.hpp"
+#include "render/local_axes.hpp"
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
@@ -89,8 +90,9 @@ struct SurfaceFrame {
   Vec3 n, x, y;
   double theta_o = 0;
   SurfaceFrame(const Vec3& normal, const Vec3& wo);
-  void to_local(const Vec3& w, double& theta, double& phi) const;  // theta in [0, pi]
-  Vec3 to_world(double theta, double phi) const;
+  LocalAxes axes() const { return {n, x, y, Domain::Hemisphere}; }
+  void to_local(const Vec3& w, double& theta, double& phi) const { local_angles(axes(), w, theta, phi); }  // theta in [0, pi]
+  Vec3 to_world(double theta, double phi) const { return local_direction(axes(), theta, phi); }
 };
 
 // Fiber frame at a hit: tangent t and the plane of omega_o (phi = 0 along n).
@@ -98,8 +100,9 @@ struct FiberFrame {
   Vec3 t, n, b;
   double theta_o = 0;
   FiberFrame(const Vec3& tangent, const Vec3& wo);
-  void to_local(const Vec3& w, double& theta, double& phi) const;
-  Vec3 to_world(double theta, double phi) const;
+  LocalAxes axes() const { return {t, n, b, Domain::Fiber}; }
+  void to_local(const Vec3& w, double& theta, double& phi) const { local_angles(axes(), w, theta, phi); }
+  Vec3 to_world(double theta, double phi) const { return local_direction(axes(), theta, phi); }
 };
 
 }  // namespace render

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "config/config.hpp"
 #include "render/render_settings.hpp"
@@ -20,8 +21,10 @@ TableMeta world_lighting_grid();
 // True when some estimator of the render (equal-sample, reference or stand-in) is mis_product.
 bool needs_world_lighting(const RenderSettings& s);
 
-// The lighting of `s` fitted with `fit`'s settings, or read from its cache under s.output.
-LightMixture world_lighting(const RenderSettings& s, const FitSection& fit, const std::string& device_selector);
+// The compact components (render/light_carry.hpp) of the lighting of `s` fitted with
+// `fit`'s settings, or read from its cache under s.output.
+std::vector<mix::Gaussian> world_lighting(const RenderSettings& s, const FitSection& fit,
+                                          const std::string& device_selector);
 
 }  // namespace render
 }  // namespace bsdfmix
