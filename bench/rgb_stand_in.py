@@ -23,6 +23,7 @@ default settings, and reads the fit report and the files back:
 
     bench/rgb_stand_in.py [--bsdfmix build/bsdfmix] [--work out/bench_rgb]
                           [--tables satin,paper,sunflower] [--csv bench/results/rgb_stand_in.csv]
+                          [--set KEY=VALUE ...]   (fit settings, e.g. --set refine_rgb=0)
 """
 import argparse
 import csv
@@ -157,6 +158,9 @@ def run(args):
         with open(cfg, "w") as f:
             f.write(f"table: {table}\nfit:\n  output: {out}_mixture.h5\n  report: {out}_fit.csv\n"
                     f"  search_report: {out}_search.csv\n")
+            for setting in args.set:
+                key, _, value = setting.partition("=")
+                f.write(f"  {key}: {value}\n")
         if os.path.exists(out + "_mixture.h5"):
             os.remove(out + "_mixture.h5")
         start = time.monotonic()
@@ -207,6 +211,8 @@ def main():
     ap.add_argument("--tables", default="satin,paper,sunflower," + ",".join(FIBERS))
     ap.add_argument("--fiber-theta-o", type=int, default=45, help="theta_o rows of the generated fiber tables")
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "rgb_stand_in.csv"))
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a fit setting for every table (repeatable), e.g. refine_rgb=0")
     args = ap.parse_args()
     results = run(args)
     os.makedirs(os.path.dirname(args.csv), exist_ok=True)

@@ -11,6 +11,7 @@ bench/results/, between markers:
 
 The tables (NAME: CSV):
   rgb_stand_in         bench/results/rgb_stand_in.csv (docs/fitting.md, "Colour and energy")
+  rgb_refine           bench/results/rgb_refine.csv (docs/fitting.md, "The channels move the Gaussians")
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
@@ -109,6 +110,24 @@ def render_measured():
     return out
 
 
+def rgb_refine():
+    names = {"satin": "satin_rosaline", "paper": "paper_white", "sunflower": "cg_sunflower", "silk": "silk",
+             "cotton": "cotton", "polyester": "polyester (red)", "wool": "wool"}
+    labels = {"alone": "the luminance alone (0, 5)", "default": "**the default (0.5, 5)**",
+              "third": "a third (1/3, 5)", "l1x2": "the L1 part doubled (0.5, 2.5)",
+              "l1x3": "the L1 part tripled (2/3, 5/3)"}
+    out = ["| variant (refine_rgb, refine_kl) | table | luminance L1 median / p90 | RGB error less the negative part, "
+           "median | ratio (target <= 1.2) | mean K | chi-square: mean, median / p90 ratio to the luminance alone |",
+           "|---|---|---|---|---|---|---|"]
+    for r in rows("rgb_refine.csv"):
+        ratio = float(r["ratio"])
+        out.append("| %s | %s | %s / %s | %s | %s | %.2f | %.4f, %.3f / %.3f |" % (
+            labels.get(r["variant"], r["variant"]), names.get(r["table"], r["table"]), pct(r["l1_median"]),
+            pct(r["l1_p90"]), pct(r["rgb_less_negative_median"]), ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio,
+            float(r["mean_k"]), float(r["chi_mean"]), float(r["chi_ratio_median"]), float(r["chi_ratio_p90"])))
+    return out
+
+
 def render_cloth():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import render_targets
@@ -116,7 +135,7 @@ def render_cloth():
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
-TABLES = {"rgb_stand_in": rgb_stand_in, "stand_in_smallest": stand_in_smallest,
+TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)

@@ -85,20 +85,63 @@ double chi_square(const SliceGrid& grid, const std::vector<double>& w, const Gmm
 
 }  // namespace
 
+// Channels whose shapes differ from the luminance's: R the band alone, G the lobe with
+// noise around zero (a third of its cells negative), B the two at other proportions.
+std::vector<double> channels_of(const SliceGrid& grid) {
+  Gmm lobe;
+  add(lobe, 1.0, 0.5, 1.0, 0.08, 0.15, 0.3);
+  const std::vector<double> l = mixture_weights(grid, lobe);
+  const std::size_t n = grid.cells(), np = grid.phi.size();
+  std::vector<double> rgb(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double c = std::cos(grid.theta[i / np]), band = 0.15 * c * c;
+    const double noise = 2e-5 * (double((i * 2654435761u) % 1000) / 1000.0 - 0.35);
+    rgb[i] = band;
+    rgb[n + i] = 0.5 * l[i] + noise;
+    rgb[2 * n + i] = 0.4 * band + 0.9 * l[i];
+  }
+  return rgb;
+}
+
+// Positive amplitudes b_jc for a mixture's components (channel-major), of various sizes.
+std::vector<double> amplitudes_for(const Gmm& g) {
+  const int k = g.k();
+  std::vector<double> b(3 * static_cast<std::size_t>(k));
+  for (int c = 0; c < 3; ++c)
+    for (int j = 0; j < k; ++j) b[c * k + j] = g.weight[j] * (0.2 + 0.3 * c + 0.1 * ((j * 7 + c) % 5));
+  return b;
+}
+
 TEST_CASE("the L1 kernel matches its reference in every K bucket and layout", "[refine]") {
+  const bool colour = GENERATE(false, true);
+  INFO((colour ? "with the R, G, B channels" : "the luminance alone"));
   SliceSet set;
   set.grid = make_slice_grid(Domain::Fiber, 90, 180);  // 16200 cells: the last chunk is padding in part
   set.weights = {band_and_lobe(set.grid)};
+  if (colour) {
+    // A second slice, grey: its channels are the luminance's shape, so it has none in the
+    // objective (l1_channels) and its queries no amplitudes, as refine_l1 passes them; the
+    // same batch as the others' (the channels' kernel, its weights per problem).
+    set.weights.push_back(set.weights[0]);
+    std::vector<double> grey;
+    for (double f : {0.9, 1.0, 0.5})
+      for (double w : set.weights[0]) grey.push_back(f * w);
+    set.rgb = {channels_of(set.grid), grey};
+    CHECK(l1_channels(set, 0).size() == 3 * set.grid.cells());
+    CHECK(l1_channels(set, 1).empty());
+  }
   const std::vector<int> ks = {3, 8, 12, 24, 50, 100};
   std::vector<L1Query> queries;
   std::set<int> buckets;
   for (int k : ks) {
-    queries.push_back({0, spread(k)});
+    const Gmm g = spread(k);
+    queries.push_back({0, g, colour ? amplitudes_for(g) : std::vector<double>{}});
+    if (colour) queries.push_back({1, g});
     buckets.insert(em_detail::k_bucket(k));
   }
   CHECK(buckets == std::set<int>{4, 8, 16, 32, 64, 128});
   CHECK(l1_images(queries[0].gmm.cov[5]) == 2);  // the wide component takes two images on each side
-  const L1Objective objective = l1_objective(set.grid, 3.0);
+  const L1Objective objective = l1_objective(set.grid, 3.0, colour ? 0.6 : 0.0);
   const std::vector<L1Value> ref = l1_values_reference(set, queries, objective);
   struct Run {
     EmPrecision precision;
@@ -114,8 +157,11 @@ TEST_CASE("the L1 kernel matches its reference in every K bucket and layout", "[
       INFO("precision " << precision_name(run.precision) << (run.gpu_layout ? ", GPU layout" : ", CPU layout")
                         << ", K = " << k);
       CHECK(got[i].objective == Approx(ref[i].objective).epsilon(1e-4));
+      const int nq = queries[i].rgb_amp.empty() ? 6 : 9;
+      REQUIRE(got[i].stats.size() == std::size_t(nq * k));
+      REQUIRE(ref[i].stats.size() == std::size_t(nq * k));
       // Each statistic against the largest of its kind over the components.
-      for (int q = 0; q < 6; ++q) {
+      for (int q = 0; q < nq; ++q) {
         double scale = 0;
         for (int j = 0; j < k; ++j) scale = std::max(scale, std::abs(ref[i].stats[q * k + j]));
         for (int j = 0; j < k; ++j) {
@@ -150,6 +196,39 @@ TEST_CASE("the L1 gradient is the derivative of the objective", "[refine]") {
       const double down = objective(g);
       *v = keep;
       const double numeric = (up - down) / (2 * h), analytic = grad[6 * j + p] * (p == 4 ? 2.0 : 1.0);
+      INFO("component " << j << ", parameter " << p << ": analytic " << analytic << ", numeric " << numeric);
+      CHECK(analytic == Approx(numeric).epsilon(1e-3).margin(1e-6));
+    }
+  }
+}
+
+TEST_CASE("the L1 gradient with channels is the derivative of the objective", "[refine]") {
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 45, 90);
+  set.weights = {band_and_lobe(set.grid)};
+  set.rgb = {channels_of(set.grid)};
+  Gmm g;
+  add(g, 0.5, 0.45, 1.1, 0.1, 0.2, 0.3);
+  add(g, 0.4, -0.2, 0.0, 0.4, 2.0, -0.1);  // wide in phi: images
+  add(g, 0.1, 0.0, kPi - 0.1, 0.15, 0.3, 0.0);  // across the seam
+  std::vector<double> b = amplitudes_for(g);
+  const L1Objective obj{0.3 / double(set.grid.cells()), 3.0, 0.6};  // smooth enough for differences
+  auto objective = [&]() { return l1_values_reference(set, {{0, g, b}}, obj)[0].objective; };
+  const std::vector<double> grad = l1_gradient(set.grid, g, l1_values_reference(set, {{0, g, b}}, obj)[0], b);
+  REQUIRE(grad.size() == 9 * std::size_t(g.k()));
+  const int k = g.k();
+  for (int j = 0; j < k; ++j) {
+    // weight, mean theta, mean phi, s_tt, s_tp (both off-diagonal entries), s_pp, b_jR, b_jG, b_jB
+    for (int p = 0; p < 9; ++p) {
+      double* v = p == 0 ? &g.weight[j] : p < 3 ? &g.mean[2 * j + p - 1] : p < 6 ? &g.cov[3 * j + p - 3] : &b[(p - 6) * k + j];
+      const double h = 1e-5 * std::max(std::abs(*v), 0.01), keep = *v;
+      *v = keep + h;
+      const double up = objective();
+      *v = keep - h;
+      const double down = objective();
+      *v = keep;
+      const double numeric = (up - down) / (2 * h);
+      const double analytic = p < 6 ? grad[6 * j + p] * (p == 4 ? 2.0 : 1.0) : grad[6 * k + (p - 6) * k + j];
       INFO("component " << j << ", parameter " << p << ": analytic " << analytic << ", numeric " << numeric);
       CHECK(analytic == Approx(numeric).epsilon(1e-3).margin(1e-6));
     }

@@ -2,7 +2,8 @@
 // docs/fitting.md, "Colour and energy"): its energy kept per channel where a lobe leaks past
 // the theta border, a grey table's rgb_scale equal to scale times the weights, the report's
 // errors equal to an independent recomputation from the file through the header, files
-// written before colour still read, and the file's rgb_scale checked and round-tripped.
+// written before colour still read, the file's rgb_scale checked and round-tripped, and the
+// channels moving the Gaussians on a measured material.
 // labels: fit
 #include <catch2/catch.hpp>
 
@@ -25,6 +26,7 @@
 #include "sweep/slice_plan.hpp"
 #include "sweep/slice_source.hpp"
 #include "sweep/sweep.hpp"
+#include "tables/rgl_import.hpp"
 
 using namespace bsdfmix;
 namespace fs = std::filesystem;
@@ -318,4 +320,39 @@ TEST_CASE("rgb_scale round-trips and is checked on read", "[stand_in]") {
     H5Fclose(file);
   }
   CHECK_THROWS_WITH(read_mixture_file(path), Catch::Contains("rgb_scale: expected shape [S, Kmax, 3]"));
+}
+
+TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured material", "[stand_in]") {
+  Progress::set_enabled(false);
+  // cg_sunflower (data/rgl/): yellow, its faint blue lobe and its red and green of other
+  // shapes than their luminance; 6 slices of 45 x 90 cells.
+  RglImportOptions opt;
+  opt.file = std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/cg_sunflower_rgb.bsdf";
+  opt.n_theta_o = 6;
+  opt.n_theta_i = 45;
+  opt.n_phi_i = 90;
+  const std::string table = (temp_dir() / "sunflower.h5").string();
+  import_rgl_table(opt, table);
+  double sums[2][2] = {{0, 0}, {0, 0}};  // [luminance alone / with the channels][luminance L1, RGB error]
+  for (int with : {0, 1}) {
+    FitSection f;
+    const std::string stem = with ? "sunflower_rgb" : "sunflower_y";
+    f.output = (temp_dir() / (stem + "_mixture.h5")).string();
+    f.report = (temp_dir() / (stem + "_fit.csv")).string();
+    f.search_report = (temp_dir() / (stem + "_search.csv")).string();
+    f.k_max = 16;
+    f.refine_rgb = with ? 0.5 : 0.0;
+    run_sweep(table, f, "");
+    const auto rows = csv_rows(f.report);
+    REQUIRE(rows.size() == 7);
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      sums[with][0] += std::stod(rows[r][6]);
+      sums[with][1] += std::stod(rows[r][10]) - std::stod(rows[r][11]);  // less the negative cells' part
+    }
+  }
+  INFO("summed over the slices: luminance L1 " << sums[0][0] << " alone, " << sums[1][0]
+                                               << " with the channels; RGB error less its negative part "
+                                               << sums[0][1] << " and " << sums[1][1]);
+  CHECK(sums[1][1] < 0.95 * sums[0][1]);
+  CHECK(sums[1][0] < 1.03 * sums[0][0]);
 }

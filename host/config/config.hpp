@@ -54,6 +54,7 @@ struct FitSection {
   std::string refine = "l1";    // l1: the final fits refined toward the least L1 error; none: EM's fits
   int refine_evaluations = 150;
   double refine_kl = 5.0;       // weight of the KL divergence (EM's objective) beside the L1 error
+  double refine_rgb = 0.5;      // with colour: the R, G, B error's share of the refinement's L1 part; 0: luminance alone
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 

@@ -46,6 +46,7 @@ FitSection parse_fit(const ConfigNode& n) {
     n.fail("refine", "'" + f.refine + "' is not a refinement (expected l1 or none)");
   f.refine_evaluations = static_cast<int>(n.integer("refine_evaluations", 1, 100000));
   f.refine_kl = n.number("refine_kl", 0.0, 1000.0);
+  f.refine_rgb = n.number("refine_rgb", 0.0, 0.9);
   if (n.has("theta_o")) {
     f.theta_o = n.numbers("theta_o");
     for (double t : f.theta_o)

@@ -77,6 +77,9 @@ class EmEngine {
   struct L1Slices {
     SliceGrid grid;
     std::vector<std::vector<float>> w;  // per slice, normalized to sum 1; empty: a zero slice
+    // With the set's rgb: per slice, its l1_channels as 3 rows of the padded stride (zero
+    // for a slice without them); empty: no colour.
+    std::vector<std::vector<float>> rgb;
   };
   static L1Slices l1_prepare(const SliceSet& set);
   std::vector<L1Value> l1_values(const L1Slices& slices, const std::vector<L1Query>& queries,

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/domain.hpp"
+#include "core/error.hpp"
 #include "fit/em_internal.hpp"
 
 namespace bsdfmix {
@@ -48,8 +49,8 @@ std::vector<double> to_params(const Gmm& g, double floor) {
   return x;
 }
 
-Gmm to_gmm(const std::vector<double>& x, double floor) {
-  const int k = static_cast<int>(x.size() / 6);
+// The mixture of a parameter vector of k components (the channels' amplitudes, if any, after).
+Gmm to_gmm(const std::vector<double>& x, double floor, int k) {
   Gmm g;
   g.weight.resize(k);
   g.mean.resize(2 * k);
@@ -86,8 +87,11 @@ std::vector<double> param_gradient(const std::vector<double>& x, const Gmm& g, c
     o[4] = 2 * (d[4] * p[3] + d[5] * p[4]);
     o[5] = 2 * d[5] * p[5];
   }
+  for (std::size_t q = 6 * std::size_t(k); q < x.size(); ++q) out[q] = std::exp(x[q]) * dg[q];  // log b
   return out;
 }
+
+
 
 double dot(const std::vector<double>& a, const std::vector<double>& b) {
   double s = 0;
@@ -97,6 +101,7 @@ double dot(const std::vector<double>& a, const std::vector<double>& b) {
 
 struct Walk {
   std::size_t slice = 0;
+  int k = 0;
   std::vector<double> x, g, dir, trial, best;
   double f = std::numeric_limits<double>::infinity(), best_f = std::numeric_limits<double>::infinity();
   double alpha = 1, slope = 0;
@@ -190,10 +195,59 @@ struct Walk {
   }
 };
 
+// The channels' amplitudes b_jc of a walk's trial (its entries past 6 K, log b); none for a
+// walk without channels.
+std::vector<double> amplitudes(const Walk& w) {
+  std::vector<double> b(w.trial.begin() + 6 * static_cast<std::ptrdiff_t>(w.k), w.trial.end());
+  for (double& v : b) v = std::exp(v);
+  return b;
+}
+
 }  // namespace
 
-L1Objective l1_objective(const SliceGrid& grid, double kl) {
-  return {1e-3 / static_cast<double>(std::max<std::size_t>(1, grid.cells())), kl};
+L1Objective l1_objective(const SliceGrid& grid, double kl, double rgb) {
+  return {1e-3 / static_cast<double>(std::max<std::size_t>(1, grid.cells())), kl, rgb};
+}
+
+L1Weights l1_weights(const L1Objective& objective, bool channels) {
+  if (!channels || !(objective.rgb > 0)) return {objective.kl, 0.0};
+  const double a = std::min(objective.rgb, 0.99);
+  return {objective.kl / (1 - a), a / (1 - a)};
+}
+
+std::vector<double> l1_channels(const SliceSet& set, std::size_t s) {
+  if (s >= set.rgb.size() || set.rgb[s].empty()) return {};
+  const std::size_t n = set.grid.cells();
+  const std::vector<double>& v = set.rgb[s];
+  if (v.size() != 3 * n)
+    throw InputError("slice " + std::to_string(s) + ": " + std::to_string(v.size()) + " channel weights, expected " +
+                     std::to_string(3 * n));
+  double total = 0;
+  for (double x : v) {
+    if (!std::isfinite(x)) throw InputError("slice " + std::to_string(s) + ": a channel weight is not finite");
+    total += std::abs(x);
+  }
+  if (!(total > 0)) return {};
+  // Channels of the luminance's shape (each within kGreyShare, summed over the three, of
+  // its sum's share of the luminance): the luminance's own error draws them.
+  if (s < set.weights.size() && set.weights[s].size() == n) {
+    const std::vector<double>& y = set.weights[s];
+    double y_sum = 0;
+    for (double x : y) y_sum += x;
+    if (y_sum > 0) {
+      double off = 0;
+      for (std::size_t c = 0; c < 3; ++c) {
+        double c_sum = 0;
+        for (std::size_t i = 0; i < n; ++i) c_sum += v[c * n + i];
+        const double r = c_sum / y_sum;
+        for (std::size_t i = 0; i < n; ++i) off += std::abs(v[c * n + i] - r * y[i]);
+      }
+      if (off <= kGreyShare * total) return {};
+    }
+  }
+  std::vector<double> out(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = v[i] / total;
+  return out;
 }
 
 int l1_images(double s_pp) {
@@ -203,7 +257,7 @@ int l1_images(double s_pp) {
 
 std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<L1Query>& queries,
                                          const L1Objective& objective) {
-  const double eps = objective.eps, kl = objective.kl;
+  const double eps = objective.eps;
   const SliceGrid& grid = set.grid;
   const std::size_t np = grid.phi.size(), n = grid.cells();
   const double area = cell_area(grid);
@@ -212,8 +266,16 @@ std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<
     const Gmm& g = queries[qi].gmm;
     const int k = g.k();
     const em_detail::PreparedSlice w = em_detail::prepare_slice(set, queries[qi].slice);
+    const bool colour = !queries[qi].rgb_amp.empty();
+    const L1Weights weights = l1_weights(objective, colour);
+    const double kl = weights.kl, lam = weights.rgb;
+    const std::vector<double> ch = colour ? l1_channels(set, queries[qi].slice) : std::vector<double>{};
+    if (colour && queries[qi].rgb_amp.size() != 3 * static_cast<std::size_t>(k))
+      throw InputError("L1 query: " + std::to_string(queries[qi].rgb_amp.size()) + " channel amplitudes, expected " +
+                       std::to_string(3 * k));
+    const std::vector<double>& amp = queries[qi].rgb_amp;
     L1Value& v = out[qi];
-    v.stats.assign(6 * static_cast<std::size_t>(k), 0.0);
+    v.stats.assign((colour ? 9 : 6) * static_cast<std::size_t>(k), 0.0);
     if (w.w.empty()) continue;
     std::vector<double> norm(k), it(k), ip(k), itp(k);
     std::vector<int> images(k);
@@ -228,26 +290,43 @@ std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<
     auto density = [&](int j, double dt, double dp) {
       return norm[j] * std::exp(-0.5 * (it[j] * dt * dt + 2 * itp[j] * dt * dp + ip[j] * dp * dp));
     };
+    std::vector<double> all(k);
     for (std::size_t i = 0; i < n; ++i) {
       const double t = grid.theta[i / np], p = grid.phi[i % np];
-      double m = 0;
+      double m = 0, mc[3] = {0, 0, 0};
       for (int j = 0; j < k; ++j) {
         const double dt = t - g.mean[2 * j], d0 = wrap_phi(p - g.mean[2 * j + 1]);
-        for (int img = -images[j]; img <= images[j]; ++img) m += density(j, dt, d0 + 2 * kPi * img);
+        all[j] = 0;
+        for (int img = -images[j]; img <= images[j]; ++img) all[j] += density(j, dt, d0 + 2 * kPi * img);
+        m += all[j];
+        if (colour)
+          for (int c = 0; c < 3; ++c) mc[c] += amp[c * k + j] / g.weight[j] * all[j];
       }
       const double am = std::max(area * m, 1e-30), d = w.w[i] - area * m, rho = std::sqrt(d * d + eps * eps);
       const double s = d / rho + kl * w.w[i] / am;
       v.objective += rho + (w.w[i] > 0 ? kl * w.w[i] * (std::log(std::max(w.w[i], 1e-30)) - std::log(am)) : 0.0);
+      double sc[3] = {0, 0, 0};
+      if (colour)
+        for (int c = 0; c < 3; ++c) {
+          const double e = (ch.empty() ? 0.0 : ch[c * n + i]) - area * mc[c], r = std::sqrt(e * e + eps * eps);
+          v.objective += lam * r;
+          sc[c] = lam * e / r;
+        }
       for (int j = 0; j < k; ++j) {
         const double dt = t - g.mean[2 * j], d0 = wrap_phi(p - g.mean[2 * j + 1]);
+        double seff = s;
+        if (colour)
+          for (int c = 0; c < 3; ++c) seff += amp[c * k + j] / g.weight[j] * sc[c];
         for (int img = -images[j]; img <= images[j]; ++img) {
-          const double dp = d0 + 2 * kPi * img, sn = s * density(j, dt, dp);
-          v.stats[0 * k + j] += sn;
+          const double dp = d0 + 2 * kPi * img, dens = density(j, dt, dp), sn = seff * dens;
+          v.stats[0 * k + j] += s * dens;
           v.stats[1 * k + j] += sn * dt;
           v.stats[2 * k + j] += sn * dp;
           v.stats[3 * k + j] += sn * dt * dt;
           v.stats[4 * k + j] += sn * dt * dp;
           v.stats[5 * k + j] += sn * dp * dp;
+          if (colour)
+            for (int c = 0; c < 3; ++c) v.stats[(6 + c) * k + j] += sc[c] * dens;
         }
       }
     }
@@ -255,17 +334,26 @@ std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<
   return out;
 }
 
-std::vector<double> l1_gradient(const SliceGrid& grid, const Gmm& g, const L1Value& v) {
+std::vector<double> l1_gradient(const SliceGrid& grid, const Gmm& g, const L1Value& v,
+                                const std::vector<double>& rgb_amp) {
   const int k = g.k();
   const double area = cell_area(grid);
-  std::vector<double> out(6 * static_cast<std::size_t>(k));
+  const bool colour = !rgb_amp.empty();
+  std::vector<double> out((colour ? 9 : 6) * static_cast<std::size_t>(k));
   for (int j = 0; j < k; ++j) {
     const double a = g.cov[3 * j], b = g.cov[3 * j + 1], c = g.cov[3 * j + 2], det = a * c - b * b;
     const double Ptt = c / det, Ptp = -b / det, Ppp = a / det;  // the inverse covariance
-    const double s0 = v.stats[0 * k + j], st = v.stats[1 * k + j], sp = v.stats[2 * k + j];
+    const double sw = v.stats[0 * k + j], st = v.stats[1 * k + j], sp = v.stats[2 * k + j];
+    double s0 = sw;  // the sum the dt .. dp^2 sums go with: the channels' parts added
+    if (colour)
+      for (int q = 0; q < 3; ++q) {
+        const double sc = v.stats[(6 + q) * k + j];
+        s0 += rgb_amp[q * k + j] / g.weight[j] * sc;
+        out[6 * k + q * k + j] = -area * sc / g.weight[j];
+      }
     const double stt = v.stats[3 * k + j], stp = v.stats[4 * k + j], spp = v.stats[5 * k + j];
     double* o = &out[6 * j];
-    o[0] = -area * s0 / g.weight[j];
+    o[0] = -area * sw / g.weight[j];
     o[1] = -area * (Ptt * st + Ptp * sp);
     o[2] = -area * (Ptp * st + Ppp * sp);
     // -area / 2 (P S2 P - s0 P), S2 = [stt stp; stp spp].
@@ -281,11 +369,29 @@ std::vector<double> l1_gradient(const SliceGrid& grid, const Gmm& g, const L1Val
 std::vector<Gmm> refine_l1(const L1Evaluator& evaluate, const SliceSet& set, const std::vector<L1Query>& start,
                            const RefineSettings& settings) {
   const double floor = refine_floor(set.grid);
-  const L1Objective objective = l1_objective(set.grid, settings.kl);
+  const bool colour = settings.rgb > 0 && !set.rgb.empty();
+  const L1Objective objective = l1_objective(set.grid, settings.kl, colour ? settings.rgb : 0.0);
   std::vector<Walk> walks(start.size());
   for (std::size_t i = 0; i < start.size(); ++i) {
     walks[i].slice = start[i].slice;
+    walks[i].k = start[i].gmm.k();
     walks[i].trial = to_params(start[i].gmm, floor);
+    const std::vector<double> ch = colour ? l1_channels(set, start[i].slice) : std::vector<double>{};
+    if (!ch.empty()) {  // each channel's amplitudes start as the luminance's weights times its sum
+      const int k = start[i].gmm.k();
+      const std::size_t n = set.grid.cells();
+      for (int c = 0; c < 3; ++c) {
+        double sum = 0, abs_sum = 0;
+        for (std::size_t q = 0; q < n; ++q) {
+          sum += ch[c * n + q];
+          abs_sum += std::abs(ch[c * n + q]);
+        }
+        // A channel of noise around zero starts at a quarter of its absolute sum; an empty
+        // one near zero, where the walk can still raise it.
+        const double level = std::max({sum, 0.25 * abs_sum, 1e-9});
+        for (int j = 0; j < k; ++j) walks[i].trial.push_back(std::log(std::max(start[i].gmm.weight[j], 1e-300) * level));
+      }
+    }
     walks[i].best = walks[i].trial;
     walks[i].done = settings.evaluations < 1 || start[i].gmm.k() < 1;
   }
@@ -295,13 +401,14 @@ std::vector<Gmm> refine_l1(const L1Evaluator& evaluate, const SliceSet& set, con
     for (std::size_t i = 0; i < walks.size(); ++i)
       if (!walks[i].done) {
         active.push_back(i);
-        queries.push_back({walks[i].slice, to_gmm(walks[i].trial, floor)});
+        queries.push_back({walks[i].slice, to_gmm(walks[i].trial, floor, walks[i].k),
+                           amplitudes(walks[i])});
       }
     if (active.empty()) break;
     const std::vector<L1Value> values = evaluate(set, queries, objective);
     for (std::size_t a = 0; a < active.size(); ++a) {
       Walk& w = walks[active[a]];
-      const std::vector<double> dg = l1_gradient(set.grid, queries[a].gmm, values[a]);
+      const std::vector<double> dg = l1_gradient(set.grid, queries[a].gmm, values[a], queries[a].rgb_amp);
       std::vector<double> gt = param_gradient(w.trial, queries[a].gmm, dg);
       double ft = values[a].objective;
       for (double v : gt)
@@ -311,7 +418,7 @@ std::vector<Gmm> refine_l1(const L1Evaluator& evaluate, const SliceSet& set, con
   }
   std::vector<Gmm> out;
   out.reserve(walks.size());
-  for (const Walk& w : walks) out.push_back(to_gmm(w.best, floor));
+  for (const Walk& w : walks) out.push_back(to_gmm(w.best, floor, w.k));
   return out;
 }
 

@@ -19,6 +19,10 @@ struct SliceGrid {
 struct SliceSet {
   SliceGrid grid;
   std::vector<std::vector<double>> weights;
+  // Optional, per slice: the R, G, B integrand weights of the same cells, channel-major
+  // [3][theta][phi], any sign (measured channels dip below zero). Only the L1 refinement
+  // reads them (fit/l1_refine.hpp); empty: none.
+  std::vector<std::vector<double>> rgb;
 };
 
 // The grid of `domain` with n_theta x n_phi cells: theta over the domain's range,

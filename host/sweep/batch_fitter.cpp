@@ -149,7 +149,7 @@ void Batch::refine(bool with_neighbours) {
     return engine.l1_values(slices, q, o);
   };
   const std::vector<Gmm> refined =
-      refine_l1(l1_values, full_set, queries, RefineSettings{fit.refine_evaluations, fit.refine_kl});
+      refine_l1(l1_values, full_set, queries, RefineSettings{fit.refine_evaluations, fit.refine_kl, fit.refine_rgb});
   const std::size_t threads = std::min<std::size_t>(queries.size(), std::max(1u, std::thread::hardware_concurrency()));
   run_on_workers(queries.size(), threads, [&](std::size_t, std::size_t i) {
     const std::size_t s = queries[i].slice;
@@ -232,6 +232,8 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
   part.slices_hash = content.hex();
   const std::size_t n = b.size();
   b.full_set = make_set(meta.domain, b.work, false);
+  if (meta.rgb && fit_.refine == "l1" && fit_.refine_rgb > 0)  // the refinement weighs the channels too
+    for (const SliceWork& w : b.work) b.full_set.rgb.push_back(w.rgb);
   b.chosen.assign(n, fit_.k_min);
   b.reduced_from.assign(n, 0);
   b.best.assign(n, Fitted{});

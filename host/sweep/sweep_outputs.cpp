@@ -99,7 +99,7 @@ std::string fit_settings_json(const FitSection& f) {
     << ", \"error_target\": " << (f.error_target ? num(*f.error_target) : "null")
     << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << search_name(f.search)
     << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
-    << ", \"refine_kl\": " << num(f.refine_kl)
+    << ", \"refine_kl\": " << num(f.refine_kl) << ", \"refine_rgb\": " << num(f.refine_rgb)
     << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
   return s.str();
 }
