@@ -16,10 +16,13 @@ default settings, and reads the fit report and the files back:
 - the stand-in's energy per channel (luminance, R, G, B): its in-domain integral (each
   component's closed-form in-domain mass times its amplitude) against the table's (the sum
   of its cells' integrand weights), the largest relative error over the slices (target:
-  0.5%); and the same with the stand-in summed over the cells. A channel that is
-  measurement noise around zero (its negative cells hold more than 0.5% of its absolute
-  sum: cg_sunflower's blue) has no integral the stand-in keeps (its amplitudes are its
-  least-L1 fit): it is counted, not compared.
+  0.5%); and the same with the stand-in summed over the cells;
+- how far each slice's channels are from the luminance's shape (grey_share: each channel
+  against its sum's share of the luminance, summed over the three, over their absolute sum;
+  the L1 refinement leaves the channels of a slice below 1% out, host/fit/l1_refine.hpp).
+  A channel that is measurement noise around zero (its negative cells hold more than 0.5%
+  of its absolute sum: cg_sunflower's blue) has no integral the stand-in keeps (its
+  amplitudes are its least-L1 fit): it is counted, not compared.
 
     bench/rgb_stand_in.py [--bsdfmix build/bsdfmix] [--work out/bench_rgb]
                           [--tables satin,paper,sunflower] [--csv bench/results/rgb_stand_in.csv]
@@ -89,6 +92,10 @@ def component_mass(tt, pp, mu_t, mu_p, a, b, c, dth, dph, area):
     return out * norm / len(offsets) * area
 
 
+def abs_rgb_of(flat):
+    return float(np.abs(flat).sum())
+
+
 def recompute(table_path, mixture_path):
     t = h5py.File(table_path, "r")["table"]
     m = h5py.File(mixture_path, "r")["mixture"]
@@ -133,7 +140,13 @@ def recompute(table_path, mixture_path):
         cell_energy = np.concatenate([[y.sum()], c.reshape(-1, 3).sum(axis=0)])
         abs_rgb = np.abs(w_c).sum()
         err = np.abs(w_c - c)
+        # How far the channels are from the luminance's shape: each channel against its sum's
+        # share of the luminance, summed over the three, over their absolute sum (below 1%
+        # the L1 refinement leaves the slice's channels out: host/fit/l1_refine.hpp).
+        grey = (sum(np.abs(flat[:, ch] - flat[:, ch].sum() / w_y.sum() * w_y.reshape(-1)).sum() for ch in range(3))
+                / abs_rgb_of(flat) if w_y.sum() > 0 and abs_rgb_of(flat) > 0 else 0.0)
         rows.append({
+            "grey_share": grey,
             "l1_rel": np.abs(w_y - y).sum() / w_y.sum() if w_y.sum() > 0 else 0.0,
             "rgb_l1_rel": err.sum() / abs_rgb if abs_rgb > 0 else 0.0,
             "rgb_negative": err[w_c < 0].sum() / abs_rgb if abs_rgb > 0 else 0.0,
@@ -193,6 +206,9 @@ def run(args):
             "energy_cells_max": worst_cells.max(), "noise_channels": skipped,
             "l1_diff_points": 100 * diff["l1_rel"], "rgb_diff_points": 100 * diff["rgb_l1_rel"],
             "negative_diff_points": 100 * diff["rgb_negative"], "fit_seconds": seconds,
+            "grey_share_min": min(x["grey_share"] for x in rows),
+            "grey_share_median": statistics.median(x["grey_share"] for x in rows),
+            "grey_share_max": max(x["grey_share"] for x in rows),
         }
         print(f"{name:10s} L1 median {100 * r['l1_median']:.2f}%, RGB median {100 * r['rgb_median']:.2f}%, less the "
               f"negative part {100 * r['rgb_less_negative_median']:.2f}% ({r['ratio']:.3f}x); energy max Y/R/G/B "
