@@ -12,6 +12,7 @@ bench/results/, between markers:
 The tables (NAME: CSV):
   rgb_stand_in         bench/results/rgb_stand_in.csv (docs/fitting.md, "Colour and energy")
   rgb_refine           bench/results/rgb_refine.csv (docs/fitting.md, "The channels move the Gaussians")
+  catalog              bench/results/catalog_summary.csv (docs/scale.md, "Catalogs")
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
@@ -130,6 +131,19 @@ def rgb_refine():
     return out
 
 
+def catalog():
+    out = ["| table | slices | mean K | L1 median | L1 p90 | table bytes | mixture bytes | seconds |",
+           "|---|---|---|---|---|---|---|---|"]
+    all_rows = rows("catalog_summary.csv")
+    for r in all_rows:
+        out.append("| %s | %s | %.2f | %s | %s | %s | %s | %.2f |" % (
+            r["table"], r["slices"], float(r["mean_k"]), pct(r["l1_median"], 1), pct(r["l1_p90"], 1),
+            r["table_bytes"], r["mixture_bytes"], float(r["seconds"])))
+    out.append("| all | %d | | | | | | %.1f |" % (sum(int(r["slices"]) for r in all_rows),
+                                                 sum(float(r["seconds"]) for r in all_rows)))
+    return out
+
+
 def render_cloth():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import render_targets
@@ -137,7 +151,7 @@ def render_cloth():
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
-TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "stand_in_smallest": stand_in_smallest,
+TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": catalog, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
