@@ -13,6 +13,7 @@ The tables (NAME: CSV):
   rgb_stand_in         bench/results/rgb_stand_in.csv (docs/fitting.md, "Colour and energy")
   rgb_refine           bench/results/rgb_refine.csv (docs/fitting.md, "The channels move the Gaussians")
   catalog              bench/results/catalog_summary.csv (docs/scale.md, "Catalogs")
+  scale, scale_traffic bench/results/scale_amd-epyc-2c.csv (docs/scale.md, "Scaling measured")
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
@@ -144,6 +145,38 @@ def catalog():
     return out
 
 
+def scale_rows():
+    return [r for r in rows("scale_amd-epyc-2c.csv")]
+
+
+def scale():
+    labels = {"1rank_1core": "`1rank_1core`", "2ranks_2cores": "`2ranks_2cores`", "1proc_2cores": "`1proc_2cores`",
+              "2copies_2cores": "`2copies_2cores` (two independent 1-core fits at once)"}
+    out = ["| config | fit time | slices/s | against 1 rank on 1 core |", "|---|---|---|---|"]
+    for r in scale_rows():
+        speed = float(r["speedup"])
+        against = "1" if r["config"] == "1rank_1core" else "%.2fx" % speed
+        if r["config"] == "2ranks_2cores":
+            against += " (efficiency %.2f)" % float(r["efficiency"])
+        seconds = "%.2f s per table" % float(r["fit_seconds"]) if r["config"] == "2copies_2cores" else \
+            "%.2f s" % float(r["fit_seconds"])
+        out.append("| %s | %s | %.1f | %s |" % (labels.get(r["config"], r["config"]), seconds,
+                                                float(r["slices_per_s"]), against))
+    return out
+
+
+def scale_traffic():
+    r = next(x for x in scale_rows() if x["config"] == "2ranks_2cores")
+    slices = int(r["slices"]) // int(r["batches"])
+    return ["| quantity | value |", "|---|---|",
+            "| task (rank 0 -> worker) | %s B per batch (%d slices) |" % (r["bytes_out_per_remote_batch"], slices),
+            "| part (worker -> rank 0) | %.2f kB per batch (%d slices, K <= 16) |" % (
+                float(r["bytes_back_per_remote_batch"]) / 1000, slices),
+            "| fitting | %.3f s per batch |" % float(r["compute_s_per_batch"]),
+            "| committing on rank 0 (decode, part file written and synced) | %.2f ms per batch |" % (
+                1000 * float(r["commit_s_per_batch"]))]
+
+
 def render_cloth():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import render_targets
@@ -151,7 +184,8 @@ def render_cloth():
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
-TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": catalog, "stand_in_smallest": stand_in_smallest,
+TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
+          "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
