@@ -91,8 +91,6 @@ std::vector<double> param_gradient(const std::vector<double>& x, const Gmm& g, c
   return out;
 }
 
-
-
 double dot(const std::vector<double>& a, const std::vector<double>& b) {
   double s = 0;
   for (std::size_t i = 0; i < a.size(); ++i) s += a[i] * b[i];
