@@ -41,21 +41,16 @@ def slice_probabilities(mix, s, tt, pp, area):
     return out * area
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("table")
-    ap.add_argument("before")
-    ap.add_argument("after")
-    ap.add_argument("--label", default="")
-    ap.add_argument("--csv")
-    args = ap.parse_args()
-    t = h5py.File(args.table, "r")["table"]
+def chi_squares(table_path, mixture_paths):
+    """Per mixture file, over the table's non-zero slices: the chi-square divergence of each
+    slice from the mixture (10% uniform mixed in) and the file's l1_rel of that slice."""
+    t = h5py.File(table_path, "r")["table"]
     theta, phi = t["theta_i"][:], t["phi_i"][:]
     area = (theta[1] - theta[0]) * (phi[1] - phi[0])
     tt, pp = np.meshgrid(theta, phi, indexing="ij")
     jac = np.cos(tt) * np.sin(tt) if t.attrs["domain"] == "hemisphere" else np.cos(tt)
-    mixes = [h5py.File(f, "r")["mixture"] for f in (args.before, args.after)]
-    chi, l1 = [[], []], [[], []]
+    mixes = [h5py.File(f, "r")["mixture"] for f in mixture_paths]
+    chi, l1 = [[] for _ in mixes], [[] for _ in mixes]
     for s in range(mixes[0]["k"].shape[0]):
         w = t["values"][s, 0] * jac * area
         if not w.sum() > 0:
@@ -65,7 +60,18 @@ def main():
             q = 0.9 * slice_probabilities(mix, s, tt, pp, area) + 0.1 / w.size
             chi[i].append(float((w * w / q).sum() - 1))
             l1[i].append(float(mix["l1_rel"][s]))
-    chi = np.array(chi)
+    return np.array(chi), l1
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("table")
+    ap.add_argument("before")
+    ap.add_argument("after")
+    ap.add_argument("--label", default="")
+    ap.add_argument("--csv")
+    args = ap.parse_args()
+    chi, l1 = chi_squares(args.table, (args.before, args.after))
     ratio = chi[1] / chi[0]
     row = {"label": args.label or os.path.basename(args.table), "slices": chi.shape[1],
            "l1_median_before": np.median(l1[0]), "l1_median_after": np.median(l1[1]),

@@ -24,7 +24,6 @@ error):
 import argparse
 import csv
 import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -33,8 +32,8 @@ import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
-import mixture_chi_square  # noqa: E402  (slice_probabilities)
-import h5py  # noqa: E402
+from mixture_chi_square import chi_squares  # noqa: E402
+from rgb_stand_in import cpu_model  # noqa: E402
 
 ALL = "satin,paper,sunflower,silk,cotton,polyester,wool"
 SOME = "satin,paper,sunflower,polyester"  # the tables whose channels differ from their luminance
@@ -45,26 +44,6 @@ VARIANTS = [  # name, refine_rgb, refine_kl, tables
     ("l1x2", "0.5", "2.5", SOME),
     ("l1x3", "0.666667", "1.666667", SOME),
 ]
-
-
-def chi_square(table, mixture):
-    """Per slice (non-zero ones), the chi-square divergence of the slice from the mixture
-    with 10% uniform mixed in."""
-    t = h5py.File(table, "r")["table"]
-    theta, phi = t["theta_i"][:], t["phi_i"][:]
-    area = (theta[1] - theta[0]) * (phi[1] - phi[0])
-    tt, pp = np.meshgrid(theta, phi, indexing="ij")
-    jac = np.cos(tt) * np.sin(tt) if t.attrs["domain"] == "hemisphere" else np.cos(tt)
-    mix = h5py.File(mixture, "r")["mixture"]
-    out = []
-    for s in range(mix["k"].shape[0]):
-        w = t["values"][s, 0] * jac * area
-        if not w.sum() > 0:
-            continue
-        w = w / w.sum()
-        q = 0.9 * mixture_chi_square.slice_probabilities(mix, s, tt, pp, area) + 0.1 / w.size
-        out.append(float((w * w / q).sum() - 1))
-    return np.array(out)
 
 
 def report(path):
@@ -98,8 +77,8 @@ def main():
             base = os.path.join(args.work, "alone", t)
             here = os.path.join(args.work, name, t)
             l1, rest, mean_k = report(here + "_fit.csv")
-            chi0 = chi_square(base + ".h5", base + "_mixture.h5")
-            chi1 = chi_square(here + ".h5", here + "_mixture.h5")
+            chi0 = chi_squares(base + ".h5", [base + "_mixture.h5"])[0][0]
+            chi1 = chi_squares(here + ".h5", [here + "_mixture.h5"])[0][0]
             ratio = chi1 / chi0
             r = {"variant": name, "refine_rgb": share, "refine_kl": kl, "table": t, "mean_k": mean_k,
                  "l1_median": statistics.median(l1), "l1_p90": float(np.percentile(l1, 90)),
@@ -112,13 +91,7 @@ def main():
                   f"chi-square mean {r['chi_mean']:.4f}, ratio median {r['chi_ratio_median']:.3f} p90 "
                   f"{r['chi_ratio_p90']:.3f}", flush=True)
             rows.append(r)
-    cpu = platform.processor() or "unknown"
-    try:
-        for line in subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout.splitlines():
-            if line.startswith("Model name"):
-                cpu = line.split(":", 1)[1].strip()
-    except (OSError, subprocess.CalledProcessError):
-        pass
+    cpu = cpu_model()
     os.makedirs(os.path.dirname(args.csv), exist_ok=True)
     with open(args.csv, "w", newline="") as f:
         w = csv.writer(f)

@@ -201,11 +201,10 @@ inline void component_constants(__global const real_t* st, __global float* cp, i
   cp[5 * K_MAX + k] = (float)(log2(w) - log2(TWO_PI_R) - R(0.5) * log2(det));
 }
 
-// Writes a work-group's statistics to `out`: per component j the six sums a[7 j + q]
-// at q * K_MAX + j, then `last` at LL_INDEX; with WG > 1 each summed over the
-// work-group through `scratch` (WG values of local memory).
-// Writes a work-group's sums: nq per component (a[(nq + 1) * j + q], the last slot of a
-// component's stride is scratch) at q * K_MAX + j, then `last` at nq * K_MAX.
+// Writes a work-group's sums to `out`: per component j the nq sums a[(nq + 1) j + q] (the
+// last slot of a component's stride is the caller's scratch) at q * K_MAX + j, then `last`
+// at nq * K_MAX; with WG > 1 each summed over the work-group through `scratch` (WG values
+// of local memory).
 inline void write_sums(const floatv* a, const floatv last, const int k, const int nq, __global real_t* out,
                        __local real_t* scratch) {
   const int stride = nq + 1;
@@ -230,6 +229,7 @@ inline void write_sums(const floatv* a, const floatv last, const int k, const in
 #endif
 }
 
+// EM's statistics: the six sums a[7 j + q], then `last` at LL_INDEX.
 inline void write_partials(const floatv* a, const floatv last, const int k, __global real_t* out,
                            __local real_t* scratch) {
   write_sums(a, last, k, 6, out, scratch);
