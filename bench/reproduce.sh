@@ -30,15 +30,18 @@ studies=(
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:12:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
-  "search_compare:25:no:the Gaussian-count search methods (search_compare*.csv, docs/images/search_l1_vs_k.png)"
+  "search_compare:27:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
   "catalog:10:no:the catalog job (catalog_summary.csv)"
   "scale:15:no:the MPI farm (scale_amd-epyc-2c.csv)"
   "converge:30:no:the convergence studies under constant light (converge/)"
+  "converge_refine:3:no:satin's importance sampling by the refined and by EM's mixtures (converge_refine/)"
   "converge_light:70:no:the convergence studies with the lighting (converge_light/)"
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
   "render:60:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
   "em:10:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+  "render_rays:3:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
+  "amplitude_objective:5:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
 
 usage() {
@@ -74,15 +77,18 @@ outputs() {
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
-    search_compare) echo "$results/search_compare*.csv docs/images/search_l1_vs_k.png" ;;
+    search_compare) echo "$results/search_compare*.csv $results/search_chi_square.csv docs/images/search_l1_vs_k.png" ;;
     fit_sweep) echo "$results/fit_sweep.csv" ;;
     catalog) echo "$results/catalog_summary.csv" ;;
     scale) echo "$results/scale_*.csv" ;;
     converge) echo "$results/converge/*" ;;
+    converge_refine) echo "$results/converge_refine/*" ;;
     converge_light) echo "$results/converge_light/*" ;;
     mis_heuristic) echo "$results/mis_heuristic.csv" ;;
     render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
     em) echo "$results/em_k*_amd-epyc-2c.*" ;;
+    render_rays) echo "$results/render_rays_amd-epyc-2c.csv" ;;
+    amplitude_objective) echo "$results/amplitude_objective.csv" ;;
   esac
 }
 record_all() {  # the study's files written since the marker
@@ -135,7 +141,13 @@ run_study() {
       done ;;
     search_compare)
       $py bench/search_compare.py --runs 1 --chart
-      $py bench/search_compare.py --tables polyester --csv $results/search_compare_polyester_best3.csv ;;
+      $py bench/search_compare.py --tables polyester --csv $results/search_compare_polyester_best3.csv
+      # walk alone against walk + L1 refinement on the RGL rows (docs/fitting.md, "The L1 refinement")
+      rm -f $results/search_chi_square.csv
+      for t in satin paper sunflower; do
+        $py bench/mixture_chi_square.py out/bench_search/$t.h5 out/bench_search/${t}_smem_none_search_mixture.h5 \
+          out/bench_search/${t}_smem_l1_search_mixture.h5 --label $t --csv $results/search_chi_square.csv
+      done ;;
     fit_sweep) RUNS=3 bench/fit_sweep.sh ;;
     catalog) $bin catalog configs/catalog.yaml && cp out/catalog/summary.csv $results/catalog_summary.csv ;;
     scale) RUNS=3 bench/scale.sh ;;
@@ -149,6 +161,17 @@ run_study() {
         $bin run configs/converge_light_$m.yaml
         cp out/converge_light_$m/${m}_convergence*.csv $results/converge_light/
       done ;;
+    converge_refine)
+      # The tail is scene- and estimator-independent: one short study per variant gives it.
+      local w=out/converge_refine
+      mkdir -p $w $results/converge_refine
+      for r in l1 none; do
+        sed -e "/^table:/!s|out/converge_satin/|$w/${r}_|" -e "0,/^  seed: 1$/s//  seed: 1\n  refine: $r/" \
+            -e "s|^  samples_max: .*|  samples_max: 64|" -e "s|^  runs: .*|  runs: 1|" \
+            -e "s|^  estimators: .*|  estimators: [us_tab]|" -e "/^charts:/,\$d" configs/converge_satin.yaml > $w/$r.yaml
+        $bin run -q $w/$r.yaml
+        cp $w/${r}_satin_convergence_tail.csv $results/converge_refine/satin_refine_${r}_tail.csv
+      done ;;
     mis_heuristic) bench/mis_heuristic.sh ;;
     render)
       for f in silk cotton wool polyester; do
@@ -160,8 +183,16 @@ run_study() {
       done ;;
     em)
       local b=build-bench/bsdfmix
-      [ -x $b ] || { echo "reproduce: em needs build-bench/ (bench/README.md)"; return 1; }
+      [ -x $b ] || b=$bin  # scripts/setup's build has the peers (BSDFMIX_BUILD_BENCH is on by default)
       for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_amd-epyc-2c.csv > $results/em_k${k}_amd-epyc-2c.txt 2>&1; done ;;
+    render_rays)
+      local r=build/bench/bsdfmix_bench_render_rays
+      [ -x $r ] || r=build-bench/bench/bsdfmix_bench_render_rays
+      [ -x $r ] || { echo "reproduce: render_rays needs a build with BSDFMIX_BUILD_BENCH=ON" >&2; return 1; }
+      $r --csv $results/render_rays_amd-epyc-2c.csv ;;
+    amplitude_objective)
+      [ -f out/bench_rgb/satin_mixture.h5 ] || $py bench/rgb_stand_in.py
+      $py bench/amplitude_objective.py ;;
     *) echo "reproduce: unknown study '$name' (bench/reproduce.sh --list)" >&2; exit 2 ;;
   esac
 }
