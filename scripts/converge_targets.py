@@ -31,7 +31,7 @@ import argparse
 import math
 import os
 
-from targets_common import Measures, failer, fmt, key, print_table, read as read_csv
+from targets_common import Measures, failer, fmt, key, markdown_lines, print_table, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
@@ -88,6 +88,38 @@ def check(x, ok):
     return fmt(x) if x is None or ok(x) else fmt(x) + " !"
 
 
+COLS = [
+    ("table", "table", None), ("theta_o (deg)", "theta_o", None), ("scene", "scene", None), ("K", "k", None),
+    ("storage", "storage", lambda x: x >= 100), ("mis fewer N", "mis_fewer", lambda x: x >= 10),
+    ("mis less time", "mis_time", lambda x: x >= 5), ("us_tab ns", "ns_us", None),
+    ("cost is_tab", "cost_is", lambda x: x <= 2), ("cost mis_tab", "cost_mis", lambda x: x <= 2),
+    ("cost is_gmm", "cost_isgmm", lambda x: x <= 2), ("mis/cdf var", "mis_cdf", None),
+    ("is fewer N", "is_fewer", None), ("is less time", "is_time", None),
+    ("is max f/pdf", "is_max_weight", None), ("is missed", "is_missed", None),
+]
+
+
+def cell(r, name, ok):
+    x = r[name]
+    if name == "theta_o":
+        return "%.0f" % math.degrees(x)
+    if name == "mis_cdf" and x is not None:
+        # cdf_tab is exact under constant lighting: the ratio is no target there
+        return fmt(x) if r["scene"] == "constant" or x <= 3 else fmt(x) + " !"
+    if ok is None:
+        return fmt(x) if not isinstance(x, (int, str)) or isinstance(x, bool) else str(x)
+    return check(x, ok)
+
+
+def tails_of(csvs):
+    return [os.path.splitext(p)[0] + "_tail.csv" for p in csvs]
+
+
+def markdown(csvs, n_target=1024):
+    """The Markdown table of the CSVs (their tails beside them), as lines (scripts/doc_tables.py)."""
+    return markdown_lines(targets(csvs, tails_of(csvs), n_target), COLS, cell)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv", nargs="+", help="convergence CSV(s)")
@@ -95,32 +127,10 @@ def main():
     ap.add_argument("--n", type=int, default=1024, help="us_tab's sample count to match (1024)")
     ap.add_argument("--markdown", action="store_true", help="a Markdown table (default: CSV)")
     a = ap.parse_args()
-    tails = a.tail if a.tail else [os.path.splitext(p)[0] + "_tail.csv" for p in a.csv]
+    tails = a.tail if a.tail else tails_of(a.csv)
     if len(tails) != len(a.csv):
         fail("--tail needs one file per CSV")
-    rows = targets(a.csv, tails, a.n)
-    cols = [
-        ("table", "table", None), ("theta_o (deg)", "theta_o", None), ("scene", "scene", None), ("K", "k", None),
-        ("storage", "storage", lambda x: x >= 100), ("mis fewer N", "mis_fewer", lambda x: x >= 10),
-        ("mis less time", "mis_time", lambda x: x >= 5), ("us_tab ns", "ns_us", None),
-        ("cost is_tab", "cost_is", lambda x: x <= 2), ("cost mis_tab", "cost_mis", lambda x: x <= 2),
-        ("cost is_gmm", "cost_isgmm", lambda x: x <= 2), ("mis/cdf var", "mis_cdf", None),
-        ("is fewer N", "is_fewer", None), ("is less time", "is_time", None),
-        ("is max f/pdf", "is_max_weight", None), ("is missed", "is_missed", None),
-    ]
-
-    def cell(r, name, ok):
-        x = r[name]
-        if name == "theta_o":
-            return "%.0f" % math.degrees(x)
-        if name == "mis_cdf" and x is not None:
-            # cdf_tab is exact under constant lighting: the ratio is no target there
-            return fmt(x) if r["scene"] == "constant" or x <= 3 else fmt(x) + " !"
-        if ok is None:
-            return fmt(x) if not isinstance(x, (int, str)) or isinstance(x, bool) else str(x)
-        return check(x, ok)
-
-    print_table(rows, cols, cell, a.markdown)
+    print_table(targets(a.csv, tails, a.n), COLS, cell, a.markdown)
 
 
 if __name__ == "__main__":

@@ -18,6 +18,11 @@ The tables (NAME: CSV):
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
+  readme_measured      the README's "Measured" table, row by row from its CSVs (scripts/readme_measured.py)
+  converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
+                       by scripts/converge_targets.py
+  converge_light       bench/results/converge_light/*_convergence*.csv (docs/sampling.md, "Measured: the sky
+                       and the sky map"), by scripts/light_targets.py
 """
 import csv
 import json
@@ -184,10 +189,31 @@ def render_cloth():
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
+def readme_measured():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import readme_measured as m
+    return m.markdown()
+
+
+def converge():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import converge_targets
+    return converge_targets.markdown([os.path.join(RESULTS, "converge", "%s_convergence.csv" % m)
+                                      for m in ("polyester", "cotton", "satin")])
+
+
+def converge_light():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import light_targets
+    return light_targets.markdown([os.path.join(RESULTS, "converge_light", "%s_convergence.csv" % m)
+                                   for m in ("polyester", "cotton", "satin", "paper")])
+
+
 TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
-          "render_cloth": render_cloth}
+          "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
+          "readme_measured": readme_measured}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 

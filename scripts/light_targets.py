@@ -30,7 +30,7 @@ import argparse
 import math
 import os
 
-from targets_common import Measures, failer, fmt, key, print_table, read as read_csv
+from targets_common import Measures, failer, fmt, key, markdown_lines, print_table, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
@@ -90,6 +90,32 @@ def targets(csvs, n_target):
     return out
 
 
+COLS = [
+    ("table", "table", None), ("theta_o (deg)", "theta_o", None), ("scene", "scene", None), ("K", "k", None),
+    ("K light", "k_light", None), ("K prod", "k_product", None), ("kept", "kept", None),
+    ("mis_product fewer N", "mp_fewer", lambda x: x >= 20), ("vs baseline", "mp_vs_base", lambda x: x >= 2.5),
+    ("less time", "mp_time", None), ("mis_light_cdf fewer N", "mlc_fewer", None),
+    ("mis_light_gmm fewer N", "mlg_fewer", None), ("mis_tab fewer N", "mis_fewer", None),
+    ("cost mis_product", "cost_mp", lambda x: x <= 3), ("cost mis_light_cdf", "cost_mlc", None),
+    ("cost mis_light_gmm", "cost_mlg", None), ("max f/pdf", "max_weight", lambda x: x <= 10),
+    ("fit s", "fit_s", None), ("break-even", "break_even", None),
+]
+
+
+def cell(r, name, ok):
+    x = r[name]
+    if name == "theta_o":
+        return "%.0f" % math.degrees(x)
+    if ok is None or x is None:
+        return fmt(x)
+    return fmt(x) if ok(x) else fmt(x) + " !"
+
+
+def markdown(csvs, n_target=1024):
+    """The Markdown table of the CSVs, as lines (scripts/doc_tables.py)."""
+    return markdown_lines(targets(csvs, n_target), COLS, cell)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv", nargs="+", help="convergence CSV(s) with the lighting estimators")
@@ -99,26 +125,7 @@ def main():
     rows = targets(a.csv, a.n)
     if not rows:
         fail("no (direction, scene) with both us_tab and mis_product in " + ", ".join(a.csv))
-    cols = [
-        ("table", "table", None), ("theta_o (deg)", "theta_o", None), ("scene", "scene", None), ("K", "k", None),
-        ("K light", "k_light", None), ("K prod", "k_product", None), ("kept", "kept", None),
-        ("mis_product fewer N", "mp_fewer", lambda x: x >= 20), ("vs baseline", "mp_vs_base", lambda x: x >= 2.5),
-        ("less time", "mp_time", None), ("mis_light_cdf fewer N", "mlc_fewer", None),
-        ("mis_light_gmm fewer N", "mlg_fewer", None), ("mis_tab fewer N", "mis_fewer", None),
-        ("cost mis_product", "cost_mp", lambda x: x <= 3), ("cost mis_light_cdf", "cost_mlc", None),
-        ("cost mis_light_gmm", "cost_mlg", None), ("max f/pdf", "max_weight", lambda x: x <= 10),
-        ("fit s", "fit_s", None), ("break-even", "break_even", None),
-    ]
-
-    def cell(r, name, ok):
-        x = r[name]
-        if name == "theta_o":
-            return "%.0f" % math.degrees(x)
-        if ok is None or x is None:
-            return fmt(x)
-        return fmt(x) if ok(x) else fmt(x) + " !"
-
-    print_table(rows, cols, cell, a.markdown)
+    print_table(rows, COLS, cell, a.markdown)
 
 
 if __name__ == "__main__":

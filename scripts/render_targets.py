@@ -65,6 +65,7 @@ def row_for(d):
         stand_in=100 * float(meta.get("stand_in_difference", -1)),
         stand_in_4x4=100 * float(meta.get("stand_in_difference_4x4", -1)),
         stand_in_mean=100 * float(meta.get("stand_in_mean_difference", 0)),
+        noise_4x4=100 * float(meta.get("table_noise_4x4", 0)),
         slices="%s/%s" % (meta["slices_needed"], meta["slices_total"]),
         slowest=max(float(r["seconds"]) for r in eq_spp),
         spp=int(eq_spp[0]["spp"]) if eq_spp else 0,

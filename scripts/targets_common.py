@@ -47,13 +47,18 @@ def fmt(x, digits=3):
     return ("%." + str(digits) + "g") % x
 
 
+def markdown_lines(rows, cols, cell):
+    """cols: (heading, key, check); the Markdown table of cell(row, key, check), as lines."""
+    out = ["| " + " | ".join(c[0] for c in cols) + " |", "|" + "---|" * len(cols)]
+    for r in rows:
+        out.append("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
+    return out
+
+
 def print_table(rows, cols, cell, markdown):
-    """cols: (heading, key, check); a Markdown table of cell(row, key, check), else CSV of the raw values."""
+    """A Markdown table (markdown_lines), else CSV of the raw values."""
     if markdown:
-        print("| " + " | ".join(c[0] for c in cols) + " |")
-        print("|" + "---|" * len(cols))
-        for r in rows:
-            print("| " + " | ".join(cell(r, n, ok) for _, n, ok in cols) + " |")
+        print("\n".join(markdown_lines(rows, cols, cell)))
     else:
         w = csv.writer(sys.stdout)
         w.writerow([c[1] for c in cols])
