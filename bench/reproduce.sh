@@ -33,7 +33,7 @@ studies=(
   "search_compare:27:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
   "catalog:10:no:the catalog job (catalog_summary.csv)"
-  "scale:15:no:the MPI farm (scale_amd-epyc-2c.csv)"
+  "scale:15:no:the MPI farm (scale_<machine>.csv)"
   "converge:30:no:the convergence studies under constant light (converge/)"
   "converge_refine:3:no:satin's importance sampling by the refined and by EM's mixtures (converge_refine/)"
   "converge_light:70:no:the convergence studies with the lighting (converge_light/)"
@@ -60,6 +60,9 @@ git diff --quiet HEAD -- host kernels include configs data bench scripts CMakeLi
   commit="$commit+dirty"
 cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -1 | tr ',' ';')
 cores=$(nproc)
+# The machine's tag in file names, as bench/render_rays.cpp makes it: "AMD EPYC 7B13 ..." on
+# 2 logical CPUs -> amd-epyc-2c (the first two words of the model, lower case, no (R)/(TM)).
+machine=$(echo "${cpu:-unknown}" | sed 's/([RrTtMm]*)//g' | awk '{print tolower($1) (NF > 1 ? "-" tolower($2) : "")}')-${cores}c
 
 # Records that `file` was written by `study` now.
 record() {
@@ -86,8 +89,8 @@ outputs() {
     converge_light) echo "$results/converge_light/*" ;;
     mis_heuristic) echo "$results/mis_heuristic.csv" ;;
     render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
-    em) echo "$results/em_k*_amd-epyc-2c.*" ;;
-    render_rays) echo "$results/render_rays_amd-epyc-2c.csv" ;;
+    em) echo "$results/em_k*_$machine.*" ;;
+    render_rays) echo "$results/render_rays_$machine.csv" ;;
     amplitude_objective) echo "$results/amplitude_objective.csv" ;;
   esac
 }
@@ -184,12 +187,12 @@ run_study() {
     em)
       local b=build-bench/bsdfmix
       [ -x $b ] || b=$bin  # scripts/setup's build has the peers (BSDFMIX_BUILD_BENCH is on by default)
-      for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_amd-epyc-2c.csv > $results/em_k${k}_amd-epyc-2c.txt 2>&1; done ;;
+      for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_$machine.csv > $results/em_k${k}_$machine.txt 2>&1; done ;;
     render_rays)
       local r=build/bench/bsdfmix_bench_render_rays
       [ -x $r ] || r=build-bench/bench/bsdfmix_bench_render_rays
       [ -x $r ] || { echo "reproduce: render_rays needs a build with BSDFMIX_BUILD_BENCH=ON" >&2; return 1; }
-      $r --csv $results/render_rays_amd-epyc-2c.csv ;;
+      $r --csv $results/render_rays_$machine.csv ;;
     amplitude_objective)
       [ -f out/bench_rgb/satin_mixture.h5 ] || $py bench/rgb_stand_in.py
       $py bench/amplitude_objective.py ;;
