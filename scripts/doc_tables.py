@@ -18,6 +18,8 @@ The tables (NAME: CSV):
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
+  failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
+                       "Measured"), by scripts/failure_tables.py
   readme_measured      the README's "Measured" table, row by row from its CSVs (scripts/readme_measured.py)
   converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
                        by scripts/converge_targets.py
@@ -195,6 +197,18 @@ def readme_measured():
     return m.markdown()
 
 
+def failure_map():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import failure_tables
+    return failure_tables.readme()
+
+
+def stability():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import failure_tables
+    return failure_tables.stability()
+
+
 def converge():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import converge_targets
@@ -213,7 +227,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
-          "readme_measured": readme_measured}
+          "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
