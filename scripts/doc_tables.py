@@ -20,6 +20,8 @@ The tables (NAME: CSV):
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
   failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
                        "Measured"), by scripts/failure_tables.py
+  search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
+  refine_kl            bench/results/refine_kl.csv (docs/fitting.md, "The L1 refinement")
   readme_measured      the README's "Measured" table, row by row from its CSVs (scripts/readme_measured.py)
   converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
                        by scripts/converge_targets.py
@@ -197,6 +199,46 @@ def readme_measured():
     return m.markdown()
 
 
+def search_compare():
+    names = {"polyester": "polyester", "satin": "satin (RGL)", "paper": "paper (RGL)", "sunflower": "sunflower (RGL)"}
+    methods = [("restarts", "none", "restarts (before)"), ("smem", "none", "smem, refine none"),
+               ("smem", "l1", "smem + L1 refinement (after)")]
+    by = {(r["table"], r["search"], r["refine"], r["run"]): r for r in rows("search_compare.csv")}
+    out = ["| table | method | search: mean K | L1 median / p90 at the chosen K | search time (x before) | K = 8: L1 "
+           "median / p90 | K = 16: L1 median / p90 | K = 8 / 16 time |", "|---|---|---|---|---|---|---|---|"]
+    for t, label in names.items():
+        if (t, "restarts", "none", "search") not in by:
+            continue
+        before = float(by[(t, "restarts", "none", "search")]["seconds"])
+        for search, refine, method in methods:
+            s, k8, k16 = (by[(t, search, refine, run)] for run in ("search", "k8", "k16"))
+            out.append("| %s | %s | %.2f | %s / %s | %.1f s (%.2fx) | %s / %s | %s / %s | %.1f / %.1f s |" % (
+                label, method, float(s["mean_k"]), pct(s["l1_median"]), pct(s["l1_p90"]), float(s["seconds"]),
+                float(s["seconds"]) / before, pct(k8["l1_median"]), pct(k8["l1_p90"]), pct(k16["l1_median"]),
+                pct(k16["l1_p90"]), float(k8["seconds"]), float(k16["seconds"])))
+    return out
+
+
+def refine_kl():
+    by = {(r["variant"], r["table"]): r for r in rows("refine_kl.csv")}
+    variants = []
+    for r in rows("refine_kl.csv"):
+        if r["variant"] not in variants:
+            variants.append(r["variant"])
+    out = ["| `refine_kl` | evaluations | satin: L1 median, chi-square ratio (median / p90) | sunflower: L1 median, "
+           "chi-square ratio (median / p90) |", "|---|---|---|---|"]
+    for v in variants:
+        first = by.get((v, "satin")) or by.get((v, "sunflower"))
+        kl, ev = ("(EM's fits)", "-") if first["refine"] == "none" else (first["refine_kl"], first["refine_evaluations"])
+        if v == "default":
+            ev += " (the default)"
+        cells = ["%s, %.2f / %.2f" % (pct(by[(v, t)]["l1_median"]), float(by[(v, t)]["chi_ratio_median"]),
+                                      float(by[(v, t)]["chi_ratio_p90"])) if (v, t) in by else "-"
+                 for t in ("satin", "sunflower")]
+        out.append("| %s | %s | %s | %s |" % (kl, ev, cells[0], cells[1]))
+    return out
+
+
 def failure_map():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import failure_tables
@@ -227,7 +269,8 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
-          "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability}
+          "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
+          "search_compare": search_compare}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
