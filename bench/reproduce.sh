@@ -41,6 +41,7 @@ studies=(
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
   "render:60:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
   "em:10:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+  "theta_border:3:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
   "failure_map:1:quick:the failure map over configs/stress/ (failure_map.csv)"
   "render_rays:3:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
   "amplitude_objective:5:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
@@ -95,6 +96,7 @@ outputs() {
     em) echo "$results/em_k*_$machine.*" ;;
     render_rays) echo "$results/render_rays_$machine.csv" ;;
     failure_map) echo "$results/failure_map.csv" ;;
+    theta_border) echo "$results/theta_border.csv" ;;
     amplitude_objective) echo "$results/amplitude_objective.csv" ;;
   esac
 }
@@ -193,6 +195,7 @@ run_study() {
       local b=build-bench/bsdfmix
       [ -x $b ] || b=$bin  # scripts/setup's build has the peers (BSDFMIX_BUILD_BENCH is on by default)
       for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_$machine.csv > $results/em_k${k}_$machine.txt 2>&1; done ;;
+    theta_border) BSDFMIX_MEASURE_CSV=$results/theta_border.csv build/tests/search_test "[.measure]" ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)
       local r=build/bench/bsdfmix_bench_render_rays

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <numeric>
 #include <random>
@@ -15,6 +16,7 @@
 #include <sstream>
 
 #include "config/config.hpp"
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "device/device.hpp"
 #include "fit/em.hpp"
@@ -406,7 +408,9 @@ TEST_CASE("the search method is a fit key: smem by default, restarts, nothing el
 }
 
 // A measurement (hidden: run it by its tag): lobes c standard deviations inside the theta
-// border, fitted by both search methods, the walk with and without the L1 refinement; docs/fitting.md, "The theta border", shows the rows.
+// border, fitted by both search methods, the walk with and without the L1 refinement. With
+// BSDFMIX_MEASURE_CSV set it also writes its rows there (bench/reproduce.sh theta_border:
+// bench/results/theta_border.csv, the table of docs/fitting.md "The theta border").
 TEST_CASE("measure: lobes near the theta border", "[.measure]") {
   const std::vector<double> cs = {0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0};
   std::vector<Known> known;
@@ -420,6 +424,8 @@ TEST_CASE("measure: lobes near the theta border", "[.measure]") {
   const SliceGrid grid = make_slice_grid(Domain::Fiber, 90, 180);
   const std::vector<std::pair<std::string, std::string>> methods = {
       {"restarts", "none"}, {"smem", "none"}, {"smem", "l1"}};
+  std::ostringstream csv;
+  csv << "search,refine,c,draw,k,true_k,l1_rel,true_l1_rel,mean_shift_sigma,sigma_ratio\n";
   for (const auto& [method, refine] : methods) {
     const FitSection f = settings("border_" + method + "_" + refine, method, refine);
     run_sweep(table, f, "");
@@ -434,21 +440,26 @@ TEST_CASE("measure: lobes near the theta border", "[.measure]") {
       const double truth_l1 = l1_rel_error(ws, make_slice_mixture(truth.weight, truth.mean, truth.cov));
       Gmm fit;
       m.slice_params(s, fit.weight, fit.mean, fit.cov);
-      std::string shape = "-";
+      std::string shape = "-", shape_csv = ",";
       if (fit.k() == truth.k()) {
         const int q = match(truth, fit)[0];
         const double sd = std::sqrt(truth.cov[0]);
-        std::ostringstream o;
-        o << "mean shift " << std::abs(fit.mean[2 * q] - truth.mean[0]) / sd << " sigma, sigma ratio "
-          << std::sqrt(fit.cov[3 * q] / truth.cov[0]);
+        const double shift = std::abs(fit.mean[2 * q] - truth.mean[0]) / sd, ratio = std::sqrt(fit.cov[3 * q] / truth.cov[0]);
+        std::ostringstream o, oc;
+        o << "mean shift " << shift << " sigma, sigma ratio " << ratio;
+        oc << shift << "," << ratio;
         shape = o.str();
+        shape_csv = oc.str();
       }
+      csv << method << "," << refine << "," << cs[s / 4] << "," << s % 4 << "," << fit.k() << "," << truth.k() << ","
+          << m.l1_rel[s] << "," << truth_l1 << "," << shape_csv << "\n";
       std::printf("%-8s %-4s c %.1f draw %zu: K %d, l1_rel %.4f, true mixture's l1_rel %.4f, %s\n", method.c_str(),
                   refine.c_str(), cs[s / 4], s % 4,
                   fit.k(), m.l1_rel[s], truth_l1, shape.c_str());
       if (cs[s / 4] >= 2.0) CHECK(fit.k() == truth.k());
     }
   }
+  if (const char* path = std::getenv("BSDFMIX_MEASURE_CSV")) write_text_atomic(path, csv.str());
 }
 
 TEST_CASE("seeding at the residual puts a component on the sharp peak a mixture misses", "[search]") {
