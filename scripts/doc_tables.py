@@ -22,6 +22,8 @@ The tables (NAME: CSV):
                        "Measured"), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
   refine_kl            bench/results/refine_kl.csv (docs/fitting.md, "The L1 refinement")
+  amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
+  theta_border         bench/results/theta_border.csv (docs/fitting.md, "The theta border")
   readme_measured      the README's "Measured" table, row by row from its CSVs (scripts/readme_measured.py)
   converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
                        by scripts/converge_targets.py
@@ -239,6 +241,51 @@ def refine_kl():
     return out
 
 
+def theta_border():
+    def span(xs, fmt):
+        lo, hi = fmt(min(xs)), fmt(max(xs))
+        return lo if lo == hi else "%s-%s" % (lo, hi)
+
+    def pc(x):
+        return "%.2g%%" % (100 * x)
+
+    all_rows = rows("theta_border.csv")
+    methods = [("restarts", "none"), ("smem", "none"), ("smem", "l1")]
+    out = ["| c (sigma inside) | chosen K (true 3): restarts / smem / + L1 | l1_rel at the chosen K: restarts / smem / "
+           "+ L1 | l1_rel of the true mixture as the stand-in | at K = 3, the fitted mean's shift (sigma) and sigma "
+           "ratio: EM / + L1 |", "|---|---|---|---|---|"]
+    for c in sorted({float(r["c"]) for r in all_rows}):
+        here = [r for r in all_rows if float(r["c"]) == c]
+        by = {m: [r for r in here if (r["search"], r["refine"]) == m] for m in methods}
+        ks = " / ".join(span([int(r["k"]) for r in by[m]], str) for m in methods)
+        l1 = " / ".join(span([float(r["l1_rel"]) for r in by[m]], pc) for m in methods)
+        truth = span([float(r["true_l1_rel"]) for r in by[methods[0]]], pc)
+        shapes = []
+        for m in (("smem", "none"), ("smem", "l1")):
+            at3 = [r for r in by[m] if r["mean_shift_sigma"]]
+            shapes.append("-" if not at3 else "%s, %s (%d of %d)" % (
+                span([float(r["mean_shift_sigma"]) for r in at3], lambda x: "%.2g" % x),
+                span([float(r["sigma_ratio"]) for r in at3], lambda x: "%.2f" % x), len(at3), len(by[m])))
+        out.append("| %s%s | %s | %s | %s | %s |" % ("%.1f" % c, " (mean on the border)" if c == 0 else "", ks, l1,
+                                                    truth, " / ".join(shapes)))
+    return out
+
+
+def amplitude_objective():
+    import statistics
+    all_rows = rows("amplitude_objective.csv")
+    med = lambda t, m, c: statistics.median(float(r[c]) for r in all_rows if r["table"] == t and r["method"] == m)
+    trio = lambda t, m: " / ".join(pct(med(t, m, c)) for c in ("l1_rel", "rgb_l1_rel", "rgb_less_negative"))
+    out = ["| material | least squares: luminance L1 / RGB / RGB less negative | reweighted (kept) | linear program | "
+           "seconds per slice, reweighted / linear program |", "|---|---|---|---|---|"]
+    for t, label in (("satin", "satin_rosaline"), ("paper", "paper_white"), ("sunflower", "cg_sunflower")):
+        if not any(r["table"] == t for r in all_rows):
+            continue
+        out.append("| %s | %s | %s | %s | %.2f / %.0f |" % (label, trio(t, "ls"), trio(t, "irls"), trio(t, "lp"),
+                                                          med(t, "irls", "seconds"), med(t, "lp", "seconds")))
+    return out
+
+
 def failure_map():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import failure_tables
@@ -270,7 +317,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
           "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
-          "search_compare": search_compare}
+          "search_compare": search_compare, "amplitude_objective": amplitude_objective}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
