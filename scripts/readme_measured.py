@@ -16,6 +16,19 @@ def rows(name):
         return list(csv.DictReader(f))
 
 
+def made_on(*names):
+    """Where the files were made, from bench/results/provenance.csv: ' (made on AMD EPYC, 2 CPUs)'."""
+    with open(os.path.join(RESULTS, "provenance.csv"), newline="") as f:
+        prov = {r["file"]: r for r in csv.DictReader(f)}
+    machines = []
+    for n in names:
+        r = prov.get("bench/results/" + n)
+        m = "%s, %s CPUs" % (r["cpu"].replace("(R)", ""), r["logical_cpus"]) if r else "no provenance row"
+        if m not in machines:
+            machines.append(m)
+    return " (made on %s)" % " and ".join(machines)
+
+
 def pct(x, digits=2):
     return "%.*f%%" % (digits, 100 * float(x))
 
@@ -42,19 +55,28 @@ def span(values, unit="x"):
     return times(lo) + unit if times(lo) == times(hi) else "%s-%s%s" % (times(lo), times(hi), unit)
 
 
+def em_file(k):
+    """The newest em_k<k>_<machine>.csv by its provenance row (the first found without one)."""
+    import glob
+    files = sorted(os.path.basename(f) for f in glob.glob(os.path.join(RESULTS, "em_k%d_*.csv" % k)))
+    with open(os.path.join(RESULTS, "provenance.csv"), newline="") as f:
+        when = {r["file"]: r["utc"] for r in csv.DictReader(f)}
+    return max(files, key=lambda n: when.get("bench/results/" + n, ""))
+
+
 def em():
-    by = {r["impl"].split(" ")[0]: r for r in rows("em_k50_amd-epyc-2c.csv")}
+    name = em_file(50)
+    by = {r["impl"].split(" ")[0]: r for r in rows(name)}
     b = by["bsdfmix"]
     peer = lambda n: "%.3g M" % (float(by[n]["pc_per_s"]) / 1e6) if n in by else "not run"
-    return ("| EM throughput, K = 50, 90 x 180 slices (2-vCPU AMD EPYC, best of 10) | %.3g G point-component updates/s "
+    return ("| EM throughput, K = 50, 90 x 180 slices (best of 10) | %.3g G point-component updates/s "
             "on %s threads: %s%% of this machine's measured FMA peak (%s GFLOP/s), at %s flops per update counted from "
             "the kernel; on one thread each: Armadillo %s (`-O3`; %s with `-march=native`), pomegranate %s, "
-            "scikit-learn %s, the CPU reference %s | `build/bsdfmix bench em --k 50 --repeat 10 --csv "
-            "bench/results/em_k50_amd-epyc-2c.csv` ([CSV](bench/results/em_k50_amd-epyc-2c.csv), "
+            "scikit-learn %s, the CPU reference %s | `bench/reproduce.sh em` ([CSV](bench/results/%s), "
             "[chart](docs/images/em_throughput.png), bench/README.md) |" % (
                 float(b["pc_per_s"]) / 1e9, b["threads"], b["pct_of_fma_peak"], b["fma_peak_gflops"],
                 b["flops_per_update"], peer("armadillo_generic"), peer("armadillo"), peer("pomegranate"),
-                peer("scikit-learn"), peer("cpu_reference")))
+                peer("scikit-learn"), peer("cpu_reference"), name))
 
 
 def fit_sweep():
@@ -231,7 +253,22 @@ def constant():
                 span([x["mis_fewer"] for x in r]), span([x["mis_time"] for x in r]), span(cost)))
 
 
+def with_machine(row, *files):
+    """The row with the machine its files were made on appended to its last column."""
+    return row[:-2] + made_on(*files) + " |"
+
+
 def markdown():
     """The table, as lines."""
-    return (["| what | result | reproduce |", "|---|---|---|", em()] + fit_sweep() +
-            [search(), before_after(), stand_in(), smallest(), lighting(), cloth(), constant()])
+    light = ["converge_light/%s_convergence.csv" % m for m in ("polyester", "cotton", "satin", "paper")]
+    cloth_files = ["render/%s_%s/render.csv" % (f, s) for s in ("sky", "skymap")
+                   for f in ("silk", "cotton", "wool", "polyester")]
+    sweep = fit_sweep()
+    return ["| what | result | reproduce |", "|---|---|---|", with_machine(em(), em_file(50)),
+            with_machine(sweep[0], "fit_sweep.csv"), sweep[1],
+            with_machine(search(), "search_compare.csv", "search_compare_polyester_best3.csv"),
+            with_machine(before_after(), "search_before_after.csv"),
+            with_machine(stand_in(), "rgb_stand_in.csv", "rgb_refine.csv"),
+            with_machine(smallest(), "stand_in_bytes.csv"), with_machine(lighting(), *light),
+            with_machine(cloth(), *cloth_files),
+            with_machine(constant(), "converge/polyester_convergence.csv", "converge/cotton_convergence.csv")]
