@@ -93,7 +93,7 @@ outputs() {
     converge_light) echo "$results/converge_light/*" ;;
     mis_heuristic) echo "$results/mis_heuristic.csv" ;;
     render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
-    em) echo "$results/em_k*_$machine.*" ;;
+    em) echo "$results/em_k*_$machine.* docs/images/em_throughput.png" ;;
     render_rays) echo "$results/render_rays_$machine.csv" ;;
     failure_map) echo "$results/failure_map.csv" ;;
     theta_border) echo "$results/theta_border.csv" ;;
@@ -194,7 +194,10 @@ run_study() {
     em)
       local b=build-bench/bsdfmix
       [ -x $b ] || b=$bin  # scripts/setup's build has the peers (BSDFMIX_BUILD_BENCH is on by default)
-      for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_$machine.csv > $results/em_k${k}_$machine.txt 2>&1; done ;;
+      for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_$machine.csv > $results/em_k${k}_$machine.txt 2>&1; done
+      mkdir -p out
+      $py scripts/plot_bench.py $results/em_k16_$machine.csv $results/em_k50_$machine.csv -o out/em_throughput
+      cp out/em_throughput.png docs/images/em_throughput.png ;;
     theta_border) BSDFMIX_MEASURE_CSV=$results/theta_border.csv build/tests/search_test "[.measure]" ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)
