@@ -24,6 +24,8 @@ The tables (NAME: CSV):
   refine_kl            bench/results/refine_kl.csv (docs/fitting.md, "The L1 refinement")
   amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
   theta_border         bench/results/theta_border.csv (docs/fitting.md, "The theta border")
+  em_results           the newest bench/results/em_k{50,16}_<machine>.csv (bench/README.md, "Results"), by
+                       scripts/em_tables.py
   readme_measured      the README's "Measured" table, row by row from its CSVs (scripts/readme_measured.py)
   converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
                        by scripts/converge_targets.py
@@ -38,7 +40,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join(ROOT, "bench", "results")
-DOCS = ["README.md"] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
+DOCS = ["README.md", os.path.join("bench", "README.md")] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
 
 
 def rows(name):
@@ -286,6 +288,14 @@ def amplitude_objective():
     return out
 
 
+def em_results():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import em_tables
+    import readme_measured
+    machine = readme_measured.em_file(50)[len("em_k50_"):-len(".csv")]
+    return em_tables.results(machine)
+
+
 def failure_map():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import failure_tables
@@ -317,7 +327,8 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
           "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
-          "search_compare": search_compare, "amplitude_objective": amplitude_objective}
+          "search_compare": search_compare, "amplitude_objective": amplitude_objective,
+          "em_results": em_results}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
@@ -348,7 +359,7 @@ def main():
             os.replace(path + ".tmp", path)
     missing = sorted(set(TABLES) - seen)
     if missing:
-        sys.exit("doc_tables: no marker for %s in README.md or docs/" % ", ".join(missing))
+        sys.exit("doc_tables: no marker for %s in README.md, bench/README.md or docs/" % ", ".join(missing))
     if check and stale:
         for s in stale:
             print("doc_tables: %s differs from its CSV (run scripts/doc_tables.py)" % s, file=sys.stderr)
