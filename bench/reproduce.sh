@@ -177,7 +177,7 @@ run_study() {
       mkdir -p $w $results/converge_refine
       for r in l1 none; do
         sed -e "/^table:/!s|out/converge_satin/|$w/${r}_|" -e "0,/^  seed: 1$/s//  seed: 1\n  refine: $r/" \
-            -e "s|^  samples_max: .*|  samples_max: 64|" -e "s|^  runs: .*|  runs: 1|" \
+            -e "s|^  samples_max: .*|  samples_max: 64|" -e "s|^  runs: .*|  runs: 2|" \
             -e "s|^  estimators: .*|  estimators: [us_tab]|" -e "/^charts:/,\$d" configs/converge_satin.yaml > $w/$r.yaml
         $bin run -q $w/$r.yaml
         cp $w/${r}_satin_convergence_tail.csv $results/converge_refine/satin_refine_${r}_tail.csv
