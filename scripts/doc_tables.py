@@ -23,6 +23,8 @@ The tables (NAME: CSV):
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
   refine_kl            bench/results/refine_kl.csv (docs/fitting.md, "The L1 refinement")
   amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
+  converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (docs/fitting.md,
+                       "Before and after")
   theta_border         bench/results/theta_border.csv (docs/fitting.md, "The theta border")
   em_results           the newest bench/results/em_k{50,16}_<machine>.csv (bench/README.md, "Results"), by
                        scripts/em_tables.py
@@ -34,6 +36,7 @@ The tables (NAME: CSV):
 """
 import csv
 import json
+import math
 import os
 import re
 import sys
@@ -296,6 +299,20 @@ def em_results():
     return em_tables.results(machine)
 
 
+def converge_refine():
+    l1 = rows(os.path.join("converge_refine", "satin_refine_l1_tail.csv"))
+    em = {r["theta_o"]: r for r in rows(os.path.join("converge_refine", "satin_refine_none_tail.csv"))}
+    out = ["| satin, theta_o (deg) | K: refined / EM | L1: refined / EM | predicted variance of `is_tab`, refined / EM "
+           "| of `mis_tab` | stand-in's integral error: refined / EM |", "|---|---|---|---|---|---|"]
+    for r in l1:
+        e = em[r["theta_o"]]
+        out.append("| %.0f | %s / %s | %s / %s | %.2fx | %.2fx | %.1e / %.1e |" % (
+            math.degrees(float(r["theta_o"])), r["k"], e["k"], pct(r["l1_rel"], 1), pct(e["l1_rel"], 1),
+            float(r["relvar_is"]) / float(e["relvar_is"]), float(r["relvar_mis"]) / float(e["relvar_mis"]),
+            float(r["stand_in_error"]), float(e["stand_in_error"])))
+    return out
+
+
 def failure_map():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import failure_tables
@@ -328,7 +345,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
           "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
-          "em_results": em_results}
+          "em_results": em_results, "converge_refine": converge_refine}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
