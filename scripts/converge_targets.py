@@ -4,7 +4,8 @@
 For every (table, theta_o, phi_o, scene) of the CSVs, one row:
   K           components of the main slice serving omega_o (tail CSV)
   storage     table_bytes / mixture_bytes of the tail CSV: the float32 cells of the table
-              slice over the slice's share of the mixture file's datasets as stored
+              slice (with its colour, where it has one) over the slice's share of the
+              mixture file's datasets as stored (rgb_scale included)
               (arrays padded to the file's largest K, per-slice scalars included)
   mis fewer   how many times fewer samples mis_tab needs than us_tab's 1024 to reach
               us_tab's rel_rmse at N = 1024: 1024 / N_mis, N_mis = N_max (rel_rmse_mis at
@@ -67,11 +68,10 @@ def targets(csvs, tails, n_target):
 
             t = tail.get(g[:3], {})
             k = int(t["k"]) if t else None
-            cells = int(t["table_bytes"]) // 4 if t else None
             v_mis, v_cdf = var("mis_tab"), var("cdf_tab")
             out.append(
                 dict(
-                    table=g[0], theta_o=g[1], phi_o=g[2], scene=g[3], k=k, cells=cells,
+                    table=g[0], theta_o=g[1], phi_o=g[2], scene=g[3], k=k,
                     storage=int(t["table_bytes"]) / int(t["mixture_bytes"]) if t and int(t["mixture_bytes"]) else None,
                     mis_fewer=fewer("mis_tab"), mis_time=time_ratio("mis_tab"),
                     cost_is=cost("is_tab"), cost_mis=cost("mis_tab"), cost_isgmm=cost("is_gmm"),

@@ -129,7 +129,9 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     const int main_slice = b.slice[main];
     const int k_used = mf.k[std::size_t(main_slice)];
     const double l1 = mf.l1_rel[std::size_t(main_slice)];
-    const std::uint64_t table_bytes = table.meta().cells_per_slice() * sizeof(float);
+    // One table slice as stored, float32: the luminance, and R, G, B where the table has
+    // them (the mixture's share below holds its rgb_scale too).
+    const std::uint64_t table_bytes = table.meta().cells_per_slice() * sizeof(float) * (table.meta().rgb ? 4 : 1);
     // The slice's share of the mixture file's datasets: its padded row and its scalars.
     const std::uint64_t mix_bytes = mf.payload_bytes() / std::max<std::uint64_t>(mf.slices(), 1);
     tail += spec.table_label + "," + num(theta_o) + "," + num(phi_o) + "," + std::to_string(k_used) + "," + num(l1) +

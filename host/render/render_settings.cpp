@@ -81,7 +81,9 @@ RenderSettings parse_render(const RenderSection& section) {
   r.seed = std::uint64_t(n.integer("seed", 0, INT64_MAX));
   r.threads = int(n.integer("threads", 0, 4096));
   r.prepass = int(n.integer("prepass", 4, 4096));
-  r.prepass_depth = int(n.integer("prepass_depth", 1, 1000));
+  // 0: every vertex a path can reach, so that the stand-in has every slice its paths use
+  r.prepass_depth = int(n.integer("prepass_depth", 0, 1000));
+  if (r.prepass_depth == 0) r.prepass_depth = r.max_depth;
 
   // the lighting, in world space
   r.lighting = default_lighting(Domain::Hemisphere, 1.0);

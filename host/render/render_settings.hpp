@@ -36,7 +36,7 @@ struct RenderSettings {
   int max_depth = 24, rr_depth = 3;
   std::uint64_t seed = 1;
   int threads = 0;
-  int prepass = 48, prepass_depth = 1;
+  int prepass = 48, prepass_depth = 24;  // the config's 0 is max_depth
   Lighting lighting;  // world space (frame unused)
   Camera camera;
   ClothParams cloth;
