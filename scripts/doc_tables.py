@@ -249,7 +249,7 @@ def refine_kl():
 def theta_border():
     def span(xs, fmt):
         lo, hi = fmt(min(xs)), fmt(max(xs))
-        return lo if lo == hi else "%s-%s" % (lo, hi)
+        return lo if lo == hi else "%s-%s" % (lo[:-1] if lo.endswith("%") else lo, hi)
 
     def pc(x):
         return "%.2g%%" % (100 * x)
@@ -345,7 +345,8 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
           "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
-          "em_results": em_results, "converge_refine": converge_refine}
+          "em_results": em_results, "converge_refine": converge_refine,
+          "theta_border": theta_border}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
