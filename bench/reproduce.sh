@@ -41,6 +41,7 @@ studies=(
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
   "render:60:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
   "em:10:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+  "em_precision:1:no:the EM kernels against their reference, both precisions (em_precision.csv)"
   "theta_border:3:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
   "failure_map:1:quick:the failure map over configs/stress/ (failure_map.csv)"
   "render_rays:3:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
@@ -97,6 +98,7 @@ outputs() {
     render_rays) echo "$results/render_rays_$machine.csv" ;;
     failure_map) echo "$results/failure_map.csv" ;;
     theta_border) echo "$results/theta_border.csv" ;;
+    em_precision) echo "$results/em_precision.csv" ;;
     amplitude_objective) echo "$results/amplitude_objective.csv" ;;
   esac
 }
@@ -198,6 +200,7 @@ run_study() {
       mkdir -p out
       $py scripts/plot_bench.py $results/em_k16_$machine.csv $results/em_k50_$machine.csv -o out/em_throughput
       cp out/em_throughput.png docs/images/em_throughput.png ;;
+    em_precision) BSDFMIX_MEASURE_CSV=$results/em_precision.csv build/tests/em_test "[.measure]" ;;
     theta_border) BSDFMIX_MEASURE_CSV=$results/theta_border.csv build/tests/search_test "[.measure]" ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)

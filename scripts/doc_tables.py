@@ -25,6 +25,7 @@ The tables (NAME: CSV):
   amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (docs/fitting.md,
                        "Before and after")
+  em_precision         bench/results/em_precision.csv (docs/em.md, "Kernel vs reference")
   theta_border         bench/results/theta_border.csv (docs/fitting.md, "The theta border")
   em_results           the newest bench/results/em_k{50,16}_<machine>.csv (bench/README.md, "Results"), by
                        scripts/em_tables.py
@@ -310,6 +311,19 @@ def converge_refine():
             math.degrees(float(r["theta_o"])), r["k"], e["k"], pct(r["l1_rel"], 1), pct(e["l1_rel"], 1),
             float(r["relvar_is"]) / float(e["relvar_is"]), float(r["relvar_mis"]) / float(e["relvar_mis"]),
             float(r["stand_in_error"]), float(e["stand_in_error"])))
+    return out
+
+
+def em_precision():
+    by = {r["precision"]: r for r in rows("em_precision.csv")}
+    a, b = by.get("auto"), by.get("fp32")
+    out = ["| quantity | precision auto (fp64 on a CPU), max | fp32, max | test bound |", "|---|---|---|---|"]
+    for key, label, bound in (("loglik_abs", "final log-likelihood, absolute (x max(1, \\|L\\|))", "2e-5"),
+                              ("weight_abs", "weights, absolute", "2e-5"), ("mean_rad", "means, rad", "5e-5"),
+                              ("cov_rel", "covariances, relative to sqrt(s_tt s_pp)", "5e-4")):
+        out.append("| %s | %.1e | %.1e | %s |" % (label, float(a[key]), float(b[key]), bound))
+    out.append("| iterations equal to the reference's | %s of %s | %s of %s | all |" % (
+        a["iterations_equal"], a["fits"], b["iterations_equal"], b["fits"]))
     return out
 
 

@@ -7,7 +7,9 @@
 #include <cstdlib>
 #include <limits>
 #include <set>
+#include <sstream>
 
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "fit/em.hpp"
@@ -360,4 +362,55 @@ TEST_CASE("initialization is deterministic for a seed and differs across restart
   double ws = 0;
   for (double v : a.weight) ws += v;
   CHECK(ws == Approx(1.0));
+}
+
+// A measurement (hidden: run it by its tag): the largest differences between the kernels
+// and the reference over the setup docs/em.md describes ("Kernel vs reference"), per
+// precision. With BSDFMIX_MEASURE_CSV set it writes them there (bench/reproduce.sh
+// em_precision: bench/results/em_precision.csv, the table of docs/em.md).
+TEST_CASE("measure: kernels against the reference", "[.measure]") {
+  struct Case {
+    SliceSet set;
+    int iterations;
+  };
+  std::vector<Case> cases(2);
+  cases[0].set.grid = make_slice_grid(Domain::Fiber, 90, 180);
+  cases[0].set.weights = {mixture_weights(cases[0].set.grid, three_lobes()),
+                          mixture_weights(cases[0].set.grid, synthetic_lobes(Domain::Fiber, 6, 1))};
+  cases[0].iterations = 50;
+  cases[1].set.grid = make_slice_grid(Domain::Hemisphere, 250, 400);
+  auto w = mixture_weights(cases[1].set.grid, three_lobes());
+  for (std::size_t i = 0; i < w.size(); ++i) w[i] *= std::pow(10.0, -8.0 + 16.0 * double((i * 7919) % 1000) / 999.0);
+  cases[1].set.weights = {w};
+  cases[1].iterations = 15;
+  std::ostringstream csv;
+  csv << "precision,loglik_abs,weight_abs,mean_rad,cov_rel,iterations_equal,fits\n";
+  for (EmPrecision prec : {EmPrecision::Auto, EmPrecision::Fp32}) {
+    double dl = 0;
+    Diff worst;
+    int equal = 0, fits = 0;
+    for (const Case& c : cases) {
+      std::vector<EmTask> tasks;
+      for (std::size_t s = 0; s < c.set.weights.size(); ++s)
+        for (int k : {1, 3, 8, 16, 32}) tasks.push_back({s, k, fixed(c.iterations)});
+      const auto ref = em_fit_reference(c.set, tasks);
+      const auto got = engine(prec).fit(c.set, tasks);
+      for (std::size_t i = 0; i < tasks.size(); ++i) {
+        REQUIRE(ref[i].ok);
+        REQUIRE(got[i].ok);
+        ++fits;
+        equal += got[i].iterations == ref[i].iterations;
+        dl = std::max(dl, std::abs(got[i].loglik - ref[i].loglik) / std::max(1.0, std::abs(ref[i].loglik)));
+        const Diff d = compare(got[i].gmm, ref[i].gmm);
+        worst.weight = std::max(worst.weight, d.weight);
+        worst.mean = std::max(worst.mean, d.mean);
+        worst.cov_rel = std::max(worst.cov_rel, d.cov_rel);
+      }
+    }
+    std::printf("%s: loglik %.2g, weights %.2g, means %.2g rad, covariances %.2g relative; iterations equal %d of %d\n",
+                precision_name(prec).c_str(), dl, worst.weight, worst.mean, worst.cov_rel, equal, fits);
+    csv << precision_name(prec) << "," << dl << "," << worst.weight << "," << worst.mean << ","
+        << worst.cov_rel << "," << equal << "," << fits << "\n";
+  }
+  if (const char* path = std::getenv("BSDFMIX_MEASURE_CSV")) write_text_atomic(path, csv.str());
 }
