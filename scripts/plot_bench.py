@@ -2,9 +2,9 @@
 """Chart of `bsdfmix bench em` CSVs: point-component updates per second of every
 implementation measured, one group of bars per K, log scale (PNG and SVG).
 
-  scripts/plot_bench.py bench/results/em_k16_amd-epyc-2c.csv bench/results/em_k50_amd-epyc-2c.csv -o out/em_throughput
+  scripts/plot_bench.py bench/results/em_k16_<machine>.csv bench/results/em_k50_<machine>.csv -o out/em_throughput
 
-(docs/images/em_throughput.png is the PNG of that command; bench/results/README.md.)
+(docs/images/em_throughput.png is the PNG of that command, which `bench/reproduce.sh em` runs.)
 """
 
 import argparse
