@@ -27,7 +27,6 @@ provenance=$results/provenance.csv
 studies=(
   "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
-  "refine_kl:12:no:the L1 refinement's divergence weight and evaluations on satin and sunflower, against EM's fits (refine_kl.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:12:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
@@ -81,7 +80,6 @@ outputs() {
   case $1 in
     rgb_stand_in) echo "$results/rgb_stand_in.csv" ;;
     rgb_refine) echo "$results/rgb_refine.csv" ;;
-    refine_kl) echo "$results/refine_kl.csv" ;;
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
@@ -115,7 +113,6 @@ run_study() {
   case $name in
     rgb_stand_in) $py bench/rgb_stand_in.py ;;
     rgb_refine) $py bench/rgb_refine.py ;;
-    refine_kl) $py bench/rgb_refine.py --variants kl ;;
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
     render_rgl)
       for m in satin paper sunflower; do

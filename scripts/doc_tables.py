@@ -21,7 +21,6 @@ The tables (NAME: CSV):
   failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
                        "Measured"), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
-  refine_kl            bench/results/refine_kl.csv (docs/fitting.md, "The L1 refinement")
   amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (docs/fitting.md,
                        "Before and after")
@@ -224,26 +223,6 @@ def search_compare():
                 label, method, float(s["mean_k"]), pct(s["l1_median"]), pct(s["l1_p90"]), float(s["seconds"]),
                 float(s["seconds"]) / before, pct(k8["l1_median"]), pct(k8["l1_p90"]), pct(k16["l1_median"]),
                 pct(k16["l1_p90"]), float(k8["seconds"]), float(k16["seconds"])))
-    return out
-
-
-def refine_kl():
-    by = {(r["variant"], r["table"]): r for r in rows("refine_kl.csv")}
-    variants = []
-    for r in rows("refine_kl.csv"):
-        if r["variant"] not in variants:
-            variants.append(r["variant"])
-    out = ["| `refine_kl` | evaluations | satin: L1 median, chi-square ratio (median / p90) | sunflower: L1 median, "
-           "chi-square ratio (median / p90) |", "|---|---|---|---|"]
-    for v in variants:
-        first = by.get((v, "satin")) or by.get((v, "sunflower"))
-        kl, ev = ("(EM's fits)", "-") if first["refine"] == "none" else (first["refine_kl"], first["refine_evaluations"])
-        if v == "default":
-            ev += " (the default)"
-        cells = ["%s, %.2f / %.2f" % (pct(by[(v, t)]["l1_median"]), float(by[(v, t)]["chi_ratio_median"]),
-                                      float(by[(v, t)]["chi_ratio_p90"])) if (v, t) in by else "-"
-                 for t in ("satin", "sunflower")]
-        out.append("| %s | %s | %s | %s |" % (kl, ev, cells[0], cells[1]))
     return out
 
 
