@@ -300,7 +300,9 @@ def em_precision():
     for key, label, bound in (("loglik_abs", "final log-likelihood, absolute (x max(1, \\|L\\|))", "2e-5"),
                               ("weight_abs", "weights, absolute", "2e-5"), ("mean_rad", "means, rad", "5e-5"),
                               ("cov_rel", "covariances, relative to sqrt(s_tt s_pp)", "5e-4")):
-        out.append("| %s | %.1e | %.1e | %s |" % (label, float(a[key]), float(b[key]), bound))
+        sci = lambda x: "%.1fe%d" % (float("%.1e" % x) / 10 ** math.floor(math.log10(float("%.1e" % x))),
+                                     math.floor(math.log10(float("%.1e" % x)))) if x > 0 else "0"
+        out.append("| %s | %s | %s | %s |" % (label, sci(float(a[key])), sci(float(b[key])), bound))
     out.append("| iterations equal to the reference's | %s of %s | %s of %s | all |" % (
         a["iterations_equal"], a["fits"], b["iterations_equal"], b["fits"]))
     return out
@@ -339,7 +341,8 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
           "em_results": em_results, "converge_refine": converge_refine,
-          "theta_border": theta_border}
+          "theta_border": theta_border,
+          "em_precision": em_precision}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
