@@ -7,12 +7,12 @@
 #
 #   bench/reproduce.sh [--quick] [--list] [--help] [STUDY ...]
 #
-# With no STUDY, every study in order. --quick runs the short studies only (about 15
-# minutes on 2 cores). The full run is about 4 hours on 2 cores (AMD EPYC, PoCL; estimated
-# from the studies' last runs, not timed end to end); the
-# longest studies are converge_light (about 70 minutes), render (about 60), converge and
-# fit_sweep. Run from the repository root after scripts/setup; the em study wants a build
-# with the peers (-DBSDFMIX_BUILD_BENCH=ON, bench/README.md) in build-bench/.
+# With no STUDY, every study in order. --quick runs the short studies only (about 20
+# minutes on 2 cores). The full run is about 4 hours on 2 cores (PoCL; the sum of each
+# study's last run, on the machine provenance.csv names for its files, not timed end to
+# end); the longest studies are render (about 90 minutes), search_compare and rgb_refine.
+# Run from the repository root after scripts/setup, whose build has the peers the em study
+# runs (BSDFMIX_BUILD_BENCH, on by default; a build-bench/ build is used when present).
 #
 # The search_before_after study compares this build with another: set BEFORE to that
 # build's bsdfmix (it is skipped otherwise).
@@ -28,23 +28,23 @@ studies=(
   "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
-  "render_rgl:12:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
+  "render_rgl:7:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
   "search_compare:27:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
-  "catalog:10:no:the catalog job (catalog_summary.csv)"
+  "catalog:1:no:the catalog job (catalog_summary.csv)"
   "scale:15:no:the MPI farm (scale_<machine>.csv)"
-  "converge:30:no:the convergence studies under constant light (converge/)"
-  "converge_refine:3:no:satin's importance sampling by the refined and by EM's mixtures (converge_refine/)"
-  "converge_light:70:no:the convergence studies with the lighting (converge_light/)"
+  "converge:4:no:the convergence studies under constant light (converge/)"
+  "converge_refine:1:no:satin's importance sampling by the refined and by EM's mixtures (converge_refine/)"
+  "converge_light:10:no:the convergence studies with the lighting (converge_light/)"
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
-  "render:60:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
-  "em:10:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+  "render:90:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
+  "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
   "em_precision:1:no:the EM kernels against their reference, both precisions (em_precision.csv)"
-  "theta_border:3:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
+  "theta_border:1:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
   "failure_map:1:quick:the failure map over configs/stress/ (failure_map.csv)"
-  "render_rays:3:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
-  "amplitude_objective:5:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
+  "render_rays:1:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
+  "amplitude_objective:20:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
 
 usage() {
