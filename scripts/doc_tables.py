@@ -18,6 +18,7 @@ The tables (NAME: CSV):
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
+  render_reading       the same renders' reading under that table, by scripts/render_targets.py
   failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
                        "Measured"), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
@@ -193,6 +194,13 @@ def scale_traffic():
                 1000 * float(r["commit_s_per_batch"]))]
 
 
+def render_reading():
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    import render_targets
+    return render_targets.reading([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
+                                   for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
+
+
 def render_cloth():
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import render_targets
@@ -342,7 +350,8 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
           "em_results": em_results, "converge_refine": converge_refine,
           "theta_border": theta_border,
-          "em_precision": em_precision}
+          "em_precision": em_precision,
+          "render_reading": render_reading}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 

@@ -107,6 +107,53 @@ def markdown(dirs):
     return out
 
 
+def reading(dirs):
+    """The reading of the renders under their table (docs/render.md), as lines: every figure
+    from the rows, so that it cannot drift from them."""
+    rows = [row_for(d) for d in dirs]
+    f2 = lambda x: "%d" % round(float("%.3g" % x)) if x >= 100 else "%.3g" % x
+    span = lambda xs, unit="x": (f2(min(xs)) + unit if f2(min(xs)) == f2(max(xs))
+                                 else "%s%s to %s%s" % (f2(min(xs)), unit, f2(max(xs)), unit))
+    where = lambda r: "%s under the %s" % (r["fiber"], "sky" if r["scene"] == "sky" else "sky map")
+    sky = [r for r in rows if r["scene"] == "sky"]
+    other = [r for r in rows if r["scene"] != "sky"]
+    best = sorted({r["mixture_name"] for r in rows})
+    ok = [r for r in rows if r["vs_cdf"] <= 1.5]
+    bad = [r for r in rows if r["vs_cdf"] > 1.5]
+    prod = [r["product_vs_cdf"] for r in rows if r["product_vs_cdf"]]
+    vertex = [r["ns_product"] / r["ns_cdf"] for r in rows if r["ns_product"] and r["ns_cdf"]]
+    blocks_ok = [r for r in rows if r["stand_in_4x4"] <= 2]
+    blocks_noisy = [r for r in rows if r["stand_in_4x4"] > 2]
+    fitted = sorted({r["slices"] for r in rows})
+    out = [
+        "- **Equal time against uniform:** the best mixture estimator (%s) has %s less relative MSE than uniform "
+        "sampling under the sky, %s under the sky map (target 5x under the sky)." % (
+            ", ".join("`%s`" % b for b in best), span([r["vs_uniform"] for r in sky]),
+            span([r["vs_uniform"] for r in other])),
+        "- **Against the table CDF:** its error is %s `mis_light_cdf`'s (target at most 1.5x) on %d of the %d rows%s." % (
+            span([r["vs_cdf"] for r in ok]), len(ok), len(rows),
+            "" if not bad else "; above it: " + ", ".join("%s (%.2fx)" % (where(r), r["vs_cdf"]) for r in bad)),
+        "- **Product sampling with the lighting** (`mis_product`): %s `mis_light_cdf`'s relative MSE at equal time "
+        "(target at most 0.5x%s), a vertex %s dearer (%s against %s ns)." % (
+            span(prod), ": missed on every row" if min(prod) > 0.5 else "", span(vertex),
+            span([r["ns_product"] for r in rows if r["ns_product"]], ""), span([r["ns_cdf"] for r in rows if r["ns_cdf"]], "")),
+        "- **The stand-in against the table** (the same estimator and seed, 4 x 4 blocks): %s on %d of the %d rows%s; "
+        "image means within %.2f%% but %s." % (
+            span([r["stand_in_4x4"] for r in blocks_ok], "%"), len(blocks_ok), len(rows),
+            "" if not blocks_noisy else "; " + ", ".join("%.2f%% on %s (the table image's own noise there: %.1f%%)" % (
+                r["stand_in_4x4"], where(r), r["noise_4x4"]) for r in blocks_noisy),
+            max(abs(r["stand_in_mean"]) for r in rows if abs(r["stand_in_mean"]) <= 0.5) if any(
+                abs(r["stand_in_mean"]) <= 0.5 for r in rows) else 0,
+            ", ".join("%s (%+.2f%%)" % (where(r), r["stand_in_mean"]) for r in rows if abs(r["stand_in_mean"]) > 0.5)
+            or "on no row"),
+        "- **Speed:** the slowest estimator takes %s for its samples per pixel at 256 x 256 (target 2 minutes); "
+        "%s to %s M rays per second on 2 cores. Slices fitted (the pre-pass): %s." % (
+            span([r["slowest"] for r in rows], " s"), "%.1f" % min(float(r["rays"].split("-")[0]) for r in rows),
+            "%.1f" % max(float(r["rays"].split("-")[1].split()[0]) for r in rows), ", ".join(fitted)),
+    ]
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dirs", nargs="+", help="render output directories (render.csv, render.json)")
