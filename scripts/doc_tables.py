@@ -35,7 +35,6 @@ The tables (NAME: CSV):
   converge_light       bench/results/converge_light/*_convergence*.csv (docs/sampling.md, "Measured: the sky
                        and the sky map"), by scripts/light_targets.py
 """
-import csv
 import json
 import math
 import os
@@ -47,13 +46,8 @@ RESULTS = os.path.join(ROOT, "bench", "results")
 DOCS = ["README.md", os.path.join("bench", "README.md")] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
 
 
-def rows(name):
-    with open(os.path.join(RESULTS, name), newline="") as f:
-        return list(csv.DictReader(f))
-
-
-def pct(x, digits=2):
-    return "%.*f%%" % (digits, 100 * float(x))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from readme_measured import pct, rows  # noqa: E402  (the one reader and percent format of the tables)
 
 
 def rgb_stand_in():
@@ -195,21 +189,18 @@ def scale_traffic():
 
 
 def render_reading():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import render_targets
     return render_targets.reading([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
                                    for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
 def render_cloth():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import render_targets
     return render_targets.markdown([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
 def readme_measured():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import readme_measured as m
     return m.markdown()
 
@@ -280,7 +271,6 @@ def amplitude_objective():
 
 
 def em_results():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import em_tables
     import readme_measured
     machine = readme_measured.em_file(50)[len("em_k50_"):-len(".csv")]
@@ -317,26 +307,22 @@ def em_precision():
 
 
 def failure_map():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import failure_tables
     return failure_tables.readme()
 
 
 def stability():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import failure_tables
     return failure_tables.stability()
 
 
 def converge():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import converge_targets
     return converge_targets.markdown([os.path.join(RESULTS, "converge", "%s_convergence.csv" % m)
                                       for m in ("polyester", "cotton", "satin")])
 
 
 def converge_light():
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import light_targets
     return light_targets.markdown([os.path.join(RESULTS, "converge_light", "%s_convergence.csv" % m)
                                    for m in ("polyester", "cotton", "satin", "paper")])

@@ -1,6 +1,5 @@
 """bench/README.md's "Results" block, from the newest `bsdfmix bench em` CSVs of
 bench/results/ (scripts/doc_tables.py writes it between its markers)."""
-import csv
 import os
 import re
 
@@ -8,9 +7,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join(ROOT, "bench", "results")
 
 
-def rows(name):
-    with open(os.path.join(RESULTS, name), newline="") as f:
-        return list(csv.DictReader(f))
+from readme_measured import rows  # noqa: E402
 
 
 def profile(txt):
