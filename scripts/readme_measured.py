@@ -2,6 +2,7 @@
 (scripts/doc_tables.py writes it between its markers; each row names the command that
 makes its CSV)."""
 import csv
+import functools
 import os
 import statistics
 import sys
@@ -16,10 +17,16 @@ def rows(name):
         return list(csv.DictReader(f))
 
 
+@functools.lru_cache(maxsize=None)
+def provenance():
+    """bench/results/provenance.csv by file (read once)."""
+    with open(os.path.join(RESULTS, "provenance.csv"), newline="") as f:
+        return {r["file"]: r for r in csv.DictReader(f)}
+
+
 def made_on(*names):
     """Where the files were made, from bench/results/provenance.csv: ' (made on AMD EPYC, 2 CPUs)'."""
-    with open(os.path.join(RESULTS, "provenance.csv"), newline="") as f:
-        prov = {r["file"]: r for r in csv.DictReader(f)}
+    prov = provenance()
     machines = []
     for n in names:
         r = prov.get("bench/results/" + n)
@@ -59,8 +66,7 @@ def em_file(k):
     """The newest em_k<k>_<machine>.csv by its provenance row (the first found without one)."""
     import glob
     files = sorted(os.path.basename(f) for f in glob.glob(os.path.join(RESULTS, "em_k%d_*.csv" % k)))
-    with open(os.path.join(RESULTS, "provenance.csv"), newline="") as f:
-        when = {r["file"]: r["utc"] for r in csv.DictReader(f)}
+    when = {f: r["utc"] for f, r in provenance().items()}
     return max(files, key=lambda n: when.get("bench/results/" + n, ""))
 
 
