@@ -11,9 +11,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "core/color.hpp"
 #include "core/domain.hpp"
 #include "core/error.hpp"
@@ -567,4 +569,38 @@ TEST_CASE("options and presets are checked") {
   std::fclose(fp);
   CHECK_THAT(std::string(line), Catch::Contains("unknown fiber preset 'denim'") && Catch::Contains("lossless"));
   std::filesystem::remove(err);
+}
+
+// A measurement (hidden: run it by its tag): the h quadrature's error at 32 to 256
+// Gauss-Legendre nodes against 2048, per preset, on 12 theta_o x 90 x 180 slices of the
+// CPU reference, as the largest cell error relative to its slice's maximum (docs/fiber.md,
+// "Quadrature in h"). With BSDFMIX_MEASURE_CSV set it writes the rows there
+// (bench/reproduce.sh fiber_quadrature).
+TEST_CASE("measure: the h quadrature against 2048 nodes", "[.measure]") {
+  const std::vector<std::size_t> nodes = {32, 64, 128, 256};
+  std::ostringstream csv;
+  csv << "preset,nodes,reference_nodes,theta_o_slices,max_rel_error\n";
+  for (const char* preset : {"silk", "cotton", "polyester", "wool"}) {
+    FiberGenerateOptions opt;
+    opt.preset = preset;
+    opt.n_theta_o = 12;
+    opt.h_nodes = 2048;
+    const TableMeta meta = fiber_table_meta(opt);
+    const FiberModel reference = fiber_model_for(opt);
+    std::vector<std::vector<double>> exact(meta.theta_o.size());
+    for (std::size_t t = 0; t < meta.theta_o.size(); ++t) exact[t] = tabulate_fiber_slice_cpu(reference, meta, t, 0);
+    for (std::size_t n : nodes) {
+      opt.h_nodes = n;
+      const FiberModel m = fiber_model_for(opt);
+      double worst = 0.0;
+      for (std::size_t t = 0; t < meta.theta_o.size(); ++t) {
+        const auto v = tabulate_fiber_slice_cpu(m, meta, t, 0);
+        const double peak = *std::max_element(exact[t].begin(), exact[t].end());
+        for (std::size_t k = 0; k < v.size(); ++k) worst = std::max(worst, std::abs(v[k] - exact[t][k]) / peak);
+      }
+      WARN(preset << ", " << n << " nodes: largest cell error " << worst << " of the slice maximum");
+      csv << preset << "," << n << ",2048," << meta.theta_o.size() << "," << worst << "\n";
+    }
+  }
+  if (const char* path = std::getenv("BSDFMIX_MEASURE_CSV")) write_text_atomic(path, csv.str());
 }

@@ -1,0 +1,68 @@
+#!/usr/bin/python3
+"""The doc tables of the input tables' own accuracy (scripts/doc_tables.py calls these):
+
+  fiber_quadrature  bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h")
+  rgl_albedo        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"): the albedo on the
+                    default grid and sampled, their difference to the converged midpoint rule,
+                    and the reciprocity
+"""
+import collections
+
+from readme_measured import pct, rows
+
+PRESETS = ("polyester", "silk", "cotton", "wool")
+FILES = ("cg_sunflower_rgb", "paper_white_rgb", "satin_rosaline_rgb")
+ANGLES = ("0", "45", "75", "85")
+
+
+def sci(x):
+    m, e = ("%.1e" % float(x)).split("e")
+    return "%se%d" % (m, int(e))
+
+
+def fiber_quadrature():
+    by = {(r["preset"], r["nodes"]): r["max_rel_error"] for r in rows("fiber_quadrature.csv")}
+    nodes = sorted({int(n) for _, n in by}, key=int)
+    out = ["| nodes | " + " | ".join(PRESETS) + " |", "|---" * (len(PRESETS) + 1) + "|"]
+    for n in nodes:
+        out.append("| %d | " % n + " | ".join(sci(by[(p, str(n))]) for p in PRESETS) + " |")
+    return out
+
+
+def _albedo():
+    a = collections.defaultdict(dict)
+    for r in rows("rgl_albedo.csv"):
+        a[(r["file"], r["quantity"])][r["theta_o_deg"]] = float(r["value"])
+    return a
+
+
+def rgl_albedo():
+    a = _albedo()
+    out = ["| file (grid / sampled) | " + " | ".join(ANGLES) + " | max up to 75 |", "|---" * (len(ANGLES) + 2) + "|"]
+    for f in FILES:
+        g, s = a[(f, "albedo_grid")], a[(f, "albedo_sampled")]
+        up75 = [d for d in g if d != "" and int(d) <= 75]
+        cells = ["%.3f / %.3f" % (g[d], s[d]) for d in ANGLES]
+        cells.append("%.3f / %.3f" % (max(g[d] for d in up75), max(s[d] for d in up75)))
+        out.append("| %s | %s |" % (f.replace("_rgb", ""), " | ".join(cells)))
+    return out
+
+
+def rgl_grid_error():
+    a = _albedo()
+    out = ["| file (grid / sampled, against 1440 x 2880 cells) | " + " | ".join(ANGLES) + " | converged albedo at 75 |",
+           "|---" * (len(ANGLES) + 2) + "|"]
+    for f in FILES:
+        g, s, c = a[(f, "albedo_grid")], a[(f, "albedo_sampled")], a[(f, "albedo_fine")]
+        cells = ["%s / %s" % (pct(g[d] / c[d] - 1, 1), pct(s[d] / c[d] - 1, 1)) for d in ANGLES]
+        out.append("| %s | %s | %.4f |" % (f.replace("_rgb", ""), " | ".join(cells), c["75"]))
+    return out
+
+
+def rgl_reciprocity():
+    a = _albedo()
+    out = ["| file | median | 90th percentile |", "|---|---|---|"]
+    for f in FILES:
+        out.append("| %s | %s | %s |" % (f.replace("_rgb", ""), pct(a[(f, "reciprocity_median")][""], 1),
+                                         pct(a[(f, "reciprocity_p90")][""], 1)))
+    return out
