@@ -34,6 +34,10 @@ The tables (NAME: CSV):
                        by scripts/converge_targets.py
   converge_light       bench/results/converge_light/*_convergence*.csv (docs/sampling.md, "Measured: the sky
                        and the sky map"), by scripts/light_targets.py
+  fiber_quadrature     bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h"), by
+                       scripts/input_tables.py
+  rgl_albedo, rgl_grid_error, rgl_reciprocity
+                       bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
 """
 import json
 import math
@@ -48,6 +52,7 @@ DOCS = ["README.md", os.path.join("bench", "README.md")] + [os.path.join("docs",
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from readme_measured import pct, rows  # noqa: E402  (the one reader and percent format of the tables)
+import input_tables  # noqa: E402
 
 
 def rgb_stand_in():
@@ -337,7 +342,9 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "em_results": em_results, "converge_refine": converge_refine,
           "theta_border": theta_border,
           "em_precision": em_precision,
-          "render_reading": render_reading}
+          "render_reading": render_reading,
+          "fiber_quadrature": input_tables.fiber_quadrature, "rgl_albedo": input_tables.rgl_albedo,
+          "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
