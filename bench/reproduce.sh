@@ -45,6 +45,7 @@ studies=(
   "failure_map:1:quick:the failure map over configs/stress/ (failure_map.csv)"
   "render_rays:1:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
   "fiber_quadrature:3:no:the fiber model's h quadrature against 2048 nodes (fiber_quadrature.csv)"
+  "fiber_generate:4:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
   "rgl_albedo:2:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
   "amplitude_objective:20:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
@@ -102,6 +103,7 @@ outputs() {
     amplitude_objective) echo "$results/amplitude_objective.csv" ;;
     fiber_quadrature) echo "$results/fiber_quadrature.csv" ;;
     rgl_albedo) echo "$results/rgl_albedo.csv" ;;
+    fiber_generate) echo "$results/fiber_generate.csv" ;;
   esac
 }
 record_all() {  # the study's files written since the marker
@@ -204,6 +206,7 @@ run_study() {
     em_precision) BSDFMIX_MEASURE_CSV=$results/em_precision.csv build/tests/em_test "[.measure]" ;;
     theta_border) BSDFMIX_MEASURE_CSV=$results/theta_border.csv build/tests/search_test "[.measure]" ;;
     fiber_quadrature) BSDFMIX_MEASURE_CSV=$results/fiber_quadrature.csv build/tests/fiber_test "[.measure]" ;;
+    fiber_generate) $py bench/fiber_generate.py ;;
     rgl_albedo) BSDFMIX_MEASURE_CSV=$results/rgl_albedo.csv build/tests/rgl_test "[.measure]" ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)
