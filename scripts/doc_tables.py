@@ -36,6 +36,7 @@ The tables (NAME: CSV):
                        and the sky map"), by scripts/light_targets.py
   fiber_quadrature     bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h"), by
                        scripts/input_tables.py
+  fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
                        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
 """
@@ -343,7 +344,8 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "theta_border": theta_border,
           "em_precision": em_precision,
           "render_reading": render_reading,
-          "fiber_quadrature": input_tables.fiber_quadrature, "rgl_albedo": input_tables.rgl_albedo,
+          "fiber_quadrature": input_tables.fiber_quadrature,
+          "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 

@@ -2,6 +2,7 @@
 """The doc tables of the input tables' own accuracy (scripts/doc_tables.py calls these):
 
   fiber_quadrature  bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h")
+  fiber_generate    bench/results/fiber_generate.csv (docs/fiber.md, the generator's time and memory)
   rgl_albedo        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"): the albedo on the
                     default grid and sampled, their difference to the converged midpoint rule,
                     and the reciprocity
@@ -65,4 +66,19 @@ def rgl_reciprocity():
     for f in FILES:
         out.append("| %s | %s | %s |" % (f.replace("_rgb", ""), pct(a[(f, "reciprocity_median")][""], 1),
                                          pct(a[(f, "reciprocity_p90")][""], 1)))
+    return out
+
+
+def fiber_generate():
+    names = {"default": "default, 180 x 90 x 180 (one phi_o by symmetry)",
+             "full_4d": "90 x 180 x 90 x 180 without symmetry, noise on"}
+    out = ["| table | file | time | peak memory |", "|---|---|---|---|"]
+    for r in rows("fiber_generate.csv"):
+        b = int(r["bytes"])
+        size = "%.1f GB" % (b / 1e9) if b >= 1e9 else "%.0f MB" % (b / 1e6)
+        t = float(r["seconds_best"])
+        out.append("| %s | %s | %s s%s | %s MB |" % (names.get(r["table"], r["table"]), size,
+                                                  "%.2f" % t if t < 10 else "%.0f" % t,
+                                                  " (best of %s)" % r["runs"] if int(r["runs"]) > 1 else "",
+                                                  r["peak_rss_mb"]))
     return out
