@@ -14,8 +14,9 @@
 # Run from the repository root after scripts/setup, whose build has the peers the em study
 # runs (BSDFMIX_BUILD_BENCH, on by default; a build-bench/ build is used when present).
 #
-# The search_before_after study compares this build with another: set BEFORE to that
-# build's bsdfmix (it is skipped otherwise).
+# The search_before_after and search_unseen studies compare this build with another: set
+# BEFORE to that build's bsdfmix (they are skipped otherwise); search_unseen also needs
+# RGL_DIR, a folder of RGL material files (*_rgb.bsdf) beyond those data/rgl/ ships.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=build/bsdfmix
@@ -30,6 +31,7 @@ studies=(
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:7:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
+  "search_unseen:6:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
   "search_compare:27:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
   "catalog:1:no:the catalog job (catalog_summary.csv)"
@@ -86,6 +88,7 @@ outputs() {
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
+    search_unseen) echo "$results/search_unseen.csv" ;;
     search_compare) echo "$results/search_compare*.csv $results/search_chi_square.csv docs/images/search_l1_vs_k.png" ;;
     fit_sweep) echo "$results/fit_sweep.csv" ;;
     catalog) echo "$results/catalog_summary.csv" ;;
@@ -144,16 +147,31 @@ run_study() {
       if [ -z "${BEFORE:-}" ]; then echo "reproduce: search_before_after skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
       [ -f out/hard.h5 ] || $py bench/hard_table.py out/hard.h5
       [ -f out/bench_rgb/wool.h5 ] || { echo "reproduce: search_before_after needs the tables of rgb_stand_in (run it first)" >&2; return 1; }
+      [ -f out/bench_rgb/iris.h5 ] || $bin import rgl -q data/rgl/cc_iris_purple_gem_rgb.bsdf --theta-o 90 --theta-i 90 --phi-i 180 -o out/bench_rgb/iris.h5
       local t="hard=out/hard.h5"
-      for m in satin paper sunflower silk cotton polyester wool; do t="$t,$m=out/bench_rgb/$m.h5"; done
+      for m in satin paper sunflower iris silk cotton polyester wool; do t="$t,$m=out/bench_rgb/$m.h5"; done
       $py bench/search_before_after.py --before "$BEFORE" --tables "$t"
       rm -f $results/search_before_after_chi_square.csv
-      for m in hard satin paper sunflower silk cotton polyester wool; do
+      for m in hard satin paper sunflower iris silk cotton polyester wool; do
         local tb=out/bench_rgb/$m.h5
         [ $m = hard ] && tb=out/hard.h5
         $py bench/mixture_chi_square.py $tb out/search_before_after/${m}_before_mixture.h5 \
           out/search_before_after/${m}_after_mixture.h5 --label $m --csv $results/search_before_after_chi_square.csv
       done ;;
+    search_unseen)
+      if [ -z "${BEFORE:-}" ] || [ -z "${RGL_DIR:-}" ]; then
+        echo "reproduce: search_unseen skipped (set BEFORE to the other build's bsdfmix and RGL_DIR to a folder of RGL .bsdf files)"; return 0
+      fi
+      local t="" f stem
+      mkdir -p out/unseen
+      for f in "$RGL_DIR"/*_rgb.bsdf; do
+        stem=$(basename "$f" .bsdf)
+        [ -f "data/rgl/$stem.bsdf" ] && continue  # shipped: search_before_after has it
+        [ -f "out/unseen/$stem.h5" ] || $bin import rgl -q "$f" --theta-o 90 --theta-i 90 --phi-i 180 -o "out/unseen/$stem.h5"
+        t="$t${t:+,}${stem%_rgb}=out/unseen/$stem.h5"
+      done
+      [ -n "$t" ] || { echo "reproduce: search_unseen: no unshipped *_rgb.bsdf in $RGL_DIR" >&2; return 1; }
+      $py bench/search_before_after.py --before "$BEFORE" --tables "$t" --work out/unseen/fits --csv $results/search_unseen.csv ;;
     search_compare)
       $py bench/search_compare.py --runs 1 --chart
       $py bench/search_compare.py --tables polyester --csv $results/search_compare_polyester_best3.csv

@@ -12,7 +12,7 @@ import collections
 from readme_measured import pct, rows
 
 PRESETS = ("polyester", "silk", "cotton", "wool")
-FILES = ("cg_sunflower_rgb", "paper_white_rgb", "satin_rosaline_rgb")
+FILES = ("cg_sunflower_rgb", "paper_white_rgb", "satin_rosaline_rgb", "cc_iris_purple_gem_rgb")
 ANGLES = ("0", "45", "75", "85")
 
 
@@ -62,10 +62,11 @@ def rgl_grid_error():
 
 def rgl_reciprocity():
     a = _albedo()
-    out = ["| file | median | 90th percentile |", "|---|---|---|"]
+    out = ["| file | median | 90th percentile | weighted by f |", "|---|---|---|---|"]
     for f in FILES:
-        out.append("| %s | %s | %s |" % (f.replace("_rgb", ""), pct(a[(f, "reciprocity_median")][""], 1),
-                                         pct(a[(f, "reciprocity_p90")][""], 1)))
+        out.append("| %s | %s | %s | %s |" % (f.replace("_rgb", ""), pct(a[(f, "reciprocity_median")][""], 1),
+                                              pct(a[(f, "reciprocity_p90")][""], 1),
+                                              pct(a[(f, "reciprocity_weighted")][""], 1)))
     return out
 
 

@@ -27,7 +27,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kFiles[] = {"cg_sunflower_rgb", "paper_white_rgb", "satin_rosaline_rgb"};
+const char* kFiles[] = {"cg_sunflower_rgb", "paper_white_rgb", "satin_rosaline_rgb", "cc_iris_purple_gem_rgb"};
 
 std::string rgl_path(const std::string& stem) {
   return std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/" + stem + ".bsdf";
@@ -147,6 +147,8 @@ TEST_CASE("sha256 of known vectors and of the data files", "[rgl]") {
         "6a9e7bdff6210969d97522cf7e3f615f3cb50ed4022b517eebda17f93b8e20e0");
   CHECK(RglBrdf(rgl_path("cg_sunflower_rgb")).sha256() ==
         "ce817d04568c39284908ce89b12989e68d6407ee48fb44f6cc644e7bfdf7c840");
+  CHECK(RglBrdf(rgl_path("cc_iris_purple_gem_rgb")).sha256() ==
+        "3e87004db0f7395365f93addb21042505e7531935645653b6fa0c7180b021500");
 }
 
 TEST_CASE("the tensor container of the three files", "[rgl]") {
@@ -309,20 +311,24 @@ TEST_CASE("satin_rosaline exceeds albedo 1 at grazing view, kept as measured", "
   CHECK(a85 < 1.3);
 }
 
-// |f(a, b) - f(b, a)| / mean on 4000 random direction pairs up to 75 degrees, sorted.
-std::vector<double> reciprocity_differences(const RglBrdf& b) {
+// |f(a, b) - f(b, a)| / mean on 4000 random direction pairs up to 75 degrees, sorted;
+// with `weighted`, the sum of |f(a, b) - f(b, a)| over the sum of the means instead (one value).
+std::vector<double> reciprocity_differences(const RglBrdf& b, bool weighted = false) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   std::vector<double> rel;
+  double diff = 0.0, mean = 0.0;
   for (int k = 0; k < 4000; ++k) {
     const double t1 = std::acos(1.0 - U(rng) * (1.0 - std::cos(deg(75)))), p1 = (2 * U(rng) - 1) * kPi;
     const double t2 = std::acos(1.0 - U(rng) * (1.0 - std::cos(deg(75)))), p2 = (2 * U(rng) - 1) * kPi;
     const double a = b.eval(t1, p1, t2, p2).y, c = b.eval(t2, p2, t1, p1).y;
     if (a + c <= 0.0) continue;
     rel.push_back(std::abs(a - c) / (0.5 * (a + c)));
+    diff += std::abs(a - c);
+    mean += 0.5 * (a + c);
   }
   std::sort(rel.begin(), rel.end());
-  return rel;
+  return weighted ? std::vector<double>{diff / mean} : rel;
 }
 
 TEST_CASE("reciprocity within measurement tolerance", "[rgl]") {
@@ -331,8 +337,19 @@ TEST_CASE("reciprocity within measurement tolerance", "[rgl]") {
   // they agree to measurement accuracy only (docs/rgl.md gives the measured median and
   // 90th percentile). Bounds: 5% and 15%. Leaving the light cosine in f (Mitsuba's eval)
   // would make the median |cos a - cos b| / mean, about 40% on these pairs.
+  // cc_iris_purple_gem's base is near black (the median pair's f about 1e-3 of its peak's
+  // 10), where the measurement's noise is of the order of the value: its pairs differ by a
+  // median 30%, and it is checked by the differences weighted by f instead (measured 15%;
+  // the three others 2% to 10%; bound 25%).
   for (const char* stem : kFiles) {
-    const auto rel = reciprocity_differences(RglBrdf(rgl_path(stem)));
+    const RglBrdf b(rgl_path(stem));
+    if (std::string(stem) == "cc_iris_purple_gem_rgb") {
+      const double weighted = reciprocity_differences(b, true)[0];
+      INFO(stem << " reciprocity: weighted relative difference " << weighted);
+      CHECK(weighted < 0.25);
+      continue;
+    }
+    const auto rel = reciprocity_differences(b);
     const double median = rel[rel.size() / 2], p90 = rel[rel.size() * 9 / 10];
     INFO(stem << " reciprocity: median relative difference " << median << ", 90th percentile " << p90 << " over "
               << rel.size() << " pairs");
@@ -538,10 +555,10 @@ TEST_CASE("the CLI imports a file and fails with one line on a bad one", "[rgl]"
 // A measurement (hidden: run it by its tag): the three files' albedo at every view degree
 // from 0 to 75 and at 85, on the default grid (90 x 180 cells) and by importance sampling
 // with the warps (64 x 64), and at 0, 45, 75 and 85 degrees by a converged midpoint rule
-// (1440 x 2880 cells); the reciprocity's median and 90th percentile. With
+// (1440 x 2880 cells); the reciprocity's median, 90th percentile and f-weighted mean. With
 // BSDFMIX_MEASURE_CSV set it writes the rows there (bench/reproduce.sh rgl_albedo;
 // docs/rgl.md, "Measurements").
-TEST_CASE("measure: albedo and reciprocity of the three files", "[.measure]") {
+TEST_CASE("measure: albedo and reciprocity of the RGL files", "[.measure]") {
   std::ostringstream csv;
   csv << "file,quantity,theta_o_deg,value\n";
   csv.precision(6);
@@ -562,6 +579,7 @@ TEST_CASE("measure: albedo and reciprocity of the three files", "[.measure]") {
     const auto rel = reciprocity_differences(b);
     csv << stem << ",reciprocity_median,," << rel[rel.size() / 2] << "\n";
     csv << stem << ",reciprocity_p90,," << rel[rel.size() * 9 / 10] << "\n";
+    csv << stem << ",reciprocity_weighted,," << reciprocity_differences(b, true)[0] << "\n";
   }
   if (const char* path = std::getenv("BSDFMIX_MEASURE_CSV")) write_text_atomic(path, csv.str());
 }

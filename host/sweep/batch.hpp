@@ -57,6 +57,10 @@ struct Batch {
   // one, the first failure seen, and its rows of the search CSV in the order searched.
   std::vector<int> chosen, reduced_from;
   std::vector<Fitted> best, below, above;
+  // With `search: smem`, a walk that stalled with a poor best fit (search_smem.cpp): the
+  // K it is fitted at past its last one, from k-means++ restarts (0: none), and that fit.
+  std::vector<int> beyond_k;
+  std::vector<Fitted> beyond;
   std::vector<std::string> failure;
   std::vector<std::vector<SearchRow>> search_rows;
 
@@ -76,7 +80,7 @@ struct Batch {
   // The chosen K of every slice at full resolution, with final_restarts and final_iterations.
   void final_fits();
   // The L1 refinement of every kept fit and, with `with_neighbours`, of every fit below
-  // and above it.
+  // and above it and beyond a stalled walk.
   void refine(bool with_neighbours);
   // A slice with fewer non-zero cells than K is refitted with one component per cell.
   void reduce_k();

@@ -125,9 +125,10 @@ void Batch::final_fits() {
 }
 
 // The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `with_neighbours`,
-// of the candidate Ks below and above it (final_smem compares the three after). A refined mixture
-// replaces its start only when its relative L1 error (sweep/fit_error.cpp, the exact
-// periodic density) is lower; its log-likelihood is recomputed.
+// of the candidate Ks below and above it and beyond a stalled walk (final_smem compares them
+// after). A refined mixture replaces its start only when its relative L1 error
+// (sweep/fit_error.cpp, the exact periodic density) is lower; its log-likelihood is
+// recomputed.
 void Batch::refine(bool with_neighbours) {
   if (fit.refine != "l1") return;
   std::vector<L1Query> queries;
@@ -137,7 +138,7 @@ void Batch::refine(bool with_neighbours) {
       queries.push_back({s, best[s].gmm});
       owners.push_back(&best[s]);
     }
-    for (std::vector<Fitted>* side : {&below, &above})
+    for (std::vector<Fitted>* side : {&below, &above, &beyond})
       if (with_neighbours && s < side->size() && (*side)[s].ok) {
         queries.push_back({s, (*side)[s].gmm});
         owners.push_back(&(*side)[s]);
@@ -239,6 +240,8 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
   b.best.assign(n, Fitted{});
   b.below.assign(n, Fitted{});
   b.above.assign(n, Fitted{});
+  b.beyond_k.assign(n, 0);
+  b.beyond.assign(n, Fitted{});
   b.failure.assign(n, std::string());
   b.search_rows.assign(n, {});
 }

@@ -15,6 +15,9 @@ namespace {
 
 // Candidates a slice walks past its best score before it stops (a heuristic).
 constexpr int kWalkPatience = 2;
+// A stalled walk whose best fit still misplaces this share of the slice gets a fit past
+// its last K (final_smem); below it, such fits were measured to lose to the walk's.
+constexpr double kRescueL1 = 0.10;
 
 std::size_t host_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
 
@@ -55,6 +58,7 @@ void search_smem(Batch& b) {
     Gmm best_gmm;        // the fit of the best score so far
     int since_best = 0;  // candidates walked since the best score last improved
     int tried_well = 0;  // of those, the ones started twice from the best fit
+    bool gave_up = false;  // stopped by the patience with larger Ks left
   };
   std::vector<Walk> walk(n);
   for (std::size_t s = 0; s < n; ++s) walk[s].active = !b.zero(s);
@@ -122,7 +126,10 @@ void search_smem(Batch& b) {
         ++wk.since_best;
         wk.tried_well += starts[i] == 2;
       }
-      if (!fit.error_target && wk.since_best >= kWalkPatience && wk.tried_well > 0) wk.active = false;
+      if (!fit.error_target && wk.since_best >= kWalkPatience && wk.tried_well > 0) {
+        wk.active = false;
+        wk.gave_up = ki + 1 < ks.size();
+      }
       for (int r = 0; r < starts[i]; ++r) b.search_rows[s].push_back(b.search_row(s, k, r, fitted[first[i] + std::size_t(r)]));
       if (fit.error_target ? f.ok && f.l1 <= *fit.error_target
                            : ki + 1 < ks.size() && wk.best_score <= fit.k_penalty * ks[ki + 1])
@@ -142,6 +149,17 @@ void search_smem(Batch& b) {
     b.best[s] = wk.per_k[pick];
     if (pick > 0 && wk.per_k[pick - 1].ok) b.below[s] = wk.per_k[pick - 1];
     if (pick + 1 < wk.per_k.size() && wk.per_k[pick + 1].ok) b.above[s] = wk.per_k[pick + 1];
+    // Stalled: the patience ended a walk in which a K past the best one had a larger L1
+    // error (EM's fits getting worse with K: a local optimum the grown starts could not
+    // leave, not a plateau of the score). When its best fit is still poor, its final fits
+    // weigh one more K, two steps past the last walked, fitted from scratch.
+    if (wk.gave_up && wk.cands[pick].ok && wk.cands[pick].l1_rel >= kRescueL1) {
+      bool worse = false;
+      for (std::size_t i = pick + 1; i < wk.cands.size(); ++i)
+        worse = worse || (wk.cands[i].ok && wk.cands[i].l1_rel > wk.cands[pick].l1_rel);
+      const auto last = std::find(ks.begin(), ks.end(), wk.cands.back().k);
+      if (worse && last != ks.end() && last + 1 != ks.end()) b.beyond_k[s] = ks.end() - last > 2 ? last[2] : last[1];
+    }
   }
 }
 
@@ -151,7 +169,8 @@ void search_smem(Batch& b) {
 // long, from their search fits, refined like it, and chosen instead when the score is
 // now the better one (EM separates overlapping lobes slowly: a search fit of the true K
 // can stop short of it; and the search compares EM's fits, whose L1 error the
-// refinement can cut by more at the K above than the penalty of its components).
+// refinement can cut by more at the K above than the penalty of its components); and a
+// walk that stalled with a poor best fit is fitted past its last K as well.
 void final_smem(Batch& b) {
   const FitSection& fit = b.fit;
   const std::size_t n = b.size();
@@ -197,6 +216,23 @@ void final_smem(Batch& b) {
       }
     }
   }
+  // Beyond a stalled walk: the K past it from twice the final restarts of k-means++, each
+  // followed by split-and-merge rounds (the few slices this takes are the poorest).
+  std::vector<EmTask> rescue;
+  for (std::size_t s = 0; s < n; ++s)
+    for (int r = 0; b.beyond_k[s] > 0 && !b.zero(s) && r < 2 * fit.final_restarts; ++r)
+      rescue.push_back(make_task(s, b.beyond_k[s], fit.final_iterations, fit.tolerance,
+                                 task_seed(fit.seed, b.work[s].ref.index, b.beyond_k[s], -1 - r)));
+  if (!rescue.empty()) {
+    const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, rescue, SmemSettings{});
+    for (std::size_t i = 0; i < res.size(); ++i) {
+      const std::size_t s = rescue[i].slice;
+      const Fitted f = evaluate(res[i], b.work[s].full);
+      if (f.ok && (!b.beyond[s].ok || f.l1 < b.beyond[s].l1)) b.beyond[s] = f;
+      if (i + 1 == res.size() || rescue[i + 1].slice != s)
+        b.search_rows[s].push_back(b.search_row(s, b.beyond_k[s], 2, b.beyond[s]));
+    }
+  }
   if (!first.empty()) {  // pinned K
     const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, first, SmemSettings{});
     for (std::size_t i = 0; i < res.size(); ++i) b.offer(first[i].slice, evaluate(res[i], b.work[first[i].slice].full));
@@ -216,9 +252,9 @@ void final_smem(Batch& b) {
   b.refine(true);
   for (std::size_t s = 0; s < n; ++s) {
     if (b.best[s].ok) {
-      std::vector<Candidate> three;
+      std::vector<Candidate> three;  // and the fit beyond a stalled walk
       std::vector<const Fitted*> fits;
-      for (const Fitted* f : {&b.below[s], &b.best[s], &b.above[s]})
+      for (const Fitted* f : {&b.below[s], &b.best[s], &b.above[s], &b.beyond[s]})
         if (f->ok) {
           three.push_back({f->gmm.k(), f->l1, true});
           fits.push_back(f);
