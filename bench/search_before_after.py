@@ -3,7 +3,8 @@
 "A walk that does not give up"): for each table, each build fits it with the default
 settings and the script reads the fit report: slices, mean K, median, p90 and max
 relative L1 error, and the wall time. Rows alternate between the builds table by table,
-so that the machine's load falls on both alike.
+so that the machine's load falls on both alike; an untimed one-slice fit by each build
+first compiles their kernels.
 
     /usr/bin/python3 bench/search_before_after.py --before B/bsdfmix --after build/bsdfmix \\
         --tables satin=out/bench_rgb/satin.h5,... [--csv bench/results/search_before_after.csv]
@@ -55,6 +56,17 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     out = []
     cpu, cores = cpu_model(), os.cpu_count()
+    # Warm-up, untimed: each build fits one slice of the first table first, so that the
+    # OpenCL compiler's first build of its kernels (cached after) is in neither's time.
+    first = a.tables.split(",")[0].split("=", 1)[1]
+    for label, binary in (("before", a.before), ("after", a.after)):
+        cfg = os.path.join(a.work, f"warmup_{label}.yaml")
+        with open(cfg, "w") as f:
+            f.write(f"table: {first}\nfit:\n  output: {cfg[:-5]}_mixture.h5\n  report: {cfg[:-5]}_fit.csv\n"
+                    f"  search_report: {cfg[:-5]}_search.csv\n  k_max: 4\n  theta_o: [0.5]\n")
+        if os.path.exists(cfg[:-5] + "_mixture.h5"):
+            os.remove(cfg[:-5] + "_mixture.h5")
+        subprocess.run([binary, "fit", "-q", cfg], check=True, stdout=subprocess.DEVNULL)
     for item in a.tables.split(","):
         name, path = item.split("=", 1)
         for label, binary in (("before", a.before), ("after", a.after)):

@@ -99,7 +99,7 @@ def stand_in_smallest():
 
 def search_before_after():
     label = {"hard": "hard (bench/hard_table.py)", "satin": "satin_rosaline", "paper": "paper_white",
-             "sunflower": "cg_sunflower"}
+             "sunflower": "cg_sunflower", "iris": "cc_iris_purple_gem"}
     out = ["| table | mean K, before / after | L1 median | L1 p90 | L1 max | fit time, after / before |",
            "|---|---|---|---|---|---|"]
     by = {}

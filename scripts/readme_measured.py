@@ -124,7 +124,7 @@ def search():
 def before_after():
     by = {(r["table"], r["build"]): r for r in rows("search_before_after.csv")}
     chi = {r["label"]: r for r in rows("search_before_after_chi_square.csv")}
-    tables = [t for t in ("hard", "satin", "paper", "sunflower", "silk", "cotton", "polyester", "wool")
+    tables = [t for t in ("hard", "satin", "paper", "sunflower", "iris", "silk", "cotton", "polyester", "wool")
               if (t, "before") in by and (t, "after") in by]
     f = lambda t, b, c: float(by[(t, b)][c])
     pair = lambda t, c: "%s to %s" % (pct(f(t, "before", c), 1), pct(f(t, "after", c), 1))
@@ -137,17 +137,21 @@ def before_after():
     most = max(dk, key=dk.get)
     return ("| the walk over K on a sharp peak 30x its base with fringes (`bench/hard_table.py`), the RGL materials and "
             "the fiber presets, before and after it restarts stalled Ks twice (the last fit grown, the best fit seeded "
-            "at the residual) and weighs the K above | hard table: p90 L1 %s, max %s; satin: p90 %s, max %s; paper max "
-            "%s, sunflower %s (after: the code as it stands, the channels moving the Gaussians on the coloured tables "
-            "included); %s, %s, %d medians or p90s up by at most %.2f points; importance sampling (mean chi-square "
+            "at the residual), weighs the K above, and fits a stalled walk with a poor best fit past its last K | hard "
+            "table: p90 L1 %s, max %s; satin: p90 %s, max %s; paper max %s, sunflower %s; the sharp colour-shifting "
+            "film cc_iris_purple_gem: median %s, p90 %s, max %s (after: the code as it stands, the channels moving "
+            "the Gaussians on the coloured tables included); %s, %s, %d medians or p90s up by at most %.2f points; "
+            "importance sampling (mean chi-square "
             "divergence) %s, %s's worst slice %.2fx; %s the fit time and up to %.2f more components on the mean on the "
             "measured and fiber tables (%s) | "
             "`BEFORE=OLD/build/bsdfmix bench/reproduce.sh search_before_after` "
             "([CSV](bench/results/search_before_after.csv), [chi-square](bench/results/search_before_after_chi_square.csv), "
             "docs/fitting.md \"A walk that does not give up\") |" % (
                 pair("hard", "l1_p90"), pair("hard", "l1_max"), pair("satin", "l1_p90"), pair("satin", "l1_max"),
-                pair("paper", "l1_max"), pair("sunflower", "l1_max"),
-                "no slice above 10%" if all(f(t, "after", "l1_max") <= 0.10 for t in tables) else "a slice above 10%",
+                pair("paper", "l1_max"), pair("sunflower", "l1_max"), pair("iris", "l1_median"), pair("iris", "l1_p90"),
+                pair("iris", "l1_max"),
+                "no slice above 10%" if all(f(t, "after", "l1_max") <= 0.10 for t in tables) else
+                "a slice above 10% on %s only" % ", ".join(t for t in tables if f(t, "after", "l1_max") > 0.10),
                 "every max lower" if all(f(t, "after", "l1_max") <= f(t, "before", "l1_max") for t in tables)
                 else "not every max lower", len(up), 100 * up_by,
                 "the same or better on every table" if chi_ok else "worse on some tables", worst,
