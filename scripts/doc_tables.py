@@ -16,6 +16,7 @@ The tables (NAME: CSV):
   scale, scale_traffic bench/results/scale_amd-epyc-2c.csv (docs/scale.md, "Scaling measured")
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
+  search_unseen        bench/results/search_unseen.csv (docs/fitting.md, the same section)
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
   render_reading       the same renders' reading under that table, by scripts/render_targets.py
@@ -97,13 +98,13 @@ def stand_in_smallest():
     return out
 
 
-def search_before_after():
+def search_before_after(name="search_before_after.csv"):
     label = {"hard": "hard (bench/hard_table.py)", "satin": "satin_rosaline", "paper": "paper_white",
              "sunflower": "cg_sunflower", "iris": "cc_iris_purple_gem"}
     out = ["| table | mean K, before / after | L1 median | L1 p90 | L1 max | fit time, after / before |",
            "|---|---|---|---|---|---|"]
     by = {}
-    for r in rows("search_before_after.csv"):
+    for r in rows(name):
         by.setdefault(r["table"], {})[r["build"]] = r
     for t, pair in by.items():
         b, a = pair["before"], pair["after"]
@@ -344,6 +345,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": cat
           "theta_border": theta_border,
           "em_precision": em_precision,
           "render_reading": render_reading,
+          "search_unseen": lambda: search_before_after("search_unseen.csv"),
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity}

@@ -124,6 +124,7 @@ def search():
 def before_after():
     by = {(r["table"], r["build"]): r for r in rows("search_before_after.csv")}
     chi = {r["label"]: r for r in rows("search_before_after_chi_square.csv")}
+    name = {"iris": "cc_iris_purple_gem"}
     tables = [t for t in ("hard", "satin", "paper", "sunflower", "iris", "silk", "cotton", "polyester", "wool")
               if (t, "before") in by and (t, "after") in by]
     f = lambda t, b, c: float(by[(t, b)][c])
@@ -151,11 +152,11 @@ def before_after():
                 pair("paper", "l1_max"), pair("sunflower", "l1_max"), pair("iris", "l1_median"), pair("iris", "l1_p90"),
                 pair("iris", "l1_max"),
                 "no slice above 10%" if all(f(t, "after", "l1_max") <= 0.10 for t in tables) else
-                "a slice above 10% on %s only" % ", ".join(t for t in tables if f(t, "after", "l1_max") > 0.10),
+                "a slice above 10%% on %s only" % ", ".join(name.get(t, t) for t in tables if f(t, "after", "l1_max") > 0.10),
                 "every max lower" if all(f(t, "after", "l1_max") <= f(t, "before", "l1_max") for t in tables)
                 else "not every max lower", len(up), 100 * up_by,
                 "the same or better on every table" if chi_ok else "worse on some tables", worst,
-                float(chi[worst]["ratio_max"]), span(time_r), max(dk.values()), most))
+                float(chi[worst]["ratio_max"]), span(time_r), max(dk.values()), name.get(most, most)))
 
 
 def stand_in():
