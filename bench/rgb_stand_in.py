@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The chromatic stand-in on the three RGL materials of data/rgl, against its targets
+"""The chromatic stand-in on the RGL materials of data/rgl, against its targets
 (docs/fitting.md, "Colour and energy").
 
 Imports each material at the default grid (90 theta_o, 90 x 180 cells), fits it with the
@@ -25,7 +25,7 @@ default settings, and reads the fit report and the files back:
   amplitudes are its least-L1 fit): it is counted, not compared.
 
     bench/rgb_stand_in.py [--bsdfmix build/bsdfmix] [--work out/bench_rgb]
-                          [--tables satin,paper,sunflower] [--csv bench/results/rgb_stand_in.csv]
+                          [--tables satin,paper,sunflower,iris] [--csv bench/results/rgb_stand_in.csv]
                           [--set KEY=VALUE ...]   (fit settings, e.g. --set refine_rgb=0)
 """
 import argparse
@@ -46,6 +46,7 @@ RGL = {
     "satin": "satin_rosaline_rgb.bsdf",
     "paper": "paper_white_rgb.bsdf",
     "sunflower": "cg_sunflower_rgb.bsdf",
+    "iris": "cc_iris_purple_gem_rgb.bsdf",
 }
 # The fiber presets, generated at --fiber-theta-o rows (90 x 180 cells) in their colours
 # (docs/fiber.md, "Colour"). The fiber domain's integrand weights have no cos theta_i.
@@ -224,7 +225,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bsdfmix", default=os.path.join(ROOT, "build", "bsdfmix"))
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "bench_rgb"))
-    ap.add_argument("--tables", default="satin,paper,sunflower," + ",".join(FIBERS))
+    ap.add_argument("--tables", default="satin,paper,sunflower,iris," + ",".join(FIBERS))
     ap.add_argument("--fiber-theta-o", type=int, default=45, help="theta_o rows of the generated fiber tables")
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "rgb_stand_in.csv"))
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",

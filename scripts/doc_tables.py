@@ -58,7 +58,8 @@ import input_tables  # noqa: E402
 
 
 def rgb_stand_in():
-    names = {"satin": "satin_rosaline", "paper": "paper_white", "sunflower": "cg_sunflower", "silk": "silk (fiber)",
+    names = {"satin": "satin_rosaline", "paper": "paper_white", "sunflower": "cg_sunflower",
+             "iris": "cc_iris_purple_gem", "silk": "silk (fiber)",
              "cotton": "cotton (fiber)", "polyester": "polyester (fiber, dyed red)", "wool": "wool (fiber)"}
     out = ["| table | luminance L1 median | RGB error median | RGB error less the negative part, median | ratio "
            "(target <= 1.2) | largest energy error, Y / R / G / B (target 0.5%) | largest difference, reported - "

@@ -162,13 +162,15 @@ def before_after():
 def stand_in():
     by = {r["table"]: r for r in rows("rgb_stand_in.csv")}
     alone = {r["table"]: r for r in rows("rgb_refine.csv") if r["variant"] == "alone"}
-    rgl, fibers = ("satin", "paper", "sunflower"), ("silk", "cotton", "polyester", "wool")
+    rgl = tuple(t for t in ("satin", "paper", "sunflower", "iris") if t in by)
+    fibers = ("silk", "cotton", "polyester", "wool")
+    label = {"iris": "cc_iris_purple_gem"}
     energy = max(float(by[t]["energy_max_" + c]) for t in by for c in "yrgb")
     diff = max(max(float(by[t]["l1_diff_points"]), float(by[t]["rgb_diff_points"])) for t in by)
     neg = [t for t in rgl if by[t]["rgb_median"] != by[t]["rgb_less_negative_median"]]
     met = sum(float(r["ratio"]) <= 1.2 for r in by.values())
     grey = [t for t in fibers if t != "polyester"]
-    return ("| the chromatic stand-in on the RGL materials satin, paper, sunflower and the fiber presets silk, cotton, "
+    return ("| the chromatic stand-in on the RGL materials %s and the fiber presets silk, cotton, "
             "polyester (dyed red), wool (per-component R, G, B amplitudes on the luminance's Gaussians) | the stand-in's "
             "integral over the domain equals the table's in the luminance and every channel (to %s); RGB error median "
             "%s on the RGL materials%s, %s the luminance L1 median (with the luminance alone in the L1 refinement %s: "
@@ -176,11 +178,11 @@ def stand_in():
             "met by %d of %d); the report's errors equal a recomputation from the files through the header (to %s "
             "points) | `/usr/bin/python3 bench/rgb_stand_in.py`, `bench/rgb_refine.py` "
             "([CSV](bench/results/rgb_stand_in.csv), docs/fitting.md \"Colour and energy\") |" % (
-                sci(energy), ", ".join(pct(by[t]["rgb_median"]) for t in rgl),
+                ", ".join(label.get(t, t) for t in rgl), sci(energy), ", ".join(pct(by[t]["rgb_median"]) for t in rgl),
                 "".join(" (%s outside the cells where %s's measured channels are below zero)" % (
-                    pct(by[t]["rgb_less_negative_median"]), t) for t in neg),
+                    pct(by[t]["rgb_less_negative_median"]), label.get(t, t)) for t in neg),
                 ", ".join("%.2fx" % float(by[t]["ratio"]) for t in rgl),
-                ", ".join("%.2fx" % float(alone[t]["ratio"]) for t in rgl if t in alone),
+                ", ".join("%s %.2fx" % (label.get(t, t), float(alone[t]["ratio"])) for t in rgl if t in alone),
                 span([float(by[t]["ratio"]) for t in grey]), ", ".join(grey), "%.2f" % float(by["polyester"]["ratio"]),
                 met, len(by), sci(diff)))
 
