@@ -73,7 +73,8 @@ def rgb_stand_in():
         energy = max(float(r["energy_max_" + c]) for c in "yrgb")
         e = "%.0e" % energy
         if int(r["noise_channels"]) > 0:
-            e += " (Y, R, G); B is noise in all %s slices, not compared" % r["slices"]
+            e += " (channels that are not noise; %s of %s (slice, channel) pairs are, not compared)" % (
+                r["noise_channels"], 3 * int(r["slices"]))
         out.append("| %s | %s | %s | %s | %s | %s | %.0e points |" % (
             label, pct(r["l1_median"]), pct(r["rgb_median"]), pct(r["rgb_less_negative_median"]),
             ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio, e, float(r["l1_diff_points"])))
