@@ -7,7 +7,7 @@
 #
 #   bench/reproduce.sh [--quick] [--list] [--help] [STUDY ...]
 #
-# With no STUDY, every study in order. --quick runs the short studies only (about 20
+# With no STUDY, every study in order. --quick runs the short studies only (about 15
 # minutes on 2 cores). The full run is about 4 hours on 2 cores (PoCL; the sum of each
 # study's last run, on the machine provenance.csv names for its files, not timed end to
 # end); the longest studies are render (about 90 minutes), search_compare and rgb_refine.
@@ -26,13 +26,13 @@ provenance=$results/provenance.csv
 
 # name : minutes on 2 cores : quick? : what
 studies=(
-  "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
+  "rgb_stand_in:4:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
-  "render_rgl:7:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
-  "search_before_after:10:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
-  "search_unseen:6:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
-  "search_compare:27:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
+  "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
+  "search_before_after:6:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
+  "search_unseen:3:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
+  "search_compare:26:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
   "catalog:1:no:the catalog job (catalog_summary.csv)"
   "scale:15:no:the MPI farm (scale_<machine>.csv)"
@@ -46,10 +46,10 @@ studies=(
   "theta_border:1:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
   "failure_map:1:quick:the failure map over configs/stress/ (failure_map.csv)"
   "render_rays:1:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
-  "fiber_quadrature:3:no:the fiber model's h quadrature against 2048 nodes (fiber_quadrature.csv)"
-  "fiber_generate:4:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
-  "rgl_albedo:2:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
-  "amplitude_objective:20:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
+  "fiber_quadrature:1:no:the fiber model's h quadrature against 2048 nodes (fiber_quadrature.csv)"
+  "fiber_generate:1:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
+  "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
+  "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
 
 usage() {
