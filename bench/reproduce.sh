@@ -124,7 +124,7 @@ run_study() {
     rgb_refine) $py bench/rgb_refine.py ;;
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
     render_rgl)
-      for m in satin paper sunflower; do
+      for m in satin paper sunflower iris; do
         rm -f out/render_$m/${m}_mixture.h5
         $bin render configs/render/${m}_skymap.yaml
         mkdir -p $results/render/${m}_skymap

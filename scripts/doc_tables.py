@@ -121,7 +121,8 @@ def render_measured():
     out = ["| table | stand-in bytes | difference, pixels / 4 x 4 blocks | the table image's own noise (4 x 4) | image "
            "mean, luminance / R / G / B |", "|---|---|---|---|---|"]
     for folder, label in (("satin_skymap", "satin_rosaline"), ("paper_skymap", "paper_white"),
-                          ("sunflower_skymap", "cg_sunflower"), ("polyester_sky_small", "polyester cloth (sky)"),
+                          ("sunflower_skymap", "cg_sunflower"), ("iris_skymap", "cc_iris_purple_gem"),
+                          ("polyester_sky_small", "polyester cloth (sky)"),
                           ("satin_skymap_target2", "satin_rosaline, error target 2%"),
                           ("polyester_sky_small_target2", "polyester cloth (sky), error target 2%")):
         with open(os.path.join(RESULTS, "render", folder, "render.json")) as f:
