@@ -5,6 +5,8 @@
 // labels: fit
 #include <catch2/catch.hpp>
 
+#include "csv_rows.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -13,7 +15,6 @@
 #include <numeric>
 #include <random>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "config/config.hpp"
@@ -552,15 +553,11 @@ TEST_CASE("a stalled walk with a poor best fit is fitted past its last K", "[sea
   run_sweep(table, f, "");
   const MixtureFile m = read_mixture_file(f.output);
   REQUIRE(m.slices() == 1);
-  std::ifstream in(f.search_report);
-  std::string line;
-  std::getline(in, line);
+  const auto rows = test::csv_rows(f.search_report);
   int walked = 0, beyond = 0;
   double best_walk = 1e300;
-  while (std::getline(in, line)) {  // slice,k,restart,loglik,l1_rel,score,chosen
-    std::vector<std::string> c;
-    std::stringstream ls(line);
-    for (std::string x; std::getline(ls, x, ',');) c.push_back(x);
+  for (std::size_t i = 1; i < rows.size(); ++i) {  // slice,k,restart,loglik,l1_rel,score,chosen
+    const auto& c = rows[i];
     REQUIRE(c.size() >= 6);
     if (c[2] == "2") beyond = std::stoi(c[1]);
     else walked = std::max(walked, std::stoi(c[1])), best_walk = std::min(best_walk, std::stod(c[5]));

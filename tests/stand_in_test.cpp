@@ -7,12 +7,12 @@
 // labels: fit
 #include <catch2/catch.hpp>
 
+#include "csv_rows.hpp"
+
 #include <hdf5.h>
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
@@ -29,6 +29,7 @@
 #include "tables/rgl_import.hpp"
 
 using namespace bsdfmix;
+using bsdfmix::test::csv_rows;
 namespace fs = std::filesystem;
 
 namespace {
@@ -92,19 +93,6 @@ FitSection settings(const std::string& stem) {
   f.final_iterations = 150;
   f.search_pool = 1;
   return f;
-}
-
-std::vector<std::vector<std::string>> csv_rows(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<std::string>> rows;
-  for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-    if (!line.empty() && line.back() == ',') cells.emplace_back();
-    rows.push_back(cells);
-  }
-  return rows;
 }
 
 // The table's integrand weights of slice t: luminance and R, G, B (channel-major).
