@@ -16,18 +16,13 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+from rgb_stand_in import cpu_model  # noqa: E402
+
 BIN = os.path.join(ROOT, "build", "bsdfmix")
 CASES = [("default", "silk", ["--theta-o", "180", "--theta-i", "90", "--phi-i", "180"]),
          ("full_4d", "wool", ["--no-symmetry", "--theta-o", "90", "--phi-o", "180", "--theta-i", "90",
                               "--phi-i", "180", "--noise", "0.05"])]
-
-
-def cpu_model():
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        return next(l.split(":", 1)[1].strip() for l in out.splitlines() if l.startswith("Model name"))
-    except (OSError, StopIteration):
-        return "unknown"
 
 
 def run_once(args, path):
@@ -50,7 +45,7 @@ def main():
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "fiber_generate.csv"))
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
-    rows = []
+    rows, cpu = [], cpu_model()
     for name, preset, args in CASES:
         path = os.path.join(a.work, name + ".h5")
         runs = a.runs if name == "default" else 1
@@ -65,7 +60,7 @@ def main():
         os.remove(path)
         print("%-8s %s: %.1f MB in %.2f s (best of %d), peak %.0f MB" % (name, preset, size / 1e6, best, runs, peak))
         rows.append({"table": name, "preset": preset, "args": " ".join(args), "bytes": size, "seconds_best": "%.3f" % best,
-                     "runs": runs, "peak_rss_mb": "%.0f" % peak, "cpu_model": cpu_model(), "logical_cpus": os.cpu_count()})
+                     "runs": runs, "peak_rss_mb": "%.0f" % peak, "cpu_model": cpu, "logical_cpus": os.cpu_count()})
     shutil.rmtree(a.work, ignore_errors=True)
     tmp = a.csv + ".tmp"
     with open(tmp, "w", newline="") as f:

@@ -27,11 +27,12 @@ def cpu_model():
     return out.split(":", 1)[-1].strip().replace(",", ";") or "unknown"
 
 
-def fit(binary, table, stem):
+def fit(binary, table, stem, extra=""):
+    """Fits `table` with the default settings (and the fit: lines `extra`) into stem_*."""
     cfg = stem + ".yaml"
     with open(cfg, "w") as f:
         f.write(f"table: {table}\nfit:\n  output: {stem}_mixture.h5\n  report: {stem}_fit.csv\n"
-                f"  search_report: {stem}_search.csv\n")
+                f"  search_report: {stem}_search.csv\n{extra}")
     for suffix in ("_mixture.h5",):
         if os.path.exists(stem + suffix):
             os.remove(stem + suffix)
@@ -60,13 +61,7 @@ def main():
     # OpenCL compiler's first build of its kernels (cached after) is in neither's time.
     first = a.tables.split(",")[0].split("=", 1)[1]
     for label, binary in (("before", a.before), ("after", a.after)):
-        cfg = os.path.join(a.work, f"warmup_{label}.yaml")
-        with open(cfg, "w") as f:
-            f.write(f"table: {first}\nfit:\n  output: {cfg[:-5]}_mixture.h5\n  report: {cfg[:-5]}_fit.csv\n"
-                    f"  search_report: {cfg[:-5]}_search.csv\n  k_max: 4\n  theta_o: [0.5]\n")
-        if os.path.exists(cfg[:-5] + "_mixture.h5"):
-            os.remove(cfg[:-5] + "_mixture.h5")
-        subprocess.run([binary, "fit", "-q", cfg], check=True, stdout=subprocess.DEVNULL)
+        fit(binary, first, os.path.join(a.work, f"warmup_{label}"), "  k_max: 4\n  theta_o: [0.5]\n")
     for item in a.tables.split(","):
         name, path = item.split("=", 1)
         for label, binary in (("before", a.before), ("after", a.after)):
