@@ -154,11 +154,12 @@ void search_smem(Batch& b) {
     // leave, not a plateau of the score). When its best fit is still poor, its final fits
     // weigh one more K, two steps past the last walked, fitted from scratch.
     if (wk.gave_up && wk.cands[pick].ok && wk.cands[pick].l1_rel >= kRescueL1) {
-      bool worse = false;
-      for (std::size_t i = pick + 1; i < wk.cands.size(); ++i)
-        worse = worse || (wk.cands[i].ok && wk.cands[i].l1_rel > wk.cands[pick].l1_rel);
+      const double l1 = wk.cands[pick].l1_rel;
+      const bool worse = std::any_of(wk.cands.begin() + long(pick) + 1, wk.cands.end(),
+                                     [l1](const Candidate& c) { return c.ok && c.l1_rel > l1; });
+      // gave_up: the last K walked is not the last of ks
       const auto last = std::find(ks.begin(), ks.end(), wk.cands.back().k);
-      if (worse && last != ks.end() && last + 1 != ks.end()) b.beyond_k[s] = ks.end() - last > 2 ? last[2] : last[1];
+      if (worse) b.beyond_k[s] = ks.end() - last > 2 ? last[2] : last[1];
     }
   }
 }
@@ -229,9 +230,9 @@ void final_smem(Batch& b) {
       const std::size_t s = rescue[i].slice;
       const Fitted f = evaluate(res[i], b.work[s].full);
       if (f.ok && (!b.beyond[s].ok || f.l1 < b.beyond[s].l1)) b.beyond[s] = f;
-      if (i + 1 == res.size() || rescue[i + 1].slice != s)
-        b.search_rows[s].push_back(b.search_row(s, b.beyond_k[s], 2, b.beyond[s]));
     }
+    for (std::size_t s = 0; s < n; ++s)  // one search row per slice: the best of its restarts
+      if (b.beyond_k[s] > 0 && !b.zero(s)) b.search_rows[s].push_back(b.search_row(s, b.beyond_k[s], 2, b.beyond[s]));
   }
   if (!first.empty()) {  // pinned K
     const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, first, SmemSettings{});
