@@ -8,6 +8,7 @@
                     and the reciprocity
 """
 import collections
+import functools
 
 from readme_measured import pct, rows
 
@@ -30,7 +31,9 @@ def fiber_quadrature():
     return out
 
 
+@functools.lru_cache(maxsize=None)
 def _albedo():
+    """rgl_albedo.csv by (file, quantity), then theta_o in degrees (read once for the three tables)."""
     a = collections.defaultdict(dict)
     for r in rows("rgl_albedo.csv"):
         a[(r["file"], r["quantity"])][r["theta_o_deg"]] = float(r["value"])
