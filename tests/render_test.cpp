@@ -16,6 +16,8 @@
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
+#include "device/device.hpp"
+#include "render/guide_training.hpp"
 #include "render/integrator.hpp"
 #include "sweep/sweep.hpp"
 #include "tables/fiber_generator.hpp"
@@ -623,6 +625,116 @@ TEST_CASE("a render is reproducible for a seed, whatever the thread count", "[re
   }
 }
 
+namespace {
+
+// What the guided tests learn with: small leaves, K <= 4, two iterations (passes 1, then
+// 2 and 3), the first two vertices of a path guided.
+GuideSetup small_guide() {
+  GuideSetup g;
+  g.field.leaf_samples = 400;
+  g.field.min_vertices = 40;
+  g.field.grid_theta = 8;
+  g.field.grid_phi = 16;
+  g.field.fit.k_max = 4;
+  g.field.fit.restarts = g.field.fit.final_restarts = 1;
+  g.field.fit.iterations = 30;
+  g.field.fit.final_iterations = 60;
+  g.field.fit.refine = "none";
+  g.iterations = 2;
+  g.depth = 2;
+  g.devices = select_devices("");
+  return g;
+}
+
+// A guided render of `spp` passes that learns in its first ones, as the comparisons do;
+// `fitted` receives the leaves with a mixture at the end.
+std::vector<double> guided_render(const SceneView& view, PathEstimator e, const GuideSetup& g, int spp,
+                                  std::size_t* fitted = nullptr) {
+  GuideTrainer t(view, g, "render_test");
+  std::vector<double> sum;
+  render_passes(t.view(), e, FSource::Table, 0, spp, sum, [&](int done, double) {
+    t.after_pass(done);
+    return true;
+  });
+  if (fitted) *fitted = t.field().fitted();
+  return sum;
+}
+
+}  // namespace
+
+TEST_CASE("the guided estimators are unbiased: image means over seeds agree with mis_light_cdf's", "[render][guide]") {
+  Progress::set_enabled(false);
+  const std::string table = small_table("silk");
+  TableBsdf bsdf(table);
+  bsdf.set_mixture(fitted_mixture(table));
+  auto s = make_scene(bsdf, sky(), true, 12);
+  s->view.max_depth = 24;
+  const GuideSetup g = small_guide();
+  const int runs = 16, spp = 8;
+  const auto [m0, se0] = mean_over_seeds(s->view, PathEstimator::MisLightCdf, runs, spp, 2000);
+  for (const PathEstimator e : {PathEstimator::Guided, PathEstimator::GuidedProduct}) {
+    std::vector<double> per_run;
+    std::size_t fitted = 0;
+    for (int r = 0; r < runs; ++r) {
+      SceneView v = s->view;
+      v.seed = 2000 + std::uint64_t(r);
+      std::size_t f = 0;
+      per_run.push_back(image_mean(grey(guided_render(v, e, g, spp, &f)), spp));
+      fitted += f;
+    }
+    double m = 0, var = 0;
+    for (double x : per_run) m += x / runs;
+    for (double x : per_run) var += (x - m) * (x - m) / (runs - 1);
+    const double se = std::sqrt(var / runs), z = (m - m0) / std::sqrt(se * se + se0 * se0);
+    std::printf("render_test: unbiased %-14s: image mean %.5f +- %.5f (mis_light_cdf %.5f +- %.5f), %zu leaves fitted\n",
+                path_estimator_name(e), m, se, m0, se0, fitted);
+    CHECK(fitted > 0);  // the guide was learnt and sampled
+    CHECK(std::abs(z) < 4.5);
+  }
+}
+
+TEST_CASE("guided white furnace: lossless fibers under a constant environment render 1", "[render][guide]") {
+  Progress::set_enabled(false);
+  const std::string table = small_table("lossless");
+  TableBsdf bsdf(table);
+  bsdf.set_mixture(fitted_mixture(table));
+  auto s = make_scene(bsdf, default_lighting(Domain::Hemisphere, 1.0), false, 16);
+  const int spp = 64;
+  for (const PathEstimator e : {PathEstimator::Guided, PathEstimator::GuidedProduct}) {
+    std::size_t fitted = 0;
+    const std::vector<double> sum = grey(guided_render(s->view, e, small_guide(), spp, &fitted));
+    const double mean = image_mean(sum, spp);
+    double var = 0;
+    for (double v : sum) var += (v / spp - mean) * (v / spp - mean) / double(sum.size() - 1);
+    const double se = std::sqrt(var / double(sum.size()));
+    std::printf("render_test: furnace %-14s: image mean %.4f +- %.4f, %zu leaves fitted\n", path_estimator_name(e), mean,
+                se, fitted);
+    CHECK(fitted > 0);
+    // the table's albedo error (within 2%, the furnace above) and the noise
+    CHECK(std::abs(mean - 1) <= 4 * se + 0.02);
+  }
+}
+
+TEST_CASE("a guided render is reproducible for a seed, whatever the thread count", "[render][guide]") {
+  Progress::set_enabled(false);
+  TableBsdf bsdf(small_table("silk"));
+  bsdf.set_mixture(broad_mixture(bsdf.meta()));
+  auto s = make_scene(bsdf, sky(), true, 12);
+  s->view.max_depth = 12;
+  const GuideSetup g = small_guide();
+  for (const PathEstimator e : {PathEstimator::Guided, PathEstimator::GuidedProduct}) {
+    SceneView v = s->view;
+    v.threads = 1;
+    const std::vector<double> a = guided_render(v, e, g, 4);
+    v.threads = 3;
+    const std::vector<double> b = guided_render(v, e, g, 4);
+    v.seed = 2;
+    const std::vector<double> c = guided_render(v, e, g, 4);
+    CHECK(a == b);
+    CHECK(a != c);
+  }
+}
+
 TEST_CASE("bad render configs are rejected with one line naming the key", "[render]") {
   const std::string table = small_table("silk");
   auto error = [&](const std::string& body) {
@@ -644,6 +756,12 @@ TEST_CASE("bad render configs are rejected with one line naming the key", "[rend
   CHECK_THAT(error("  ground: {albedo: 2}\n"), Catch::Contains("render.ground.albedo"));
   CHECK_THAT(error("  product_share: 1\n"), Catch::Contains("render.product_share (line 3)") &&
                                                 Catch::Contains("strictly between 0 and 1"));
+  CHECK_THAT(error("  guide: {share: 1}\n"), Catch::Contains("render.guide.share") && Catch::Contains("strictly between"));
+  CHECK_THAT(error("  guide: {grid: [1, 32]}\n"), Catch::Contains("render.guide.grid") && Catch::Contains("integers"));
+  CHECK_THAT(error("  guide: {depth: 0}\n"), Catch::Contains("render.guide.depth"));
+  CHECK_THAT(error("  guide: {sharee: 0.5}\n"), Catch::Contains("render.guide.sharee") && Catch::Contains("unknown key"));
+  CHECK_THAT(error("  reference_estimator: guided\n"), Catch::Contains("render.reference_estimator") &&
+                                                          Catch::Contains("learns within each render"));
   CHECK_THAT(error("  cloth: {weave: satin}\n"),
              Catch::Contains("no error"));  // parsed here; make_cloth rejects it, below
   ClothParams p;

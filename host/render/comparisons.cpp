@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 
 #include "core/format.hpp"
 #include "core/progress.hpp"
@@ -19,7 +20,8 @@ double rays_per_second(const RenderStats& st) { return double(st.rays) / std::ma
 // `budget` seconds. With `progress`, the error against the reference after 1, 2, 4, ... passes.
 class PassRunner {
  public:
-  PassRunner(const SceneView& view, const Image& reference) : view_(view), reference_(reference) {}
+  PassRunner(const SceneView& view, const Image& reference, const GuideSetup& guide)
+      : view_(view), reference_(reference), guide_(guide) {}
 
   std::pair<Image, RenderStats> run(PathEstimator e, FSource f, int spp, double budget, const std::string& what,
                                     std::vector<RenderRow>* progress) {
@@ -30,7 +32,12 @@ class PassRunner {
                            ? std::max(1, int(std::lround(budget / known->second)))
                            : spp;
     Progress prog("render " + what, std::uint64_t(std::max(expect, 1)), "spp");
-    const RenderStats st = render_passes(view_, e, f, 0, budget > 0 ? 1 << 20 : spp, sum, [&](int done, double sec) {
+    // a guided estimator learns in its own first passes
+    std::unique_ptr<GuideTrainer> trainer;
+    if (is_guided(e)) trainer = std::make_unique<GuideTrainer>(view_, guide_, what);
+    const SceneView& view = trainer ? trainer->view() : view_;
+    const RenderStats st = render_passes(view, e, f, 0, budget > 0 ? 1 << 20 : spp, sum, [&](int done, double sec) {
+      if (trainer) trainer->after_pass(done);
       prog.advance();
       if (progress && (done & (done - 1)) == 0 && !reference_.v.empty()) {
         RenderRow r;
@@ -58,6 +65,7 @@ class PassRunner {
  private:
   const SceneView& view_;
   const Image& reference_;
+  const GuideSetup& guide_;
   std::map<std::string, double> pass_seconds_;
 };
 
@@ -81,9 +89,10 @@ double image_difference(const Image& a, const Image& b, int block) {
   return t > 0 ? d / t : 0;
 }
 
-Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, const Image& reference) {
+Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, const Image& reference,
+                            const GuideSetup& guide) {
   Comparisons out;
-  PassRunner passes(view, reference);
+  PassRunner passes(view, reference, guide);
   // Every estimator at equal samples, then at equal time.
   double budget = s.seconds, slowest = 0;
   for (const PathEstimator e : s.estimators) {

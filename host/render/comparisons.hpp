@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "render/guide_training.hpp"
 #include "render/integrator.hpp"
 
 namespace bsdfmix {
@@ -31,8 +32,10 @@ struct Comparisons {
 };
 
 // Renders every comparison the settings ask for, writing each image to the output
-// directory (<estimator>_spp, <estimator>_time, table, stand_in; EXR and PFM).
-Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, const Image& reference);
+// directory (<estimator>_spp, <estimator>_time, table, stand_in; EXR and PFM). The guided
+// estimators learn with `guide` in each of their renders (render/guide_training.hpp).
+Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, const Image& reference,
+                            const GuideSetup& guide);
 
 // sum |a - b| / sum |b| over blocks of `block` x `block` pixels and the three channels: the
 // mean relative RGB difference of two images, with the Monte Carlo noise of both reduced by

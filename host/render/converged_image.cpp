@@ -73,7 +73,13 @@ std::string scene_key(const RenderSettings& s, const std::string& table) {
     << s.cloth.yarn_radius << " " << s.cloth.plies << " " << s.cloth.ply_twist << " " << s.cloth.fibers_per_ply << " "
     << s.cloth.fiber_twist << " " << s.cloth.fiber_radius << " " << s.cloth.jitter << " " << s.cloth.segments_per_spacing
     << " " << s.cloth.seed << " " << s.cloth.drape << " " << s.cloth.drape_radius << "\nground " << s.ground.enabled << " "
-    << s.ground.z << " " << s.ground_albedo << "\nlight";
+    << s.ground.z << " " << s.ground_albedo;
+  if (s.room.enabled) {  // only when on: a render without the room keeps its key
+    k << "\nroom " << s.room.albedo << " " << s.room.window << " " << s.room.window_min[0] << " " << s.room.window_min[1]
+      << " " << s.room.window_max[0] << " " << s.room.window_max[1];
+    for (int i = 0; i < 3; ++i) k << " " << s.room.min[i] << " " << s.room.max[i];
+  }
+  k << "\nlight";
   for (float x : s.lighting.pack()) k << " " << x;
   Hash64 h;
   h.update(s.lighting.env.data(), s.lighting.env.size() * sizeof(float));

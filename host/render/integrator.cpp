@@ -31,7 +31,9 @@ BsdfSampler sampler_of(PathEstimator e) {
     case PathEstimator::Uniform: return BsdfSampler::Uniform;
     case PathEstimator::MisTab:
     case PathEstimator::MisLightGmm:
-    case PathEstimator::MisProduct: return BsdfSampler::Mixture;
+    case PathEstimator::MisProduct:
+    case PathEstimator::Guided:
+    case PathEstimator::GuidedProduct: return BsdfSampler::Mixture;
     case PathEstimator::CdfTab:
     case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
   }
@@ -58,6 +60,15 @@ struct LightPdf {
   }
 };
 
+// A vertex of a training path: where it is, the world direction it continued in (theta,
+// phi) and that direction's density, the throughput at the next vertex before Russian
+// roulette (luminance), and the path's luminance when it left the vertex.
+struct TrainVertex {
+  float position[3];
+  float theta = 0, phi = 0;
+  double pdf = 0, beta = 0, mark = 0;
+};
+
 int thread_count(int asked) {
   if (asked > 0) return asked;
   const unsigned n = std::thread::hardware_concurrency();
@@ -67,12 +78,17 @@ int thread_count(int asked) {
 // One path: the RGB radiance arriving at the camera along `ray`, the throughput carried
 // per channel (directions are drawn by the luminance samplers; every decision reads the
 // largest channel, so a grey path is exactly the luminance path). `theta_out`, when
-// given, receives theta_o of every fiber vertex (the pre-pass).
+// given, receives theta_o of every fiber vertex (the pre-pass); `train`, when given, the
+// path's training samples for the guide (guide/radiance_field.hpp).
 Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, const Rng& rng, std::uint64_t& rays,
-               std::uint64_t& vertices, std::vector<double>* theta_out) {
+               std::uint64_t& vertices, std::vector<double>* theta_out, std::vector<guide::Sample>* train) {
   const BsdfSampler fs = sampler_of(est);
   const bool product = est == PathEstimator::MisProduct && v.world_light && !v.world_light->empty();
   const bool nee = uses_light_sampling(est);
+  const bool guided = is_guided(est) && v.guide;
+  TrainVertex path[64];
+  int recorded = 0;
+  const int max_record = train ? std::min({v.max_depth, v.guide_depth, 64}) : 0;
   Rgb L, beta(1.0);
   double prev_pdf = 0;
   bool prev_nee = false;
@@ -87,6 +103,11 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       if (!prev_nee) L += beta * Le;
       else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, prev_lp(ray.dir));
       break;
+    }
+    if (depth < max_record) {  // the rest is filled when the path continues
+      path[recorded] = TrainVertex{};
+      for (int i = 0; i < 3; ++i) path[recorded].position[i] = float(hit.position[std::size_t(i)]);
+      ++recorded;
     }
     ++vertices;
     const Vec3 wo = neg(ray.dir);
@@ -132,6 +153,40 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       const double c = dot(w, gn);
       return c > 0 ? c / kPi : 0.0;
     };
+    // The guide at this vertex: its leaf's mixture over world directions (share a_guide)
+    // and, under guided_product at a fiber or surface, the product of its compact part
+    // carried into the hit's frame with the BSDF mixture (share a_prod); the BSDF sampler
+    // has the rest. dir_pdf is the density of the next direction, whoever draws it.
+    const guide::Leaf* leaf = guided && depth < v.guide_depth ? v.guide->at(hit.position) : nullptr;
+    const LocalAxes axes = fiber ? frame.axes() : sframe.axes();
+    mix::SliceMixture gprod;
+    double a_prod = 0, a_guide = 0;
+    if (leaf) {
+      a_guide = v.guide_share;
+      if (est == PathEstimator::GuidedProduct && (fiber || surface) && !leaf->compact.empty() && a_guide > 0) {
+        try {
+          gprod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(leaf->compact, axes, kGuideAxes),
+                                   v.product);
+          a_prod = a_guide * leaf->compact_share;
+          a_guide -= a_prod;
+        } catch (const std::invalid_argument&) {
+          // no overlap: the leaf's mixture alone
+        }
+      }
+    }
+    auto dir_pdf = [&](const Vec3& w) {
+      if (!leaf) return pdf_of(w);
+      double p = (1 - a_guide - a_prod) * pdf_of(w), th, ph;
+      if (a_guide > 0) {
+        guide::guide_angles(w, th, ph);
+        p += a_guide * leaf->mixture.pdf_omega(Domain::Fiber, th, ph);
+      }
+      if (a_prod > 0) {
+        local_angles(axes, w, th, ph);
+        p += a_prod * gprod.pdf_omega(axes.domain, th, ph);
+      }
+      return p;
+    };
     Ray next;
     next.org = hit.position;
     if (fiber) {
@@ -171,15 +226,27 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
         Ray shadow = next;
         shadow.dir = wl;
         ++rays;
-        if (!v.tracer->occluded(shadow))
-          L += beta * fv * v.lighting->radiance_world(wl) * power_weight(pl, pdf_of(wl)) / pl;
+        if (!v.tracer->occluded(shadow)) {
+          const double Le = v.lighting->radiance_world(wl), w = power_weight(pl, dir_pdf(wl));
+          L += beta * fv * Le * w / pl;
+        }
       }
     }
     // the next direction
     rng.draw(dim + 2, u);
+    double ur[4];  // ur[0]: Russian roulette; ur[1]: the guide's technique
+    rng.draw(dim + 3, ur);
     Vec3 wi;
     double pdf = 0;
-    if (fiber) {
+    if (leaf && ur[1] < a_guide + a_prod) {
+      const bool from_product = ur[1] < a_prod;
+      const mix::Sample m = from_product ? gprod.sample(axes.domain, u[0], u[1], u[2])
+                                         : leaf->mixture.sample(Domain::Fiber, u[0], u[1], u[2]);
+      if (!m.valid) break;
+      wi = from_product ? local_direction(axes, m.theta, m.phi) : guide::guide_direction(m.theta, m.phi);
+      pdf = dir_pdf(wi);
+      if (!(pdf > 0)) break;
+    } else if (fiber) {
       double th, ph;
       v.bsdf->sample(fs, frame.theta_o, u, th, ph, pdf);
       if (!(pdf > 0)) break;
@@ -196,13 +263,23 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       pdf = z / kPi;
       if (!(pdf > 0)) break;
     }
+    if (leaf && !(ur[1] < a_guide + a_prod)) pdf = dir_pdf(wi);
     const Rgb fv = value(wi);
     if (!(fv.max() > 0)) break;
     beta *= fv / pdf;
+    if (depth < max_record) {
+      TrainVertex& tv = path[recorded - 1];
+      double th, ph;
+      guide::guide_angles(wi, th, ph);
+      tv.theta = float(th);
+      tv.phi = float(ph);
+      tv.pdf = pdf;
+      tv.beta = beta.luminance();
+      tv.mark = L.luminance();
+    }
     if (depth + 1 >= v.rr_depth) {
-      rng.draw(dim + 3, u);
       const double q = std::min(0.95, beta.max());
-      if (u[0] >= q) break;
+      if (ur[0] >= q) break;
       beta /= q;
     }
     prev_pdf = pdf;
@@ -210,6 +287,18 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     if (nee) std::swap(prev_lp, lp);
     next.dir = wi;
     ray = next;
+  }
+  // Each recorded vertex's sample: the luminance that arrived along its direction (all the
+  // path gathered after it, over the throughput there) over the direction's density.
+  const double end = L.luminance();
+  for (int i = 0; i < recorded; ++i) {
+    const TrainVertex& tv = path[i];
+    guide::Sample s;
+    std::copy(tv.position, tv.position + 3, s.position);
+    s.theta = tv.theta;
+    s.phi = tv.phi;
+    s.value = tv.pdf > 0 && tv.beta > 0 ? float((end - tv.mark) / tv.beta / tv.pdf) : 0.f;
+    train->push_back(s);
   }
   return L;
 }
@@ -247,7 +336,8 @@ RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, 
           double u[4];
           rng.draw(0, u);
           const Ray ray = camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]);
-          const Rgb L = trace_path(v, est, which, ray, rng, local, local_vertices, nullptr);
+          const Rgb L = trace_path(v, est, which, ray, rng, local, local_vertices, nullptr,
+                                   v.train ? &(*v.train)[std::size_t(y)] : nullptr);
           for (int c = 0; c < 3; ++c) sum[3 * std::size_t(p) + std::size_t(c)] += L[c];
         }
       rays += local;
@@ -282,7 +372,7 @@ std::vector<double> collect_theta_o(const SceneView& v, int spp) {
           double u[4];
           rng.draw(0, u);
           trace_path(v, PathEstimator::Uniform, FSource::Table, camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]),
-                     rng, rays, vertices, &local);
+                     rng, rays, vertices, &local, nullptr);
         }
     std::lock_guard<std::mutex> lock(m);
     out.insert(out.end(), local.begin(), local.end());

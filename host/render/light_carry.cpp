@@ -10,14 +10,12 @@ namespace render {
 std::vector<mix::Gaussian> compact_components(const mix::SliceMixture& world) {
   std::vector<mix::Gaussian> out;
   for (const mix::Gaussian& g : world.components) {
-    const double s_max = std::sqrt(0.5 * (g.s_tt + g.s_pp) +
-                                   std::sqrt(0.25 * (g.s_tt - g.s_pp) * (g.s_tt - g.s_pp) + g.s_tp * g.s_tp));
-    if (s_max <= kBroadSigma) out.push_back(g);
+    if (g.sigma_max() <= kBroadSigma) out.push_back(g);
   }
   return out;
 }
 
-mix::SliceMixture carry_lighting(const std::vector<mix::Gaussian>& compact, const LocalAxes& f) {
+mix::SliceMixture carry_lighting(const std::vector<mix::Gaussian>& compact, const LocalAxes& f, const LocalAxes& from) {
   mix::SliceMixture out;
   out.scale = 1;
   out.components.reserve(compact.size());
@@ -25,9 +23,13 @@ mix::SliceMixture carry_lighting(const std::vector<mix::Gaussian>& compact, cons
   const double sgn = fiber ? 1.0 : -1.0, cap = 4 * kPi * kPi;
   for (const mix::Gaussian& g : compact) {
     const double ct = std::cos(g.mu_t), st = std::sin(g.mu_t), cp = std::cos(g.mu_p), sp = std::sin(g.mu_p);
-    const Vec3 w{ct * cp, ct * sp, st};
-    // the derivatives of the direction along world theta and phi
-    const Vec3 dwt{-st * cp, -st * sp, ct}, dwp{-ct * sp, ct * cp, 0};
+    // the direction and its derivatives along the source map's theta and phi
+    Vec3 w, dwt, dwp;
+    for (std::size_t i = 0; i < 3; ++i) {
+      w[i] = ct * cp * from.e1[i] + ct * sp * from.e2[i] + st * from.axis[i];
+      dwt[i] = -st * cp * from.e1[i] - st * sp * from.e2[i] + ct * from.axis[i];
+      dwp[i] = -ct * sp * from.e1[i] + ct * cp * from.e2[i];
+    }
     const double z = std::clamp(dot(w, f.axis), -1.0, 1.0), x = dot(w, f.e1), y = dot(w, f.e2);
     const double rho2 = x * x + y * y;
     if (!(rho2 > 1e-12)) continue;  // on the pole itself: left to light sampling

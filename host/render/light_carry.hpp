@@ -33,7 +33,10 @@ std::vector<mix::Gaussian> compact_components(const mix::SliceMixture& world);
 // frame's (theta, phi), prepared. Near the frame's pole (the fiber axis, the surface
 // normal) the map stretches phi without bound; phi standard deviations are capped at
 // 2 pi (wider is uniform in phi to 1e-8), the correlation coefficient kept.
-mix::SliceMixture carry_lighting(const std::vector<mix::Gaussian>& compact, const LocalAxes& f);
+// The components are over `from`'s (theta, phi) in the fiber domain's map: the world's
+// latitude-longitude (the lighting), or the guide's map (a guide leaf's radiance).
+mix::SliceMixture carry_lighting(const std::vector<mix::Gaussian>& compact, const LocalAxes& f,
+                                 const LocalAxes& from = kWorldAxes);
 
 }  // namespace render
 }  // namespace bsdfmix

@@ -17,6 +17,9 @@ struct LocalAxes {
 
 // World directions as latitude-longitude with z up: theta = asin(w_z), phi = atan2(w_y, w_x).
 inline const LocalAxes kWorldAxes{{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, Domain::Fiber};
+// The guide's map (guide/radiance_field.hpp, guide_angles): the axis +x, phi = 0 at the
+// zenith +z, phi = pi / 2 toward -y.
+inline const LocalAxes kGuideAxes{{1, 0, 0}, {0, 0, 1}, {0, -1, 0}, Domain::Fiber};
 
 // A direction's (theta, phi) in the frame (phi wrapped into [-pi, pi)), and back.
 void local_angles(const LocalAxes& f, const Vec3& w, double& theta, double& phi);

@@ -1,6 +1,7 @@
 // The render command's stages, in order.
 #include "render/render_run.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "core/atomic_file.hpp"
@@ -9,6 +10,7 @@
 #include "core/progress.hpp"
 #include "core/scripts.hpp"
 #include "render/comparisons.hpp"
+#include "render/light_carry.hpp"
 #include "render/converged_image.hpp"
 #include "render/render_mixtures.hpp"
 #include "render/render_report.hpp"
@@ -22,6 +24,32 @@ RenderSettings render_settings(const Config& config) {
   if (!config.render) throw ConfigError(config.file + ": render: missing (the render command needs a render section)");
   if (!config.fit) throw ConfigError(config.file + ": fit: missing (the render fits the mixtures the scene needs)");
   return parse_render(*config.render);
+}
+
+GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std::string& device_selector) {
+  GuideSetup g;
+  g.field = s.guide;
+  g.iterations = s.guide_iterations;
+  g.depth = s.guide_depth;
+  g.share = s.guide_share;
+  // a leaf's grid is small and noisy: the search up to k_max with one restart, EM's fits
+  // (no L1 refinement), the config's seed, penalty and search strategy
+  FitSection& f = g.field.fit;
+  f = fit;
+  f.output = f.report = f.search_report = "";
+  f.theta_o.clear();
+  f.phi_o.clear();
+  f.k_min = 1;
+  f.k_max = s.guide_k_max;
+  f.restarts = f.final_restarts = 1;
+  f.iterations = 40;
+  f.final_iterations = 100;
+  f.refine = "none";
+  f.error_target.reset();
+  g.field.compact_sigma = kBroadSigma;
+  const bool guided = std::any_of(s.estimators.begin(), s.estimators.end(), is_guided);
+  if (guided) g.devices = select_devices(device_selector);
+  return g;
 }
 
 void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector, bool figures) {
@@ -53,9 +81,11 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
     view.world_light = &compact;
   }
 
-  // 3. The converged image (cached under its key); 4. the comparisons against it.
+  // 3. The converged image (cached under its key); 4. the comparisons against it, the
+  // guided estimators learning with the leaves' fit settings.
   const Image converged = converged_image(view, s, scene_key(s, config.table));
-  const Comparisons comparisons = run_comparisons(view, s, converged);
+  const GuideSetup guide = guide_setup(s, *config.fit, device_selector);
+  const Comparisons comparisons = run_comparisons(view, s, converged, guide);
 
   // 5. The report, the cloth's pixels and the figures.
   write_pfm((fs::path(s.output) / "cloth_mask.pfm").string(), scene.cloth_mask());

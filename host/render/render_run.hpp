@@ -7,6 +7,7 @@
 #include <string>
 
 #include "config/config.hpp"
+#include "render/guide_training.hpp"
 #include "render/render_settings.hpp"
 
 namespace bsdfmix {
@@ -15,6 +16,11 @@ namespace render {
 // The render settings of a config, checked before any work: ConfigError when the config
 // has no render or no fit section, or names a bad render setting.
 RenderSettings render_settings(const Config& config);
+
+// What the guided estimators learn with: the settings' guide, its leaves fitted with
+// `fit`'s seed, penalty and search (up to the guide's k_max, one restart, no refinement),
+// on the devices of `device_selector` when some estimator is guided.
+GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std::string& device_selector);
 
 // Renders the config's scene; its table must exist (the CLI makes it first).
 void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector,

@@ -8,9 +8,11 @@ namespace render {
 
 namespace {
 
+// The ground plane; off inside the room, whose floor takes its place.
 GroundPlane ground_of(const RenderSettings& s) {
   GroundPlane g = s.ground;
   g.half = 4 * std::max(s.cloth.size, 1.0);
+  if (s.room.enabled) g.enabled = false;
   return g;
 }
 
@@ -28,14 +30,17 @@ SurfaceMesh surface_of(const RenderSettings& s, const TableBsdf& bsdf, const std
 RenderScene::RenderScene(const RenderSettings& s, const TableBsdf& bsdf, const std::string& where)
     : cloth_(cloth_of(s, bsdf, where)),
       surface_(surface_of(s, bsdf, where)),
-      tracer_(cloth_, ground_of(s), CurveType::FlatLinear, surface_.triangles.empty() ? nullptr : &surface_),
+      room_(make_room(s.room)),
+      room_window_(s.room.window),
+      tracer_(cloth_, ground_of(s), CurveType::FlatLinear, surface_.triangles.empty() ? nullptr : &surface_,
+              room_.triangles.empty() ? nullptr : &room_),
       light_(make_light_sampler(s.lighting)) {
   view_.tracer = &tracer_;
   view_.bsdf = &bsdf;
   view_.lighting = &s.lighting;
   view_.light = &light_;
   view_.camera = s.camera;
-  view_.ground_albedo = s.ground_albedo;
+  view_.ground_albedo = s.room.enabled ? s.room.albedo : s.ground_albedo;  // one albedo for every ground hit
   view_.fiber_radius = s.cloth.fiber_radius;
   view_.max_depth = s.max_depth;
   view_.rr_depth = s.rr_depth;
@@ -54,8 +59,13 @@ SceneView RenderScene::prepass_view(const RenderSettings& s) const {
 }
 
 std::string RenderScene::describe() const {
-  if (!surface_.triangles.empty()) return "a sphere of " + std::to_string(surface_.triangles.size()) + " triangles";
-  return std::to_string(cloth_.fibers.size()) + " fibers, " + std::to_string(cloth_.segments()) + " segments";
+  const std::string what =
+      !surface_.triangles.empty()
+          ? "a sphere of " + std::to_string(surface_.triangles.size()) + " triangles"
+          : std::to_string(cloth_.fibers.size()) + " fibers, " + std::to_string(cloth_.segments()) + " segments";
+  if (room_.triangles.empty()) return what;
+  return what + ", in a room of " + std::to_string(room_.triangles.size()) + " triangles with a window in its " +
+         room_window_ + " wall";
 }
 
 Image RenderScene::cloth_mask() const {

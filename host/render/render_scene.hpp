@@ -1,5 +1,6 @@
 // The scene of a render, built once from its settings: the cloth, the tracer over it and
-// the ground, the light sampler, and the view every pass renders (render/integrator.hpp).
+// the ground or the room, the light sampler, and the view every pass renders
+// (render/integrator.hpp).
 #pragma once
 
 #include <string>
@@ -14,7 +15,8 @@ namespace bsdfmix {
 namespace render {
 
 // A fiber table is rendered as woven cloth; a hemisphere table (a measured material) on a
-// sphere (the render section's `sphere`), both over the ground.
+// sphere (the render section's `sphere`), both over the ground, or inside the room (the
+// render section's `room`), whose floor replaces the ground.
 class RenderScene {
  public:
   // `where` names the render section in errors; `bsdf` must outlive the scene.
@@ -24,7 +26,8 @@ class RenderScene {
 
   const Cloth& cloth() const { return cloth_; }
   const SurfaceMesh& surface() const { return surface_; }
-  // "N fibers, M segments" or "a sphere of N triangles".
+  const SurfaceMesh& room() const { return room_; }  // empty without the room
+  // "N fibers, M segments" or "a sphere of N triangles", and the room when there is one.
   std::string describe() const;
   // The view at the render's size and depth.
   const SceneView& view() const { return view_; }
@@ -37,6 +40,8 @@ class RenderScene {
  private:
   Cloth cloth_;
   SurfaceMesh surface_;
+  SurfaceMesh room_;
+  std::string room_window_;  // the room's window wall (+x, -x, +y, -y, +z)
   Tracer tracer_;
   LightSampler light_;
   SceneView view_;

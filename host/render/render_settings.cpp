@@ -2,6 +2,7 @@
 #include "render/render_settings.hpp"
 
 #include <cmath>
+#include <iterator>
 #include <set>
 
 #include "config/node.hpp"
@@ -13,13 +14,15 @@ namespace render {
 
 namespace {
 
-const char* kNames[] = {"uniform", "mis_tab", "cdf_tab", "mis_light_cdf", "mis_light_gmm", "mis_product"};
+const char* kNames[] = {"uniform",       "mis_tab",     "cdf_tab", "mis_light_cdf",
+                        "mis_light_gmm", "mis_product", "guided",  "guided_product"};
 
 PathEstimator parse_estimator_name(const ConfigNode& n, const std::string& key, const std::string& name) {
-  for (int i = 0; i < 6; ++i)
+  for (int i = 0; i < int(std::size(kNames)); ++i)
     if (name == kNames[i]) return PathEstimator(i);
   n.fail(key, "unknown estimator '" + name +
-                  "' (expected uniform, mis_tab, cdf_tab, mis_light_cdf, mis_light_gmm or mis_product)");
+                  "' (expected uniform, mis_tab, cdf_tab, mis_light_cdf, mis_light_gmm, mis_product, guided or "
+                  "guided_product)");
 }
 
 // A nested mapping with its defaults merged under it and unknown keys rejected.
@@ -49,8 +52,11 @@ Vec3 vec3(const ConfigNode& n, const std::string& key) {
 
 const char* path_estimator_name(PathEstimator e) { return kNames[int(e)]; }
 
+bool is_guided(PathEstimator e) { return e == PathEstimator::Guided || e == PathEstimator::GuidedProduct; }
+
 bool uses_light_sampling(PathEstimator e) {
-  return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm || e == PathEstimator::MisProduct;
+  return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm || e == PathEstimator::MisProduct ||
+         is_guided(e);
 }
 
 RenderSettings parse_render(const RenderSection& section) {
@@ -76,6 +82,24 @@ RenderSettings parse_render(const RenderSection& section) {
   r.product_share = n.number("product_share", 0, 1);
   if (!(r.product_share > 0 && r.product_share < 1))
     n.fail("product_share", "expected a share strictly between 0 and 1 (the rest of the light samples go to the light sampler)");
+  for (const auto& [key, e] : {std::pair<const char*, PathEstimator>{"reference_estimator", r.reference_estimator},
+                                {"stand_in_estimator", r.stand_in_estimator}})
+    if (is_guided(e)) n.fail(key, "a guided estimator learns within each render; expected one that does not");
+  const ConfigNode gd = nested(section, n, "guide");
+  r.guide_share = gd.number("share", 0, 1);
+  if (!(r.guide_share > 0 && r.guide_share < 1))
+    gd.fail("share", "expected a share strictly between 0 and 1 (the rest of the directions go to the BSDF sampler)");
+  r.guide_iterations = int(gd.integer("iterations", 0, 20));
+  r.guide_depth = int(gd.integer("depth", 1, 1000));
+  r.guide_k_max = int(gd.integer("k_max", 1, 64));
+  r.guide.leaf_samples = std::size_t(gd.integer("leaf_vertices", 16, INT64_MAX));
+  r.guide.min_vertices = std::size_t(gd.integer("min_vertices", 1, INT64_MAX));
+  const std::vector<double> grid = gd.numbers("grid");
+  if (grid.size() != 2 || !(grid[0] >= 2 && grid[0] <= 256 && grid[1] >= 2 && grid[1] <= 512) ||
+      grid[0] != std::floor(grid[0]) || grid[1] != std::floor(grid[1]))
+    gd.fail("grid", "expected [theta cells, phi cells], integers in [2, 256] and [2, 512]");
+  r.guide.grid_theta = int(grid[0]);
+  r.guide.grid_phi = int(grid[1]);
   r.max_depth = int(n.integer("max_depth", 1, 1000));
   r.rr_depth = int(n.integer("rr_depth", 1, 1000));
   r.seed = std::uint64_t(n.integer("seed", 0, INT64_MAX));
@@ -134,6 +158,7 @@ RenderSettings parse_render(const RenderSection& section) {
   r.sphere_radius = sp.number("radius", 1e-9, 1e9);
   r.sphere_rings = int(sp.integer("rings", 3, 4096));
   r.sphere_segments = int(sp.integer("segments", 3, 4096));
+  r.room = parse_room(nested(section, n, "room"), r.camera.position);
   return r;
 }
 

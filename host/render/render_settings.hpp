@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "config/config.hpp"
+#include "guide/radiance_field.hpp"
 #include "render/cloth.hpp"
+#include "render/room.hpp"
 #include "render/tracer.hpp"
 #include "sampling/lighting.hpp"
 
@@ -15,9 +17,11 @@ namespace bsdfmix {
 namespace render {
 
 // How a path's next direction at a fiber is drawn (docs/render.md, "Estimators").
-enum class PathEstimator { Uniform, MisTab, CdfTab, MisLightCdf, MisLightGmm, MisProduct };
+enum class PathEstimator { Uniform, MisTab, CdfTab, MisLightCdf, MisLightGmm, MisProduct, Guided, GuidedProduct };
 const char* path_estimator_name(PathEstimator e);
 bool uses_light_sampling(PathEstimator e);
+// guided, guided_product: the estimators that learn the incident radiance (docs/render.md, "Guided paths").
+bool is_guided(PathEstimator e);
 
 struct Camera {
   Vec3 position{0, -1.3, 1.1}, look_at{0, 0, 0}, up{0, 0, 1};
@@ -33,6 +37,12 @@ struct RenderSettings {
   std::vector<PathEstimator> estimators;
   bool stand_in = true;
   double product_share = 0.5;  // mis_product: the product's share of the light samples, in (0, 1)
+  // guided, guided_product (docs/render.md, "Guided paths"): the share of guided directions,
+  // the training iterations, the path vertices guided, the leaves' largest K, the field's
+  // tree and grid
+  double guide_share = 0.5;
+  int guide_iterations = 4, guide_depth = 1, guide_k_max = 8;
+  guide::FieldSettings guide;
   int max_depth = 24, rr_depth = 3;
   std::uint64_t seed = 1;
   int threads = 0;
@@ -46,6 +56,8 @@ struct RenderSettings {
   Vec3 sphere_center{0, 0, 0.29};
   double sphere_radius = 0.35;
   int sphere_rings = 96, sphere_segments = 192;
+  // The room around the cloth or the sphere; when enabled its floor replaces the ground.
+  RoomParams room;
 };
 
 RenderSettings parse_render(const RenderSection& section);

@@ -1,5 +1,6 @@
 // Embree scene of the cloth: one curve geometry holding every fiber (geometry 0), the ground
-// quad as two triangles (geometry 1), and the self-hit filter on the curves.
+// quad as two triangles (geometry 1), the surface (2), the room (3), and the self-hit filter
+// on the curves.
 #include "render/tracer.hpp"
 
 #include <embree3/rtcore.h>
@@ -17,7 +18,7 @@ namespace render {
 
 namespace {
 
-constexpr unsigned kCurveGeom = 0, kGroundGeom = 1, kSurfaceGeom = 2;
+constexpr unsigned kCurveGeom = 0, kGroundGeom = 1, kSurfaceGeom = 2, kRoomGeom = 3;
 
 // The intersect context extended with the ray's self-hit rule. Embree passes the context
 // pointer through to the filter, which casts it back (the base must be the first member).
@@ -69,6 +70,8 @@ struct Tracer::Impl {
   double ground_z = 0;
   std::vector<std::int32_t> fiber_of;  // segment (primID) -> fiber
   SurfaceMesh surface;                 // the surface's triangles and shading normals (a copy)
+  std::vector<Vec3> room_normal;       // per room triangle: unit geometric normal ...
+  std::vector<Vec3> room_point;        // ... and its first vertex, as Embree holds it (floats)
   const float* vertices = nullptr;     // the curve geometry's vertex buffer (x, y, z, r)
   const unsigned* indices = nullptr;   // the curve geometry's index buffer
 
@@ -100,7 +103,8 @@ struct Tracer::Impl {
   }
 };
 
-Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, const SurfaceMesh* surface)
+Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, const SurfaceMesh* surface,
+               const SurfaceMesh* room)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.type = type;
@@ -220,6 +224,35 @@ Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, co
     m.check("build the surface geometry");
   }
 
+  if (room && !room->triangles.empty()) {
+    const SurfaceMesh& rm = *room;
+    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                             3 * sizeof(float), rm.vertices.size()));
+    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), rm.triangles.size()));
+    m.check("allocate the room buffers");
+    for (std::size_t i = 0; i < rm.vertices.size(); ++i)
+      for (int c = 0; c < 3; ++c) vb[3 * i + std::size_t(c)] = static_cast<float>(rm.vertices[i][c]);
+    for (std::size_t t = 0; t < rm.triangles.size(); ++t) {
+      Vec3 p[3];
+      for (int c = 0; c < 3; ++c) {
+        const unsigned k = rm.triangles[t][std::size_t(c)];
+        if (k >= rm.vertices.size()) throw Error("render: a room triangle is out of range");
+        ib[3 * t + std::size_t(c)] = k;
+        for (int d = 0; d < 3; ++d) p[c][d] = vb[3 * std::size_t(k) + std::size_t(d)];
+      }
+      const Vec3 n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+      if (!(dot(n, n) > 0)) throw Error("render: a room triangle has no area");
+      m.room_normal.push_back(normalized(n));
+      m.room_point.push_back(p[0]);
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(m.scene, g, kRoomGeom);
+    rtcReleaseGeometry(g);
+    m.check("build the room geometry");
+  }
+
   rtcCommitScene(m.scene);
   m.check("commit the scene");
 }
@@ -276,6 +309,16 @@ Hit Tracer::intersect(const Ray& ray) const {
              v * m.surface.normals[tri[2]][k];
     n = normalized(n);
     if (dot(n, ray.dir) > 0) n = neg(n);  // the side the ray comes from
+    h.normal = n;
+  } else if (rh.hit.geomID == kRoomGeom) {
+    // A wall, the floor or the ceiling: diffuse like the ground. The position is moved onto
+    // the triangle's plane (exactly, for the room's axis-aligned walls), so that a ray
+    // leaving it neither starts behind the wall nor hits it again.
+    h.kind = HitKind::Ground;
+    Vec3 n = m.room_normal[rh.hit.primID];
+    if (dot(n, ray.dir) > 0) n = neg(n);  // the side the ray comes from
+    const double off = dot(sub(h.position, m.room_point[rh.hit.primID]), n);
+    for (int d = 0; d < 3; ++d) h.position[d] -= off * n[d];
     h.normal = n;
   } else {
     h.kind = HitKind::Ground;

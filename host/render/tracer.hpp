@@ -1,6 +1,7 @@
 // Ray tracing of the cloth's fibers (and an optional ground plane) with Embree 3
 // (docs/render.md, "Geometry"): fibers as ray-facing flat linear curves (RTC_GEOMETRY_TYPE_
-// FLAT_LINEAR_CURVE), the ground as two triangles. Thread-safe after construction.
+// FLAT_LINEAR_CURVE), the ground as two triangles, the room's walls as triangles reported
+// as ground. Thread-safe after construction.
 #pragma once
 
 #include <cstdint>
@@ -28,7 +29,7 @@ struct Hit {
   double t = 0;
   Vec3 position{0, 0, 0};
   Vec3 tangent{0, 0, 0};  // fibers: unit curve tangent at the hit
-  Vec3 normal{0, 0, 0};   // ground: unit normal facing the ray's origin; surface: the shading normal
+  Vec3 normal{0, 0, 0};   // ground and room: unit normal facing the ray's origin; surface: the shading normal
   std::int64_t fiber = -1;
 };
 
@@ -43,8 +44,11 @@ struct GroundPlane {
 class Tracer {
  public:
   // `surface`, when given, is traced too (its triangles, with their shading normals).
+  // `room`, when given, too: its triangles are hit as HitKind::Ground, with their geometric
+  // normal (its normals are not read) and the hit's position put back onto the triangle's
+  // plane, so that a ray leaving a wall starts on it.
   Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type = CurveType::FlatLinear,
-         const SurfaceMesh* surface = nullptr);
+         const SurfaceMesh* surface = nullptr, const SurfaceMesh* room = nullptr);
   ~Tracer();
   Tracer(const Tracer&) = delete;
   Tracer& operator=(const Tracer&) = delete;

@@ -107,6 +107,12 @@ struct Gaussian {
     images = static_cast<int>(std::ceil((cut + kPi + std::abs(mu_p)) / (2 * kPi)));
   }
 
+  // The larger standard deviation (radians): the square root of the covariance's larger
+  // eigenvalue.
+  double sigma_max() const {
+    return std::sqrt(0.5 * (s_tt + s_pp) + std::sqrt(0.25 * (s_tt - s_pp) * (s_tt - s_pp) + s_tp * s_tp));
+  }
+
   // Density at (theta, phi), phi in [-pi, pi), summed over the phi images.
   double density(double theta, double phi) const {
     const double dt = theta - mu_t;
