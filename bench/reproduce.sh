@@ -41,6 +41,7 @@ studies=(
   "converge_light:10:no:the convergence studies with the lighting (converge_light/)"
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
   "render:90:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
+  "render_room:30:no:the cloth of the four fibers in the room, the guided estimators against the baseline (render/<fiber>_room/)"
   "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
   "em_precision:1:no:the EM kernels against their reference, both precisions (em_precision.csv)"
   "theta_border:1:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
@@ -98,6 +99,7 @@ outputs() {
     converge_light) echo "$results/converge_light/*" ;;
     mis_heuristic) echo "$results/mis_heuristic.csv" ;;
     render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
+    render_room) echo "$results/render/*_room/*" ;;
     em) echo "$results/em_k*_$machine.* docs/images/em_throughput.png" ;;
     render_rays) echo "$results/render_rays_$machine.csv" ;;
     failure_map) echo "$results/failure_map.csv" ;;
@@ -213,6 +215,12 @@ run_study() {
           mkdir -p $results/render/${f}_${s}
           cp out/render_$f/$s/render.csv out/render_$f/$s/render.json $results/render/${f}_${s}/
         done
+      done ;;
+    render_room)
+      for f in silk cotton wool polyester; do
+        $bin render configs/render/${f}_room.yaml
+        mkdir -p $results/render/${f}_room
+        cp out/render_$f/room/render.csv out/render_$f/room/render.json $results/render/${f}_room/
       done ;;
     em)
       local b=build-bench/bsdfmix

@@ -26,8 +26,8 @@ struct Uniforms {
 
 
 // Training samples at `n` vertices in the box [lo, lo + 1]^3: directions uniform over the
-// sphere (density 1 / 4 pi), value L(w) / density, L = `emitter` within `radius` of
-// `toward` and 1 elsewhere.
+// sphere (density 1 / 4 pi, the vertex's own sampler's too, f = 1), L = `emitter` within
+// `radius` of `toward` and 1 elsewhere.
 void add_samples(std::vector<Sample>& out, std::size_t n, const Vec3& lo, const Vec3& toward, double radius,
                  double emitter, std::uint64_t seed) {
   Uniforms rng{seed << 32};
@@ -42,7 +42,10 @@ void add_samples(std::vector<Sample>& out, std::size_t n, const Vec3& lo, const 
     guide_angles(w, theta, phi);
     s.theta = float(theta);
     s.phi = float(phi);
-    s.value = float(L * 4 * kPi);
+    s.radiance = float(L);
+    s.pdf = float(1 / (4 * kPi));
+    s.f = 1;
+    s.pdf_bsdf = float(1 / (4 * kPi));
     out.push_back(s);
   }
 }
@@ -131,6 +134,31 @@ TEST_CASE("the learned mixture recovers a small emitter over a dim background", 
   const double at = leaf->mixture.pdf_omega(mix::Domain::Fiber, th, ph);
   const double away = leaf->mixture.pdf_omega(mix::Domain::Fiber, th2, ph2);
   CHECK(at > 20 * away);
+}
+
+TEST_CASE("a leaf guides where its guide lowers the second moment, and not where it raises it", "[guide]") {
+  Progress::set_enabled(false);
+  const Vec3 toward = normalized({0.3, -0.5, 0.6});
+  std::vector<Sample> s;
+  add_samples(s, 40000, {0, 0, 0}, toward, 0.2, 200, 5);
+  // a guide toward the emitter (and a broad part) lowers it: the largest share
+  mix::SliceMixture good;
+  mix::Gaussian g;
+  guide_angles(toward, g.mu_t, g.mu_p);
+  g.weight = 0.8;
+  g.s_tt = g.s_pp = 0.04;
+  mix::Gaussian broad = g;
+  broad.weight = 0.2;
+  broad.s_tt = broad.s_pp = 4;
+  good.components = {g, broad};
+  good.prepare();
+  CHECK(best_share(good, s.data(), s.data() + s.size(), 0.5) == Approx(0.5));
+  // a guide pointing away from it raises it: none
+  mix::SliceMixture bad = good;
+  guide_angles(neg(toward), bad.components[0].mu_t, bad.components[0].mu_p);
+  bad.components[1].weight = 1e-3;
+  bad.prepare();
+  CHECK(best_share(bad, s.data(), s.data() + s.size(), 0.5) == 0);
 }
 
 TEST_CASE("the kd-tree keeps two regions with different light apart", "[guide]") {

@@ -628,7 +628,8 @@ TEST_CASE("a render is reproducible for a seed, whatever the thread count", "[re
 namespace {
 
 // What the guided tests learn with: small leaves, K <= 4, two iterations (passes 1, then
-// 2 and 3), the first two vertices of a path guided.
+// 2 and 3), the first two vertices of a path guided, half of their directions by the
+// guide wherever a leaf has a mixture.
 GuideSetup small_guide() {
   GuideSetup g;
   g.field.leaf_samples = 400;
@@ -640,6 +641,7 @@ GuideSetup small_guide() {
   g.field.fit.iterations = 30;
   g.field.fit.final_iterations = 60;
   g.field.fit.refine = "none";
+  g.field.adapt_share = false;  // every leaf guides half the directions: the guided sampling is exercised
   g.iterations = 2;
   g.depth = 2;
   g.devices = select_devices("");
@@ -670,7 +672,7 @@ TEST_CASE("the guided estimators are unbiased: image means over seeds agree with
   auto s = make_scene(bsdf, sky(), true, 12);
   s->view.max_depth = 24;
   const GuideSetup g = small_guide();
-  const int runs = 16, spp = 8;
+  const int runs = 40, spp = 8;
   const auto [m0, se0] = mean_over_seeds(s->view, PathEstimator::MisLightCdf, runs, spp, 2000);
   for (const PathEstimator e : {PathEstimator::Guided, PathEstimator::GuidedProduct}) {
     std::vector<double> per_run;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
@@ -47,6 +48,24 @@ class LeafSlices final : public SliceSource {
 
 }  // namespace
 
+double best_share(const mix::SliceMixture& guide, const Sample* begin, const Sample* end, double largest) {
+  constexpr int kSteps = 8;
+  double moment[kSteps + 1] = {};
+  for (const Sample* s = begin; s != end; ++s) {
+    if (!(s->pdf > 0) || !(s->f > 0) || !(s->radiance > 0)) continue;
+    const double pg = guide.pdf_omega(Domain::Fiber, s->theta, s->phi), fl = double(s->f) * double(s->radiance);
+    for (int k = 0; k <= kSteps; ++k) {
+      const double a = largest * k / kSteps, p = a * pg + (1 - a) * double(s->pdf_bsdf);
+      // E_draw[(f L / p)^2 p / p_draw]: the second moment under p, from samples drawn by p_draw
+      moment[k] += p > 0 ? fl * fl / (p * double(s->pdf)) : std::numeric_limits<double>::infinity();
+    }
+  }
+  int best = 0;
+  for (int k = 1; k <= kSteps; ++k)
+    if (moment[k] < moment[best]) best = k;
+  return largest * best / kSteps;
+}
+
 std::vector<double> bin_leaf(const Sample* begin, const Sample* end, int grid_theta, int grid_phi) {
   std::vector<double> g(std::size_t(grid_theta) * std::size_t(grid_phi), 0.0);
   const std::size_t n = vertices_in(begin, end);
@@ -55,13 +74,14 @@ std::vector<double> bin_leaf(const Sample* begin, const Sample* end, int grid_th
   // each make a cell, and a component, of their own. Values are capped at kClamp times
   // the leaf's mean sample value (the guide is a proposal: this costs no bias).
   double mean = 0;
-  for (const Sample* s = begin; s != end; ++s) mean += std::max(0.0f, s->value);
+  for (const Sample* s = begin; s != end; ++s) mean += std::max(0.0, s->value());
   const double cap = kClamp * mean / double(n);
   for (const Sample* s = begin; s != end; ++s) {
-    if (!(s->value > 0)) continue;
+    const double v = s->value();
+    if (!(v > 0)) continue;
     const int i = std::clamp(int((s->theta + kPi / 2) / kPi * grid_theta), 0, grid_theta - 1);
     const int j = std::clamp(int((s->phi + kPi) / (2 * kPi) * grid_phi), 0, grid_phi - 1);
-    g[std::size_t(i) * std::size_t(grid_phi) + std::size_t(j)] += std::min(double(s->value), cap);
+    g[std::size_t(i) * std::size_t(grid_phi) + std::size_t(j)] += std::min(v, cap);
   }
   for (double& v : g) v /= double(n);
   return g;
@@ -72,7 +92,7 @@ void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, 
   const auto t0 = std::chrono::steady_clock::now();
   nodes_.assign(1, Node{});
   leaves_.clear();
-  leaf_of_node_count_ = fitted_ = 0;
+  leaf_of_node_count_ = fitted_ = guiding_ = 0;
   // 1. The tree: a node holding more than leaf_samples vertices is split at the median of
   // its samples along the longest side of their bounding box.
   std::vector<Range> todo{{0, samples.size(), 0, 0}};
@@ -161,6 +181,10 @@ void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, 
         continue;
       }
       ++fitted_;
+      leaf.share = s.adapt_share ? best_share(leaf.mixture, samples.data() + leaf_ranges[i].first,
+                                              samples.data() + leaf_ranges[i].second, s.share)
+                                 : s.share;
+      if (leaf.share > 0) ++guiding_;
       for (const mix::Gaussian& g : leaf.mixture.components) {
         if (g.sigma_max() > s.compact_sigma) continue;
         mix::Gaussian c = g;

@@ -29,13 +29,18 @@ namespace bsdfmix {
 namespace guide {
 
 // One training sample of a path vertex: the luminance that arrived at `position` from
-// the direction (theta, phi) of the guide's map, over the density the direction was
-// drawn with (per steradian). What arrives straight from the lighting counts with its MIS
-// weight against light sampling, so that the guide learns what light sampling leaves to
-// the directions a vertex draws (Karlik et al. 2019, "MIS compensation").
+// the direction (theta, phi) of the guide's map (`radiance`), the density the direction
+// was drawn with (`pdf`, per steradian), and at that direction the vertex's scattering
+// (`f`: the luminance of f cos, or f at a fiber) and its own sampler's density
+// (`pdf_bsdf`). What arrives straight from the lighting counts with its MIS weight
+// against light sampling, so that the guide learns what light sampling leaves to the
+// directions a vertex draws (Karlik et al. 2019, "MIS compensation").
 struct Sample {
   float position[3];
-  float theta, phi, value;
+  float theta, phi;
+  float radiance, pdf, f, pdf_bsdf;
+  // the sample's share of the integral of the incident luminance over directions
+  double value() const { return pdf > 0 ? double(radiance) / double(pdf) : 0.0; }
 };
 
 // A world direction's (theta, phi) in the guide's map, and back.
@@ -54,6 +59,8 @@ struct FieldSettings {
   std::size_t min_vertices = 256;      // a leaf with fewer has no mixture (the BSDF samples there)
   int max_depth = 24;                  // of the tree
   double compact_sigma = 0.5;          // components this compact (sigma_max, radians) are carried
+  double share = 0.5;                  // the largest share of a vertex's directions drawn from the guide
+  bool adapt_share = true;             // each leaf picks its share (Leaf::share); false: every leaf takes `share`
   FitSection fit;                      // the leaves' sweep settings (output paths unused)
 };
 
@@ -63,6 +70,12 @@ struct FieldSettings {
 // as the world lighting's mixture does.
 struct Leaf {
   mix::SliceMixture mixture;
+  // The share of a vertex's directions drawn from the guide here: of 0, 1/8, ..., 1 times
+  // FieldSettings::share, the one whose one-sample MIS estimate of the leaf's samples'
+  // scattered light, f L / (share p_guide + (1 - share) p_bsdf), has the least second
+  // moment (estimated from the samples, each weighted by its own density): where the guide
+  // would add variance, it is not used.
+  double share = 0;
   std::vector<mix::Gaussian> compact;
   double compact_share = 0;  // the compact components' share of the mixture's weight
 };
@@ -82,6 +95,7 @@ class RadianceField {
 
   std::size_t leaves() const { return leaf_of_node_count_; }
   std::size_t fitted() const { return fitted_; }
+  std::size_t guiding() const { return guiding_; }  // leaves whose share is above 0
   double mean_k() const;
   double fit_seconds() const { return fit_seconds_; }
 
@@ -94,9 +108,12 @@ class RadianceField {
   };
   std::vector<Node> nodes_;
   std::vector<Leaf> leaves_;
-  std::size_t leaf_of_node_count_ = 0, fitted_ = 0;
+  std::size_t leaf_of_node_count_ = 0, fitted_ = 0, guiding_ = 0;
   double fit_seconds_ = 0;
 };
+
+// Leaf::share for `guide` over the samples [begin, end), of 0, 1/8, ..., 1 times `largest`.
+double best_share(const mix::SliceMixture& guide, const Sample* begin, const Sample* end, double largest);
 
 // The estimate a leaf's grid holds: per cell the sum of the values of the samples in it
 // over the leaf's samples, [theta][phi] with theta rows from -pi/2 up and phi columns

@@ -10,7 +10,6 @@ namespace render {
 GuideTrainer::GuideTrainer(const SceneView& base, const GuideSetup& setup, std::string what)
     : view_(base), setup_(setup), what_(std::move(what)) {
   view_.guide = &field_;
-  view_.guide_share = setup_.share;
   view_.guide_depth = setup_.depth;
   rows_.resize(std::size_t(view_.height));
   view_.train = setup_.iterations > 0 ? &rows_ : nullptr;
@@ -34,7 +33,7 @@ void GuideTrainer::after_pass(int done) {
   learn_seconds_ += field_.fit_seconds();
   log_line("render: " + what_ + ": iteration " + std::to_string(iteration_) + ": " + std::to_string(n) +
            " samples, " + std::to_string(field_.leaves()) + " leaves, " + std::to_string(field_.fitted()) +
-           " fitted, mean K " + format_number(field_.mean_k(), "%.2f") + ", " +
+           " fitted, " + std::to_string(field_.guiding()) + " guiding, mean K " + format_number(field_.mean_k(), "%.2f") + ", " +
            format_number(field_.fit_seconds(), "%.2f") + " s");
   next_end_ = 2 * next_end_ + 1;  // iterations of 1, 2, 4, ... passes
   if (iteration_ >= setup_.iterations) {

@@ -15,13 +15,12 @@
 namespace bsdfmix {
 namespace render {
 
-// What a guided render learns with: the field's settings (its leaves' fit among them),
-// the training iterations, the path vertices guided, the share of guided directions, the
-// devices that fit.
+// What a guided render learns with: the field's settings (its leaves' fit and the largest
+// share of guided directions among them), the training iterations, the path vertices
+// guided, the devices that fit.
 struct GuideSetup {
   guide::FieldSettings field;
   int iterations = 4, depth = 1;
-  double share = 0.5;
   std::vector<Device> devices;
 };
 

@@ -66,7 +66,7 @@ struct LightPdf {
 struct TrainVertex {
   float position[3];
   float theta = 0, phi = 0;
-  double pdf = 0, beta = 0, mark = 0;
+  double pdf = 0, beta = 0, mark = 0, f = 0, pdf_bsdf = 0;
 };
 
 int thread_count(int asked) {
@@ -88,7 +88,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
   const bool guided = is_guided(est) && v.guide;
   TrainVertex path[64];
   int recorded = 0;
-  const int max_record = train ? std::min({v.max_depth, v.guide_depth, 64}) : 0;
+  const int max_record = train ? std::min(v.max_depth, 64) : 0;
   Rgb L, beta(1.0);
   double prev_pdf = 0;
   bool prev_nee = false;
@@ -162,7 +162,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     mix::SliceMixture gprod;
     double a_prod = 0, a_guide = 0;
     if (leaf) {
-      a_guide = v.guide_share;
+      a_guide = leaf->share;
       if (est == PathEstimator::GuidedProduct && (fiber || surface) && !leaf->compact.empty() && a_guide > 0) {
         try {
           gprod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(leaf->compact, axes, kGuideAxes),
@@ -274,6 +274,8 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       tv.theta = float(th);
       tv.phi = float(ph);
       tv.pdf = pdf;
+      tv.f = fv.luminance();
+      tv.pdf_bsdf = leaf ? pdf_of(wi) : pdf;
       tv.beta = beta.luminance();
       tv.mark = L.luminance();
     }
@@ -297,7 +299,10 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     std::copy(tv.position, tv.position + 3, s.position);
     s.theta = tv.theta;
     s.phi = tv.phi;
-    s.value = tv.pdf > 0 && tv.beta > 0 ? float((end - tv.mark) / tv.beta / tv.pdf) : 0.f;
+    s.radiance = tv.beta > 0 ? float((end - tv.mark) / tv.beta) : 0.f;
+    s.pdf = float(tv.pdf);
+    s.f = float(tv.f);
+    s.pdf_bsdf = float(tv.pdf_bsdf);
     train->push_back(s);
   }
   return L;

@@ -39,10 +39,9 @@ struct SceneView {
   double product_share = 0.5;
   mix::ProductOptions product{0.99, 32};
   // guided, guided_product (docs/render.md, "Guided paths"): the learned incident radiance
-  // (none: the estimators sample as mis_light_gmm), the share of directions drawn from it,
-  // the path vertices it guides, and, while it learns, where the training samples go: one vector per image row.
+  // (none: the estimators sample as mis_light_gmm; each leaf holds the share of directions
+  // drawn from it), the path vertices it guides, and, while it learns, where the training samples go: one vector per image row.
   const guide::RadianceField* guide = nullptr;
-  double guide_share = 0.5;
   int guide_depth = 1;  // the vertices of a path that are guided, from the camera
   std::vector<std::vector<guide::Sample>>* train = nullptr;
 };
