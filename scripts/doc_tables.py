@@ -20,6 +20,8 @@ The tables (NAME: CSV):
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
   render_reading       the same renders' reading under that table, by scripts/render_targets.py
+  render_room          bench/results/render/<fiber>_room/ (docs/render.md, "Measured"), by scripts/guide_targets.py
+  render_room_reading  the room renders' reading under that table, by scripts/guide_targets.py
   failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
                        "Measured"), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
@@ -210,6 +212,20 @@ def render_cloth():
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
+def room_dirs():
+    return [os.path.join(RESULTS, "render", "%s_room" % f) for f in ("silk", "cotton", "wool", "polyester")]
+
+
+def render_room():
+    import guide_targets
+    return guide_targets.markdown(room_dirs())
+
+
+def render_room_reading():
+    import guide_targets
+    return guide_targets.reading(room_dirs())
+
+
 def readme_measured():
     import readme_measured as m
     return m.markdown()
@@ -341,7 +357,8 @@ def converge_light():
 TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
-          "render_cloth": render_cloth, "converge": converge, "converge_light": converge_light,
+          "render_cloth": render_cloth, "render_room": render_room, "render_room_reading": render_room_reading,
+          "converge": converge, "converge_light": converge_light,
           "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
           "em_results": em_results, "converge_refine": converge_refine,

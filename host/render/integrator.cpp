@@ -60,13 +60,15 @@ struct LightPdf {
   }
 };
 
-// A vertex of a training path: where it is, the world direction it continued in (theta,
-// phi) and that direction's density, the throughput at the next vertex before Russian
-// roulette (luminance), and the path's luminance when it left the vertex.
+// A vertex of a training path: where it is, the direction it continued in (the guide's
+// theta, phi), that direction's density, the vertex's f cos and own sampler's density
+// there, the throughput at the next vertex before Russian roulette (luminance), and the
+// path's luminance when it left the vertex. Plain data: a path's array is filled only
+// while a guide trains.
 struct TrainVertex {
   float position[3];
-  float theta = 0, phi = 0;
-  double pdf = 0, beta = 0, mark = 0, f = 0, pdf_bsdf = 0;
+  float theta, phi;
+  double pdf, beta, mark, f, pdf_bsdf;
 };
 
 int thread_count(int asked) {
@@ -105,9 +107,10 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       break;
     }
     if (depth < max_record) {  // the rest is filled when the path continues
-      path[recorded] = TrainVertex{};
-      for (int i = 0; i < 3; ++i) path[recorded].position[i] = float(hit.position[std::size_t(i)]);
-      ++recorded;
+      TrainVertex& tv = path[recorded++];
+      for (int i = 0; i < 3; ++i) tv.position[i] = float(hit.position[std::size_t(i)]);
+      tv.theta = tv.phi = 0;
+      tv.pdf = tv.beta = tv.mark = tv.f = tv.pdf_bsdf = 0;
     }
     ++vertices;
     const Vec3 wo = neg(ray.dir);

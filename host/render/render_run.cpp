@@ -90,7 +90,7 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   // 5. The report, the cloth's pixels and the figures.
   write_pfm((fs::path(s.output) / "cloth_mask.pfm").string(), scene.cloth_mask());
   RenderFacts facts;
-  facts.scene = s.lighting.name;
+  facts.scene = s.room.enabled ? s.lighting.name + "_room" : s.lighting.name;  // the lighting, through a window
   facts.fiber = fs::path(config.table).stem().string();
   facts.table_bytes = bsdf.table_bytes();
   facts.full_table_bytes = std::uint64_t(bsdf.table_bytes()) * meta.phi_i.size();

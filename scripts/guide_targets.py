@@ -1,0 +1,105 @@
+#!/usr/bin/python3
+"""The guided estimators against the renderers' baseline (docs/render.md, "Measured"), from
+the render.csv of each render directory given (the room renders).
+
+For every directory, one row: the equal-time relative MSE of mis_light_cdf (the baseline),
+mis_light_gmm, mis_product, guided and guided_product; the best of the three new ones
+(mis_product, guided, guided_product) over the baseline (target at most 0.25 in the room,
+none above 1.1); guided_product over guided (target below 1 in the room); and the cost of a
+path vertex of each (thread-nanoseconds at equal samples, the guided ones' training passes
+and fits included).
+
+  scripts/guide_targets.py bench/results/render/silk_room ... [--markdown]
+"""
+
+import argparse
+import csv
+import json
+import os
+
+from targets_common import failer, fmt, print_table
+
+fail = failer("guide_targets")
+ESTIMATORS = ["mis_light_cdf", "mis_light_gmm", "mis_product", "guided", "guided_product"]
+NEW = ["mis_product", "guided", "guided_product"]
+
+
+def row_for(d):
+    try:
+        with open(os.path.join(d, "render.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        with open(os.path.join(d, "render.json")) as f:
+            meta = json.load(f)
+    except (OSError, ValueError) as e:
+        fail("%s: %s" % (d, e))
+    eq_time = {r["estimator"]: float(r["rel_mse"]) for r in rows if r["mode"] == "equal_time"}
+    missing = [e for e in ESTIMATORS if e not in eq_time]
+    if missing:
+        fail("%s: no equal_time row for %s" % (d, ", ".join(missing)))
+    ns = {r["estimator"]: float(r["ns_per_vertex"]) for r in rows if r["mode"] == "equal_spp" and r["ns_per_vertex"]}
+    base = eq_time["mis_light_cdf"]
+    best = min(NEW, key=lambda e: eq_time[e])
+    out = dict(fiber=meta["fiber"].replace("_table", ""), best_name=best, best=eq_time[best] / base,
+               worst=max(eq_time[e] / base for e in NEW), product_vs_guided=eq_time["guided_product"] / eq_time["guided"],
+               seconds=float(meta.get("equal_time_seconds", 0)))
+    for e in ESTIMATORS:
+        out[e] = eq_time[e]
+        out["ns_" + e] = ns.get(e)
+    return out
+
+
+COLS = ([("fiber", "fiber", None)] + [("%s rel MSE" % e, e, None) for e in ESTIMATORS] +
+        [("best new", "best_name", None), ("best new / mis_light_cdf", "best", lambda x: x <= 0.25),
+         ("worst new / mis_light_cdf", "worst", lambda x: x <= 1.1),
+         ("guided_product / guided", "product_vs_guided", lambda x: x < 1)] +
+        [("ns/vertex %s" % e, "ns_" + e, None) for e in ESTIMATORS])
+
+
+def cell(r, name, ok):
+    x = r[name]
+    if ok is None or x is None or isinstance(x, str):
+        return fmt(x)
+    return fmt(x) if ok(x) else fmt(x) + " !"
+
+
+def markdown(dirs):
+    rows = [row_for(d) for d in dirs]
+    out = ["| " + " | ".join(c[0] for c in COLS) + " |", "|" + "---|" * len(COLS)]
+    for r in rows:
+        out.append("| " + " | ".join(cell(r, n, ok) for _, n, ok in COLS) + " |")
+    return out
+
+
+def reading(dirs):
+    """The reading under the table, every figure from its rows."""
+    rows = [row_for(d) for d in dirs]
+    span = lambda xs: ("%.3gx" % min(xs)) if "%.3g" % min(xs) == "%.3g" % max(xs) else "%.3gx to %.3gx" % (min(xs), max(xs))
+    gmm = [r["mis_light_gmm"] / r["mis_light_cdf"] for r in rows]
+    guided = [r["guided"] / r["mis_light_cdf"] for r in rows]
+    gprod = [r["guided_product"] / r["mis_light_cdf"] for r in rows]
+    vs_gmm = [min(r["guided"], r["guided_product"]) / r["mis_light_gmm"] for r in rows]
+    cost = [r["ns_guided"] / r["ns_mis_light_gmm"] for r in rows if r["ns_guided"] and r["ns_mis_light_gmm"]]
+    met = [r for r in rows if r["best"] <= 0.25]
+    return [
+        "- **In the room, against the baseline** (`mis_light_cdf`, equal time): `mis_light_gmm` %s, `guided` %s, "
+        "`guided_product` %s (target for the best new estimator at most 0.25x: met on %d of the %d fibers)." % (
+            span(gmm), span(guided), span(gprod), len(met), len(rows)),
+        "- **Guiding against the mixture it guides** (`mis_light_gmm`, which samples as the guided estimators do where "
+        "a leaf does not guide): the better guided estimator's error is %s its error; a guided vertex costs %s "
+        "a `mis_light_gmm` vertex, training passes and fits included." % (span(vs_gmm), span(cost)),
+    ]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("dirs", nargs="+", help="render output directories (render.csv, render.json)")
+    ap.add_argument("--markdown", action="store_true")
+    a = ap.parse_args()
+    if a.markdown:
+        print("\n".join(markdown(a.dirs)))
+        return
+    print_table([row_for(d) for d in a.dirs], COLS, lambda r, n, ok: cell(r, n, ok), False)
+
+
+if __name__ == "__main__":
+    main()
