@@ -254,6 +254,18 @@ def cloth():
                 "%.1f" % max(float(x["rays"].split("-")[1].split()[0]) for x in r)))
 
 
+def room():
+    import guide_targets
+    r = [guide_targets.row_for(os.path.join(RESULTS, "render", "%s_room" % f)) for f in ("silk", "cotton", "wool", "polyester")]
+    ratio = lambda name: [x[name] / x["mis_light_cdf"] for x in r]
+    return ("| guided paths, the cloth of the four fibers in a room lit through a skylight, 256 x 256 | at equal time, "
+            "training included, against `mis_light_cdf`: `guided` %s, `guided_product` %s, `mis_light_gmm` %s (target "
+            "for the best new estimator 0.25x: %s) | `bench/reproduce.sh render_room` (`build/bsdfmix render "
+            "configs/render/<fiber>_room.yaml`), `scripts/guide_targets.py` ([CSVs](bench/results/render/), "
+            "docs/render.md) |" % (span(ratio("guided")), span(ratio("guided_product")), span(ratio("mis_light_gmm")),
+                                   "met" if all(x["best"] <= 0.25 for x in r) else "missed"))
+
+
 def constant():
     import converge_targets
     csvs = [os.path.join(RESULTS, "converge", "%s_convergence.csv" % m) for m in ("polyester", "cotton")]
@@ -284,4 +296,5 @@ def markdown():
             with_machine(stand_in(), "rgb_stand_in.csv", "rgb_refine.csv"),
             with_machine(smallest(), "stand_in_bytes.csv"), with_machine(lighting(), *light),
             with_machine(cloth(), *cloth_files),
+            with_machine(room(), *["render/%s_room/render.csv" % f for f in ("silk", "cotton", "wool", "polyester")]),
             with_machine(constant(), "converge/polyester_convergence.csv", "converge/cotton_convergence.csv")]
