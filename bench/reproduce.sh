@@ -99,7 +99,7 @@ outputs() {
     converge_light) echo "$results/converge_light/*" ;;
     mis_heuristic) echo "$results/mis_heuristic.csv" ;;
     render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
-    render_room) echo "$results/render/*_room/* docs/images/render_silk_room_sheet.png" ;;
+    render_room) echo "$results/render/*_room/* docs/images/render_silk_room_*.png" ;;
     em) echo "$results/em_k*_$machine.* docs/images/em_throughput.png" ;;
     render_rays) echo "$results/render_rays_$machine.csv" ;;
     failure_map) echo "$results/failure_map.csv" ;;
@@ -222,7 +222,8 @@ run_study() {
         mkdir -p $results/render/${f}_room
         cp out/render_$f/room/render.csv out/render_$f/room/render.json $results/render/${f}_room/
       done
-      cp out/render_silk/room/figures/figure_sheet.png docs/images/render_silk_room_sheet.png ;;
+      cp out/render_silk/room/figures/figure_sheet.png docs/images/render_silk_room_sheet.png
+      cp out/render_silk/room/figures/error_vs_time.png docs/images/render_silk_room_error_time.png ;;
     em)
       local b=build-bench/bsdfmix
       [ -x $b ] || b=$bin  # scripts/setup's build has the peers (BSDFMIX_BUILD_BENCH is on by default)
