@@ -13,11 +13,10 @@ and fits included).
 """
 
 import argparse
-import csv
-import json
 import os
 
-from targets_common import failer, fmt, print_table
+from render_targets import cell, read_render
+from targets_common import failer, markdown_lines, print_table
 
 fail = failer("guide_targets")
 ESTIMATORS = ["mis_light_cdf", "mis_light_gmm", "mis_product", "guided", "guided_product"]
@@ -25,13 +24,7 @@ NEW = ["mis_product", "guided", "guided_product"]
 
 
 def row_for(d):
-    try:
-        with open(os.path.join(d, "render.csv"), newline="") as f:
-            rows = list(csv.DictReader(f))
-        with open(os.path.join(d, "render.json")) as f:
-            meta = json.load(f)
-    except (OSError, ValueError) as e:
-        fail("%s: %s" % (d, e))
+    rows, meta = read_render(d, fail)
     eq_time = {r["estimator"]: float(r["rel_mse"]) for r in rows if r["mode"] == "equal_time"}
     missing = [e for e in ESTIMATORS if e not in eq_time]
     if missing:
@@ -51,25 +44,14 @@ def row_for(d):
 
 
 COLS = ([("fiber", "fiber", None)] + [("%s rel MSE" % e, e, None) for e in ESTIMATORS] +
-        [("best new", "best_name", None), ("best new / mis_light_cdf", "best", lambda x: x <= 0.25),
-         ("worst new / mis_light_cdf", "worst", lambda x: x <= 1.1),
-         ("guided_product / guided", "product_vs_guided", lambda x: x < 1)] +
+        [("best new", "best_name", None), ("best new / mis_light_cdf", "best", lambda x, r: x <= 0.25),
+         ("worst new / mis_light_cdf", "worst", lambda x, r: x <= 1.1),
+         ("guided_product / guided", "product_vs_guided", lambda x, r: x < 1)] +
         [("ns/vertex %s" % e, "ns_" + e, None) for e in ESTIMATORS])
 
 
-def cell(r, name, ok):
-    x = r[name]
-    if ok is None or x is None or isinstance(x, str):
-        return fmt(x)
-    return fmt(x) if ok(x) else fmt(x) + " !"
-
-
 def markdown(dirs):
-    rows = [row_for(d) for d in dirs]
-    out = ["| " + " | ".join(c[0] for c in COLS) + " |", "|" + "---|" * len(COLS)]
-    for r in rows:
-        out.append("| " + " | ".join(cell(r, n, ok) for _, n, ok in COLS) + " |")
-    return out
+    return markdown_lines([row_for(d) for d in dirs], COLS, cell)
 
 
 def reading(dirs):
@@ -102,7 +84,7 @@ def main():
     if a.markdown:
         print("\n".join(markdown(a.dirs)))
         return
-    print_table([row_for(d) for d in a.dirs], COLS, lambda r, n, ok: cell(r, n, ok), False)
+    print_table([row_for(d) for d in a.dirs], COLS, cell, False)
 
 
 if __name__ == "__main__":

@@ -35,7 +35,8 @@ MIXTURE = ["mis_tab", "mis_light_gmm", "mis_product"]
 TABLE_CDF = ["cdf_tab", "mis_light_cdf"]
 
 
-def row_for(d):
+def read_render(d, fail=fail):
+    """A render directory's render.csv rows and render.json."""
     try:
         with open(os.path.join(d, "render.csv"), newline="") as f:
             rows = list(csv.DictReader(f))
@@ -43,6 +44,11 @@ def row_for(d):
             meta = json.load(f)
     except (OSError, ValueError) as e:
         fail("%s: %s" % (d, e))
+    return rows, meta
+
+
+def row_for(d):
+    rows, meta = read_render(d)
     eq_time = {r["estimator"]: float(r["rel_mse"]) for r in rows if r["mode"] == "equal_time"}
     eq_spp = [r for r in rows if r["mode"] == "equal_spp"]
     if "uniform" not in eq_time:

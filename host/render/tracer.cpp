@@ -76,11 +76,34 @@ struct Tracer::Impl {
   const unsigned* indices = nullptr;   // the curve geometry's index buffer
 
   // Throws with Embree's error text if the last calls failed.
-  void check(const char* what) {
+  void check(const std::string& what) {
     const RTCError e = rtcGetDeviceError(device);
     if (e != RTC_ERROR_NONE)
-      throw Error(std::string("render: Embree failed to ") + what + ": " + error_name(e) +
+      throw Error("render: Embree failed to " + what + ": " + error_name(e) +
                   (last_error.empty() ? "" : " (" + last_error + ")"));
+  }
+
+  // A triangle mesh as the scene's geometry `id`, its vertices as float; Error naming
+  // `what` for a triangle that indexes past the vertices.
+  void attach_mesh(const SurfaceMesh& mesh, unsigned id, const std::string& what) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                             3 * sizeof(float), mesh.vertices.size()));
+    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), mesh.triangles.size()));
+    check("allocate the " + what + " buffers");
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+      for (int c = 0; c < 3; ++c) vb[3 * i + std::size_t(c)] = static_cast<float>(mesh.vertices[i][c]);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        if (mesh.triangles[t][std::size_t(c)] >= mesh.vertices.size())
+          throw Error("render: a " + what + " triangle is out of range");
+        ib[3 * t + std::size_t(c)] = mesh.triangles[t][std::size_t(c)];
+      }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scene, g, id);
+    rtcReleaseGeometry(g);
+    check("build the " + what + " geometry");
   }
 
   bool bspline() const { return type == CurveType::FlatBSpline || type == CurveType::RoundBSpline; }
@@ -203,54 +226,23 @@ Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, co
 
   if (surface && !surface->triangles.empty()) {
     m.surface = *surface;
-    const SurfaceMesh& sm = m.surface;
-    if (sm.normals.size() != sm.vertices.size()) throw Error("render: the surface needs one normal per vertex");
-    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                             3 * sizeof(float), sm.vertices.size()));
-    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), sm.triangles.size()));
-    m.check("allocate the surface buffers");
-    for (std::size_t i = 0; i < sm.vertices.size(); ++i)
-      for (int c = 0; c < 3; ++c) vb[3 * i + std::size_t(c)] = static_cast<float>(sm.vertices[i][c]);
-    for (std::size_t t = 0; t < sm.triangles.size(); ++t)
-      for (int c = 0; c < 3; ++c) {
-        if (sm.triangles[t][std::size_t(c)] >= sm.vertices.size()) throw Error("render: a surface triangle is out of range");
-        ib[3 * t + std::size_t(c)] = sm.triangles[t][std::size_t(c)];
-      }
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(m.scene, g, kSurfaceGeom);
-    rtcReleaseGeometry(g);
-    m.check("build the surface geometry");
+    if (m.surface.normals.size() != m.surface.vertices.size())
+      throw Error("render: the surface needs one normal per vertex");
+    m.attach_mesh(m.surface, kSurfaceGeom, "surface");
   }
 
   if (room && !room->triangles.empty()) {
-    const SurfaceMesh& rm = *room;
-    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                             3 * sizeof(float), rm.vertices.size()));
-    unsigned* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(unsigned), rm.triangles.size()));
-    m.check("allocate the room buffers");
-    for (std::size_t i = 0; i < rm.vertices.size(); ++i)
-      for (int c = 0; c < 3; ++c) vb[3 * i + std::size_t(c)] = static_cast<float>(rm.vertices[i][c]);
-    for (std::size_t t = 0; t < rm.triangles.size(); ++t) {
+    m.attach_mesh(*room, kRoomGeom, "room");
+    // each triangle's unit normal and first vertex, from the float vertices Embree holds
+    for (const auto& tri : room->triangles) {
       Vec3 p[3];
-      for (int c = 0; c < 3; ++c) {
-        const unsigned k = rm.triangles[t][std::size_t(c)];
-        if (k >= rm.vertices.size()) throw Error("render: a room triangle is out of range");
-        ib[3 * t + std::size_t(c)] = k;
-        for (int d = 0; d < 3; ++d) p[c][d] = vb[3 * std::size_t(k) + std::size_t(d)];
-      }
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) p[c][d] = static_cast<float>(room->vertices[tri[std::size_t(c)]][d]);
       const Vec3 n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
       if (!(dot(n, n) > 0)) throw Error("render: a room triangle has no area");
       m.room_normal.push_back(normalized(n));
       m.room_point.push_back(p[0]);
     }
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(m.scene, g, kRoomGeom);
-    rtcReleaseGeometry(g);
-    m.check("build the room geometry");
   }
 
   rtcCommitScene(m.scene);
