@@ -108,6 +108,43 @@ TEST_CASE("the carried lighting keeps the world mixture's value per direction", 
   CHECK(worst < 0.06);
 }
 
+TEST_CASE("a lobe over the guide's map is carried as the same lobe over the world's map", "[render][sample][guide]") {
+  // An isotropic lobe of standard deviation s on the sphere at a random direction, written
+  // over each map (phi's deviation s / cos(theta) there): carried into a random frame, both
+  // are the same Gaussian, whichever map it came from.
+  int frames = 0;
+  for (std::uint32_t k = 0; k < 40; ++k) {
+    const Domain d = k % 2 ? Domain::Hemisphere : Domain::Fiber;
+    const LocalAxes f = random_frame(k, d);
+    double u[4];
+    mix::uniforms(kSeed, 9, k, u);
+    const double z = 2 * u[0] - 1, a = 2 * kPi * u[1], r = std::sqrt(1 - z * z), s = 0.05;
+    const Vec3 w{r * std::cos(a), r * std::sin(a), z};
+    auto lobe = [&](const LocalAxes& map) {
+      mix::Gaussian g;
+      local_angles(map, w, g.mu_t, g.mu_p);
+      g.weight = 1;
+      g.s_tt = s * s;
+      g.s_pp = s * s / (std::cos(g.mu_t) * std::cos(g.mu_t));
+      return std::vector<mix::Gaussian>{g};
+    };
+    const std::vector<mix::Gaussian> in_world = lobe(kWorldAxes), in_guide = lobe(kGuideAxes);
+    // away from every map's pole, where the lobe is one Gaussian in each
+    if (std::abs(in_world[0].mu_t) > 1.2 || std::abs(in_guide[0].mu_t) > 1.2 || pole_angle(f, w) < 0.5) continue;
+    const mix::SliceMixture from_world = carry_lighting(in_world, f), from_guide = carry_lighting(in_guide, f, kGuideAxes);
+    REQUIRE(from_world.components.size() == 1);
+    REQUIRE(from_guide.components.size() == 1);
+    const mix::Gaussian &x = from_world.components[0], &y = from_guide.components[0];
+    CHECK(y.mu_t == Approx(x.mu_t).margin(1e-12));
+    CHECK(y.mu_p == Approx(x.mu_p).margin(1e-12));
+    CHECK(y.s_tt == Approx(x.s_tt).epsilon(1e-9));
+    CHECK(y.s_pp == Approx(x.s_pp).epsilon(1e-9));
+    CHECK(y.s_tp == Approx(x.s_tp).margin(1e-9 * std::sqrt(x.s_tt * x.s_pp)));
+    ++frames;
+  }
+  REQUIRE(frames >= 10);
+}
+
 TEST_CASE("broad components are left out of the carried lighting", "[render][sample]") {
   mix::SliceMixture world;
   world.components = {gauss(0.5, 0.6, 0.7, 0.05, 0.05, 0), gauss(0.5, 0.0, 0.0, 0.9, 1.5, 0)};
