@@ -24,8 +24,6 @@ struct Range {
   int depth, node;
 };
 
-std::size_t vertices_in(const Sample* b, const Sample* e) { return std::size_t(e - b); }
-
 // The leaves' grids as the slices of one sweep: slice i is leaf i's grid over the guide's
 // map (the fiber domain's (theta, phi)), its weights the cell estimates themselves (the
 // integral of L_i over the cell's solid angle is what the mixture's density over (theta,
@@ -68,7 +66,7 @@ double best_share(const mix::SliceMixture& guide, const Sample* begin, const Sam
 
 std::vector<double> bin_leaf(const Sample* begin, const Sample* end, int grid_theta, int grid_phi) {
   std::vector<double> g(std::size_t(grid_theta) * std::size_t(grid_phi), 0.0);
-  const std::size_t n = vertices_in(begin, end);
+  const std::size_t n = std::size_t(end - begin);
   if (n == 0) return g;
   // Paths through near-lossless fibers make heavy-tailed estimates: a few samples would
   // each make a cell, and a component, of their own. Values are capped at kClamp times
@@ -103,7 +101,7 @@ void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, 
     todo.pop_back();
     Sample* b = samples.data() + r.begin;
     Sample* e = samples.data() + r.end;
-    const std::size_t nv = vertices_in(b, e);
+    const std::size_t nv = r.end - r.begin;
     int axis = -1;
     if (nv > s.leaf_samples && r.depth < s.max_depth) {
       float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};

@@ -38,7 +38,6 @@ class GuideTrainer {
   // samples; after the last one, stops collecting.
   void after_pass(int done);
   const guide::RadianceField& field() const { return field_; }
-  double learn_seconds() const { return learn_seconds_; }
 
  private:
   SceneView view_;
@@ -47,7 +46,6 @@ class GuideTrainer {
   std::string what_;
   guide::RadianceField field_;
   std::vector<std::vector<guide::Sample>> rows_;
-  double learn_seconds_ = 0;
 };
 
 }  // namespace render

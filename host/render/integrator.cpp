@@ -161,12 +161,13 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     // carried into the hit's frame with the BSDF mixture (share a_prod); the BSDF sampler
     // has the rest. dir_pdf is the density of the next direction, whoever draws it.
     const guide::Leaf* leaf = guided && depth < v.guide_depth ? v.guide->at(hit.position) : nullptr;
-    const LocalAxes axes = fiber ? frame.axes() : sframe.axes();
+    LocalAxes axes;  // the hit's frame, where guided_product carries the leaf
     mix::SliceMixture gprod;
     double a_prod = 0, a_guide = 0;
     if (leaf) {
       a_guide = leaf->share;
       if (est == PathEstimator::GuidedProduct && (fiber || surface) && !leaf->compact.empty() && a_guide > 0) {
+        axes = fiber ? frame.axes() : sframe.axes();
         try {
           gprod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(leaf->compact, axes, kGuideAxes),
                                    v.product);
@@ -229,16 +230,14 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
         Ray shadow = next;
         shadow.dir = wl;
         ++rays;
-        if (!v.tracer->occluded(shadow)) {
-          const double Le = v.lighting->radiance_world(wl), w = power_weight(pl, dir_pdf(wl));
-          L += beta * fv * Le * w / pl;
-        }
+        if (!v.tracer->occluded(shadow))
+          L += beta * fv * v.lighting->radiance_world(wl) * power_weight(pl, dir_pdf(wl)) / pl;
       }
     }
     // the next direction
     rng.draw(dim + 2, u);
-    double ur[4];  // ur[0]: Russian roulette; ur[1]: the guide's technique
-    rng.draw(dim + 3, ur);
+    double ur[4] = {0, 0, 0, 0};  // ur[0]: Russian roulette; ur[1]: the guide's technique (drawn where either is needed)
+    if (leaf || depth + 1 >= v.rr_depth) rng.draw(dim + 3, ur);
     Vec3 wi;
     double pdf = 0;
     if (leaf && ur[1] < a_guide + a_prod) {

@@ -31,7 +31,6 @@ GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std
   g.field = s.guide;
   g.iterations = s.guide_iterations;
   g.depth = s.guide_depth;
-  g.field.share = s.guide_share;
   // a leaf's grid is small and noisy: the search up to k_max with one restart, EM's fits
   // (no L1 refinement), the config's seed, penalty and search strategy
   FitSection& f = g.field.fit;

@@ -86,8 +86,8 @@ RenderSettings parse_render(const RenderSection& section) {
                                 {"stand_in_estimator", r.stand_in_estimator}})
     if (is_guided(e)) n.fail(key, "a guided estimator learns within each render; expected one that does not");
   const ConfigNode gd = nested(section, n, "guide");
-  r.guide_share = gd.number("share", 0, 1);
-  if (!(r.guide_share > 0 && r.guide_share < 1))
+  r.guide.share = gd.number("share", 0, 1);
+  if (!(r.guide.share > 0 && r.guide.share < 1))
     gd.fail("share", "expected a share strictly between 0 and 1 (the rest of the directions go to the BSDF sampler)");
   r.guide_iterations = int(gd.integer("iterations", 0, 20));
   r.guide_depth = int(gd.integer("depth", 1, 1000));

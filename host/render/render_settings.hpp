@@ -37,10 +37,9 @@ struct RenderSettings {
   std::vector<PathEstimator> estimators;
   bool stand_in = true;
   double product_share = 0.5;  // mis_product: the product's share of the light samples, in (0, 1)
-  // guided, guided_product (docs/render.md, "Guided paths"): the share of guided directions,
-  // the training iterations, the path vertices guided, the leaves' largest K, the field's
-  // tree and grid
-  double guide_share = 0.5;
+  // guided, guided_product (docs/render.md, "Guided paths"): the training iterations, the
+  // path vertices guided, the leaves' largest K, and the field's settings (its largest
+  // share of guided directions, tree and grid)
   int guide_iterations = 4, guide_depth = 1, guide_k_max = 8;
   guide::FieldSettings guide;
   int max_depth = 24, rr_depth = 3;
