@@ -98,6 +98,12 @@ std::vector<double> ConfigNode::numbers(const std::string& key) const {
   return out;
 }
 
+std::vector<double> ConfigNode::numbers(const std::string& key, std::size_t count, const std::string& shape) const {
+  std::vector<double> v = numbers(key);
+  if (v.size() != count) fail(key, "expected " + shape);
+  return v;
+}
+
 ConfigNode ConfigNode::child(const std::string& key) const {
   const YAML::Node n = raw(key);
   if (!n.IsMap()) fail(key, "expected a mapping, got " + show(n));

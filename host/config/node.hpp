@@ -24,6 +24,8 @@ class ConfigNode {
   double number(const std::string& key, double min, double max) const;
   bool boolean(const std::string& key) const;
   std::vector<double> numbers(const std::string& key) const;  // a number or a list of numbers
+  // A list of exactly `count` numbers; else fails with "expected <shape>".
+  std::vector<double> numbers(const std::string& key, std::size_t count, const std::string& shape) const;
   ConfigNode child(const std::string& key) const;             // a mapping
   YAML::Node raw(const std::string& key) const;
 

@@ -41,10 +41,7 @@ ConfigNode nested(const RenderSection& s, const ConfigNode& parent, const std::s
 }
 
 Vec3 vec3(const ConfigNode& n, const std::string& key) {
-  const std::vector<double> v = n.numbers(key);
-  if (v.size() != 3) n.fail(key, "expected three numbers [x, y, z]");
-  for (double x : v)
-    if (!std::isfinite(x)) n.fail(key, "expected finite numbers");
+  const std::vector<double> v = n.numbers(key, 3, "three numbers [x, y, z]");
   return {v[0], v[1], v[2]};
 }
 
@@ -94,10 +91,11 @@ RenderSettings parse_render(const RenderSection& section) {
   r.guide_k_max = int(gd.integer("k_max", 1, 64));
   r.guide.leaf_samples = std::size_t(gd.integer("leaf_vertices", 16, INT64_MAX));
   r.guide.min_vertices = std::size_t(gd.integer("min_vertices", 1, INT64_MAX));
-  const std::vector<double> grid = gd.numbers("grid");
-  if (grid.size() != 2 || !(grid[0] >= 2 && grid[0] <= 256 && grid[1] >= 2 && grid[1] <= 512) ||
+  const char* grid_shape = "[theta cells, phi cells], integers in [2, 256] and [2, 512]";
+  const std::vector<double> grid = gd.numbers("grid", 2, grid_shape);
+  if (!(grid[0] >= 2 && grid[0] <= 256 && grid[1] >= 2 && grid[1] <= 512) ||
       grid[0] != std::floor(grid[0]) || grid[1] != std::floor(grid[1]))
-    gd.fail("grid", "expected [theta cells, phi cells], integers in [2, 256] and [2, 512]");
+    gd.fail("grid", std::string("expected ") + grid_shape);
   r.guide.grid_theta = int(grid[0]);
   r.guide.grid_phi = int(grid[1]);
   r.max_depth = int(n.integer("max_depth", 1, 1000));

@@ -1,11 +1,10 @@
 // The room: its config and its triangles.
 #include "render/room.hpp"
 
-#include <cmath>
-#include <cstdio>
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -19,19 +18,7 @@ bool window_wall_name(const std::string& w) {
   return false;
 }
 
-std::vector<double> finite_numbers(const ConfigNode& n, const std::string& key, std::size_t count, const char* shape) {
-  const std::vector<double> v = n.numbers(key);
-  if (v.size() != count) n.fail(key, std::string("expected ") + shape);
-  for (double x : v)
-    if (!std::isfinite(x)) n.fail(key, "expected finite numbers");
-  return v;
-}
-
-std::string show(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", x);
-  return b;
-}
+std::string show(double x) { return format_number(x, "%g"); }
 
 // Appends the rectangle [u0, u1] x [v0, v1] of wall `a`, on the plane at `w` along its
 // axis, as two triangles with the unit normal `sign` times the axis; nothing when it has no
@@ -73,8 +60,8 @@ WallAxes window_wall(const std::string& window) {
 RoomParams parse_room(const ConfigNode& room, const Vec3& camera_position) {
   RoomParams p;
   p.enabled = room.boolean("enabled");
-  const std::vector<double> lo = finite_numbers(room, "min", 3, "three numbers [x, y, z]");
-  const std::vector<double> hi = finite_numbers(room, "max", 3, "three numbers [x, y, z]");
+  const std::vector<double> lo = room.numbers("min", 3, "three numbers [x, y, z]");
+  const std::vector<double> hi = room.numbers("max", 3, "three numbers [x, y, z]");
   for (int i = 0; i < 3; ++i) {
     p.min[i] = lo[std::size_t(i)];
     p.max[i] = hi[std::size_t(i)];
@@ -85,8 +72,8 @@ RoomParams parse_room(const ConfigNode& room, const Vec3& camera_position) {
   if (!window_wall_name(p.window))
     room.fail("window", "expected +x, -x, +y, -y or +z (the wall with the window), not '" + p.window + "'");
   const WallAxes a = window_wall(p.window);
-  const std::vector<double> wlo = finite_numbers(room, "window_min", 2, "two numbers [u, v]");
-  const std::vector<double> whi = finite_numbers(room, "window_max", 2, "two numbers [u, v]");
+  const std::vector<double> wlo = room.numbers("window_min", 2, "two numbers [u, v]");
+  const std::vector<double> whi = room.numbers("window_max", 2, "two numbers [u, v]");
   for (int k = 0; k < 2; ++k) {
     p.window_min[k] = wlo[std::size_t(k)];
     p.window_max[k] = whi[std::size_t(k)];
