@@ -8,9 +8,10 @@
 #   bench/reproduce.sh [--quick] [--list] [--help] [STUDY ...]
 #
 # With no STUDY, every study in order. --quick runs the short studies only (about 15
-# minutes on 2 cores). The full run is about 4 hours on 2 cores (PoCL; the sum of each
+# minutes on 2 cores). The full run is about 5 hours on 2 cores (PoCL; the sum of each
 # study's last run, on the machine provenance.csv names for its files, not timed end to
-# end); the longest studies are render (about 90 minutes), search_compare and rgb_refine.
+# end); the longest studies are render (about 150 minutes; RENDER_FIBERS="polyester" renders
+# one fiber's sky and sky-map configs alone), search_compare and rgb_refine.
 # Run from the repository root after scripts/setup, whose build has the peers the em study
 # runs (BSDFMIX_BUILD_BENCH, on by default; a build-bench/ build is used when present).
 #
@@ -26,7 +27,7 @@ provenance=$results/provenance.csv
 
 # name : minutes on 2 cores : quick? : what
 studies=(
-  "rgb_stand_in:4:quick:the chromatic stand-in on the RGL materials and fiber presets (rgb_stand_in.csv)"
+  "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets, with and without colour copies (rgb_stand_in.csv, rgb_stand_in_no_copies.csv)"
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
@@ -40,7 +41,7 @@ studies=(
   "converge_refine:1:no:satin's importance sampling by the refined and by EM's mixtures (converge_refine/)"
   "converge_light:10:no:the convergence studies with the lighting (converge_light/)"
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
-  "render:90:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
+  "render:150:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
   "render_room:30:no:the cloth of the four fibers in the room, the guided estimators against the baseline (render/<fiber>_room/)"
   "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
   "em_precision:1:no:the EM kernels against their reference, both precisions (em_precision.csv)"
@@ -84,7 +85,7 @@ record() {
 # The files a study writes (globs under the repository root).
 outputs() {
   case $1 in
-    rgb_stand_in) echo "$results/rgb_stand_in.csv" ;;
+    rgb_stand_in) echo "$results/rgb_stand_in.csv $results/rgb_stand_in_no_copies.csv" ;;
     rgb_refine) echo "$results/rgb_refine.csv" ;;
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
@@ -98,7 +99,7 @@ outputs() {
     converge_refine) echo "$results/converge_refine/*" ;;
     converge_light) echo "$results/converge_light/*" ;;
     mis_heuristic) echo "$results/mis_heuristic.csv" ;;
-    render) echo "$results/render/*_sky/* $results/render/*_skymap/*" ;;
+    render) echo "$results/render/*_sky/* $results/render/*_skymap/* docs/images/render_silk_sky_*.png" ;;
     render_room) echo "$results/render/*_room/* docs/images/render_silk_room_*.png" ;;
     em) echo "$results/em_k*_$machine.* docs/images/em_throughput.png" ;;
     render_rays) echo "$results/render_rays_$machine.csv" ;;
@@ -122,7 +123,12 @@ record_all() {  # the study's files written since the marker
 run_study() {
   local name=$1
   case $name in
-    rgb_stand_in) $py bench/rgb_stand_in.py ;;
+    rgb_stand_in)
+      $py bench/rgb_stand_in.py
+      # the same tables with the components' colour alone (docs/fitting.md, "Colour copies")
+      mkdir -p out/bench_rgb_no_copies
+      for f in out/bench_rgb/*.h5; do case $f in *_mixture.h5) ;; *) ln -sf "$PWD/$f" out/bench_rgb_no_copies/ ;; esac; done
+      $py bench/rgb_stand_in.py --set 'rgb_copies=~' --work out/bench_rgb_no_copies --csv $results/rgb_stand_in_no_copies.csv ;;
     rgb_refine) $py bench/rgb_refine.py ;;
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
     render_rgl)
@@ -208,14 +214,19 @@ run_study() {
         cp $w/${r}_satin_convergence_tail.csv $results/converge_refine/satin_refine_${r}_tail.csv
       done ;;
     mis_heuristic) bench/mis_heuristic.sh ;;
-    render)
-      for f in silk cotton wool polyester; do
+    render)  # RENDER_FIBERS (default: all four) renders some of them again
+      for f in ${RENDER_FIBERS:-silk cotton wool polyester}; do
         for s in sky skymap; do
           $bin render configs/render/${f}_${s}.yaml
           mkdir -p $results/render/${f}_${s}
           cp out/render_$f/$s/render.csv out/render_$f/$s/render.json $results/render/${f}_${s}/
         done
-      done ;;
+      done
+      case " ${RENDER_FIBERS:-silk} " in *" silk "*)
+        cp out/render_silk/sky/figures/figure_sheet.png docs/images/render_silk_sky_sheet.png
+        cp out/render_silk/sky/figures/error_vs_time.png docs/images/render_silk_sky_error_time.png
+        cp out/render_silk/sky/figures/stand_in.png docs/images/render_silk_sky_stand_in.png ;;
+      esac ;;
     render_room)
       for f in silk cotton wool polyester; do
         $bin render configs/render/${f}_room.yaml

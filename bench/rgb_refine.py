@@ -6,7 +6,8 @@ luminance L1 median and p90, the RGB error less its negative part (median) and i
 the luminance median (target 1.2), the mean K and the fit time, and importance sampling by
 the mixture, the chi-square divergence of each slice from it (bench/mixture_chi_square.py:
 the mean over the slices, and the median and p90 of the per-slice ratio to the luminance
-alone's).
+alone's). Every variant keeps the components' colour (`rgb_copies: ~`, no colour copies:
+docs/fitting.md, "Colour copies"), so that what is compared is what the refinement does.
 
     bench/rgb_refine.py [--bsdfmix build/bsdfmix] [--work out/rgb_refine]
                         [--csv bench/results/rgb_refine.csv]
@@ -67,7 +68,8 @@ def main():
         out_csv = os.path.join(work, "rgb_stand_in.csv")
         print(f"== {name}: refine_rgb {share}, refine_kl {kl}", flush=True)
         subprocess.run([sys.executable, script, "--bsdfmix", args.bsdfmix, "--work", work, "--tables", tables,
-                        "--set", f"refine_rgb={share}", "--set", f"refine_kl={kl}", "--csv", out_csv], check=True)
+                        "--set", f"refine_rgb={share}", "--set", f"refine_kl={kl}", "--set", "rgb_copies=~",
+                        "--csv", out_csv], check=True)
         with open(out_csv) as f:
             for r in csv.DictReader(f):
                 seconds[(name, r["table"])] = float(r["fit_seconds"])

@@ -17,6 +17,8 @@ default settings, and reads the fit report and the files back:
   component's closed-form in-domain mass times its amplitude) against the table's (the sum
   of its cells' integrand weights), the largest relative error over the slices (target:
   0.5%); and the same with the stand-in summed over the cells;
+- the slices whose colour the file holds as colour copies (copied_slices; docs/fitting.md,
+  "Colour copies"), recomputed like the rest from the copies' own shapes;
 - how far each slice's channels are from the luminance's shape (grey_share: each channel
   against its sum's share of the luminance, summed over the three, over their absolute sum;
   the L1 refinement leaves the channels of a slice below 1% out, host/fit/l1_refine.hpp).
@@ -113,6 +115,9 @@ def recompute(table_path, mixture_path):
         jac = np.cos(tt) * np.sin(tt) * area
         lo, hi = 0.0, math.pi / 2
     has_rgb = "rgb_scale" in m
+    # colour copies: the rows of the slices that have them, slice s's at copies_offset[s] (-1: none)
+    copies = m["rgb_copies"][:] if "rgb_copies" in m else None
+    copies_offset = m["copies_offset"][:] if "rgb_copies" in m else None
     rows = []
     for s in range(m["k"].shape[0]):
         k = int(m["k"][s])
@@ -125,15 +130,31 @@ def recompute(table_path, mixture_path):
         y = np.zeros_like(tt)
         c = np.zeros(tt.shape + (3,))
         energy = np.zeros(4)
+        copied = copies is not None and int(copies_offset[s]) >= 0
+        copy_amp = copies[int(copies_offset[s]):int(copies_offset[s]) + k].astype(np.float64) if copied else None
         for j in range(k):
             a, b, cc = (float(x) for x in m["covariances"][s, j])
             mt, mp = (float(x) for x in m["means"][s, j])
             mass = component_mass(tt, pp, mt, mp, a, b, cc, dth, dph, area)
             y += scale * weights[j] * mass
-            c += mass[..., None] * rgb_amp[j]
             z = erf_mass(mt, a, lo, hi)
             energy[0] += scale * weights[j] * z
-            energy[1:] += rgb_amp[j] * z
+            if not copied:
+                c += mass[..., None] * rgb_amp[j]
+                energy[1:] += rgb_amp[j] * z
+                continue
+            # Colour copies (docs/formats.md): copy i moved by 0.5 along a column of the
+            # Cholesky factor L (i = 0, 1: -, + L e_theta; 2, 3: -, + L e_phi), covariance x 0.875.
+            l_tt = math.sqrt(a)
+            l_pt = b / l_tt
+            l_pp = math.sqrt(max(cc - l_pt * l_pt, 0.0))
+            for i in range(4):
+                sign = 1.0 if i % 2 else -1.0
+                ct = mt + (0.5 * sign * l_tt if i < 2 else 0.0)
+                cp = mp + 0.5 * sign * (l_pt if i < 2 else l_pp)
+                mass_i = component_mass(tt, pp, ct, cp, 0.875 * a, 0.875 * b, 0.875 * cc, dth, dph, area)
+                c += mass_i[..., None] * copy_amp[j, i]
+                energy[1:] += copy_amp[j, i] * erf_mass(ct, 0.875 * a, lo, hi)
         table_energy = np.concatenate([[w_y.sum()], w_c.reshape(-1, 3).sum(axis=0)])
         flat = w_c.reshape(-1, 3)
         noise = [False] + [bool(-flat[:, ch][flat[:, ch] < 0].sum() > 0.005 * np.abs(flat[:, ch]).sum())
@@ -147,7 +168,7 @@ def recompute(table_path, mixture_path):
         grey = (sum(np.abs(flat[:, ch] - flat[:, ch].sum() / w_y.sum() * w_y.reshape(-1)).sum() for ch in range(3))
                 / abs_rgb_of(flat) if w_y.sum() > 0 and abs_rgb_of(flat) > 0 else 0.0)
         rows.append({
-            "grey_share": grey,
+            "grey_share": grey, "copied": copied,
             "l1_rel": np.abs(w_y - y).sum() / w_y.sum() if w_y.sum() > 0 else 0.0,
             "rgb_l1_rel": err.sum() / abs_rgb if abs_rgb > 0 else 0.0,
             "rgb_negative": err[w_c < 0].sum() / abs_rgb if abs_rgb > 0 else 0.0,
@@ -210,13 +231,14 @@ def run(args):
             "grey_share_min": min(x["grey_share"] for x in rows),
             "grey_share_median": statistics.median(x["grey_share"] for x in rows),
             "grey_share_max": max(x["grey_share"] for x in rows),
+            "copied_slices": sum(1 for x in rows if x["copied"]),
         }
         print(f"{name:10s} L1 median {100 * r['l1_median']:.2f}%, RGB median {100 * r['rgb_median']:.2f}%, less the "
               f"negative part {100 * r['rgb_less_negative_median']:.2f}% ({r['ratio']:.3f}x); energy max Y/R/G/B "
               f"{100 * worst[0]:.2g}/{100 * worst[1]:.2g}/{100 * worst[2]:.2g}/{100 * worst[3]:.2g}% (cell sums "
               f"{100 * r['energy_cells_max']:.2f}%; {skipped} (slice, channel) noise); report vs recomputed "
               f"{r['l1_diff_points']:.2g} / {r['rgb_diff_points']:.2g} / {r['negative_diff_points']:.2g} points; "
-              f"fit {seconds:.1f} s", flush=True)
+              f"fit {seconds:.1f} s; {r['copied_slices']} slices with colour copies", flush=True)
         results.append(r)
     return results
 

@@ -11,6 +11,7 @@ bench/results/, between markers:
 
 The tables (NAME: CSV):
   rgb_stand_in         bench/results/rgb_stand_in.csv (docs/fitting.md, "Colour and energy")
+  rgb_copies           bench/results/rgb_stand_in{,_no_copies}.csv (docs/fitting.md, "Colour copies")
   rgb_refine           bench/results/rgb_refine.csv (docs/fitting.md, "The channels move the Gaussians")
   catalog              bench/results/catalog_summary.csv (docs/scale.md, "Catalogs")
   scale, scale_traffic bench/results/scale_amd-epyc-2c.csv (docs/scale.md, "Scaling measured")
@@ -80,6 +81,27 @@ def rgb_stand_in():
         out.append("| %s | %s | %s | %s | %s | %s | %.0e points |" % (
             label, pct(r["l1_median"]), pct(r["rgb_median"]), pct(r["rgb_less_negative_median"]),
             ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio, e, float(r["l1_diff_points"])))
+    return out
+
+
+def rgb_copies():
+    names = {"satin": "satin_rosaline", "paper": "paper_white", "sunflower": "cg_sunflower",
+             "iris": "cc_iris_purple_gem", "silk": "silk (fiber)", "cotton": "cotton (fiber)",
+             "polyester": "polyester (fiber, dyed red)", "wool": "wool (fiber)"}
+    out = ["| table | slices with copies | RGB error less the negative part, median: without / with copies | "
+           "ratio to the luminance L1 median: without / with (target <= 1.2) | luminance L1 median: without / with | "
+           "fit seconds: without / with |", "|---|---|---|---|---|---|"]
+    with_ = {r["table"]: r for r in rows("rgb_stand_in.csv")}
+    without = {r["table"]: r for r in rows("rgb_stand_in_no_copies.csv")}
+    for key, label in names.items():
+        if key not in with_ or key not in without:
+            continue
+        a, b = without[key], with_[key]
+        ratio = float(b["ratio"])
+        out.append("| %s | %s of %s | %s / %s | %.3fx / %s | %s / %s | %.1f / %.1f |" % (
+            label, b["copied_slices"], b["slices"], pct(a["rgb_less_negative_median"]),
+            pct(b["rgb_less_negative_median"]), float(a["ratio"]), ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio,
+            pct(a["l1_median"]), pct(b["l1_median"]), float(a["fit_seconds"]), float(b["fit_seconds"])))
     return out
 
 
@@ -354,7 +376,7 @@ def converge_light():
                                    for m in ("polyester", "cotton", "satin", "paper")])
 
 
-TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
+TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "render_room": render_room, "render_room_reading": render_room_reading,

@@ -11,6 +11,10 @@ For every render directory given, one row:
                        estimator's (target <= 1.5)
   product vs light CDF mis_product's rel MSE over mis_light_cdf's (the renderers' baseline;
                        target <= 0.5 on the sky and sky-map renders, never above 1.1)
+  guided vs light CDF  guided's and guided_product's rel MSE over mis_light_cdf's, and the best
+                       of the new estimators (mis_product, guided, guided_product) over it
+                       (target <= 0.5 under the sky and the sky map, none above 1.1); empty on
+                       a render made before the guided estimators
   ns per vertex        the cost of a path vertex of mis_light_cdf and of mis_product
   memory               table bytes / mixture bytes (target >= 100) and full 4D table bytes /
                        mixture bytes (target >= 1000)
@@ -33,6 +37,7 @@ from targets_common import failer, fmt, print_table
 fail = failer("render_targets")
 MIXTURE = ["mis_tab", "mis_light_gmm", "mis_product"]
 TABLE_CDF = ["cdf_tab", "mis_light_cdf"]
+NEW = ["mis_product", "guided", "guided_product"]  # the estimators past the renderers' baseline
 
 
 def read_render(d, fail=fail):
@@ -66,6 +71,11 @@ def row_for(d):
         vs_uniform=eq_time["uniform"] / mix if mix else None,
         vs_cdf=mix / cdf if mix and cdf else None,
         product_vs_cdf=ratio("mis_product", "mis_light_cdf"),
+        guided_vs_cdf=ratio("guided", "mis_light_cdf"), guided_product_vs_cdf=ratio("guided_product", "mis_light_cdf"),
+        best_new_vs_cdf=min((ratio(n, "mis_light_cdf") for n in NEW if ratio(n, "mis_light_cdf")), default=None)
+        if "guided" in eq_time else None,
+        worst_new_vs_cdf=max((ratio(n, "mis_light_cdf") for n in NEW if ratio(n, "mis_light_cdf")), default=None)
+        if "guided" in eq_time else None,
         ns_cdf=ns.get("mis_light_cdf"), ns_product=ns.get("mis_product"),
         memory=float(meta["table_bytes"]) / mb, memory_full=float(meta["full_table_bytes"]) / mb,
         stand_in=100 * float(meta.get("stand_in_difference", -1)),
@@ -86,6 +96,9 @@ COLS = [("fiber", "fiber", None), ("scene", "scene", None), ("size", "size", Non
         ("vs uniform", "vs_uniform", lambda x, r: x >= 5 or r["scene"] != "sky"),
         ("vs table CDF", "vs_cdf", lambda x, r: x <= 1.5),
         ("mis_product / mis_light_cdf", "product_vs_cdf", lambda x, r: x <= 0.5),
+        ("guided / mis_light_cdf", "guided_vs_cdf", lambda x, r: x <= 1.1),
+        ("guided_product / mis_light_cdf", "guided_product_vs_cdf", lambda x, r: x <= 1.1),
+        ("best new / mis_light_cdf", "best_new_vs_cdf", lambda x, r: x <= 0.5),
         ("ns/vertex mis_light_cdf", "ns_cdf", None), ("ns/vertex mis_product", "ns_product", None),
         ("table / mixtures", "memory", lambda x, r: x >= 100),
         ("full 4D / mixtures", "memory_full", lambda x, r: x >= 1000),
@@ -143,6 +156,20 @@ def reading(dirs):
         "(target at most 0.5x%s), a vertex %s dearer (%s against %s ns)." % (
             span(prod), ": missed on every row" if min(prod) > 0.5 else "", span(vertex),
             span([r["ns_product"] for r in rows if r["ns_product"]], ""), span([r["ns_cdf"] for r in rows if r["ns_cdf"]], "")),
+    ]
+    guided = [r for r in rows if r["guided_vs_cdf"] is not None]
+    if guided:
+        out.append(
+            "- **Guided paths** (`guided`, `guided_product`, trained in the render's own budget): %s and %s "
+            "`mis_light_cdf`'s relative MSE at equal time; the best of the new estimators (`mis_product` and "
+            "the two guided ones) %s (target at most 0.5x: %s), the worst %s (target never above 1.1x)%s." % (
+                span([r["guided_vs_cdf"] for r in guided]), span([r["guided_product_vs_cdf"] for r in guided]),
+                span([r["best_new_vs_cdf"] for r in guided]),
+                "met on %d of %d rows" % (sum(r["best_new_vs_cdf"] <= 0.5 for r in guided), len(guided)),
+                span([r["worst_new_vs_cdf"] for r in guided]),
+                "" if len(guided) == len(rows) else "; the other rows (%s) were rendered before the guided "
+                "estimators and have none" % ", ".join(where(r) for r in rows if r["guided_vs_cdf"] is None)))
+    out += [
         "- **The stand-in against the table** (the same estimator and seed, 4 x 4 blocks): %s on %d of the %d rows%s; "
         "image means within %.2f%% but %s." % (
             span([r["stand_in_4x4"] for r in blocks_ok], "%"), len(blocks_ok), len(rows),

@@ -47,6 +47,8 @@ TEST_CASE("defaults are merged under the user's keys", "[config]") {
   CHECK(c.fit->k_max == 8);
   CHECK(c.fit->k_min == 1);
   CHECK(c.fit->output == "out/mixture.h5");
+  CHECK(c.fit->rgb_copies == 1.2);  // colour copies where a slice's colour error is above 1.2x its luminance's
+  CHECK_FALSE(parse_config("table: " + existing_table() + "\nfit:\n  rgb_copies: ~\n", "cfg.yaml").fit->rgb_copies);
   CHECK_FALSE(c.converge);
   CHECK_FALSE(c.generate);
   CHECK(c.device.empty());
@@ -89,6 +91,7 @@ TEST_CASE("wrong types and impossible values are named", "[config]") {
   CHECK_THAT(config_error(t + "converge:\n  samples_max: -4\n"), Catch::Contains("converge.samples_max (line 3): -4 is out of range"));
   CHECK_THAT(config_error(t + "converge:\n  theta_o: [0.1, zero]\n"), Catch::Contains("expected a number or a list of numbers, got 'zero'"));
   CHECK_THAT(config_error(t + "fit: 3\n"), Catch::Contains("cfg.yaml: fit (line 2): expected a mapping"));
+  CHECK_THAT(config_error(t + "fit:\n  rgb_copies: -1\n"), Catch::Contains("fit.rgb_copies (line 3): -1 is out of range"));
   CHECK_THAT(config_error(t + "generate:\n  symmetry: maybe\n"), Catch::Contains("generate.symmetry (line 3): expected true or false"));
   // sampling with the lighting
   CHECK_THAT(config_error(t + "converge:\n  estimators: [mis_product, mis_prod]\n"),

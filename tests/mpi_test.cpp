@@ -127,6 +127,7 @@ void require_same_mixture(const std::string& a_path, const std::string& b_path) 
   CHECK(same_bits(a.scale, b.scale));
   CHECK(a.has_rgb() == b.has_rgb());
   CHECK(same_bits(a.rgb_scale, b.rgb_scale));
+  CHECK(same_bits(a.rgb_copies, b.rgb_copies));
   CHECK(same_bits(a.theta_o, b.theta_o));
   CHECK(a.fit_settings == b.fit_settings);
 }
@@ -174,7 +175,11 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
     }
     std::vector<double> rgb;
     for (int j = 0; j < 3 * k; ++j) rgb.push_back(std::abs(u(rng)));
-    p.mixture.add_slice(u(rng), u(rng), std::abs(u(rng)), u(rng), s == 4 ? 0.0 : std::abs(u(rng)), w, mean, cov, &rgb);
+    std::vector<double> copies;  // colour copies on slices 1 and 3
+    if (s % 2 == 1)
+      for (int j = 0; j < 12 * k; ++j) copies.push_back(std::abs(u(rng)));
+    p.mixture.add_slice(u(rng), u(rng), std::abs(u(rng)), u(rng), s == 4 ? 0.0 : std::abs(u(rng)), w, mean, cov, &rgb,
+                        &copies);
     p.slice_index.push_back(100 + 3 * s);
   }
   p.mixture.loglik[2] = -0.0;  // the sign of zero survives too
@@ -212,6 +217,10 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   CHECK(same_bits(q.mixture.covariances, p.mixture.covariances));
   CHECK(q.mixture.has_rgb());
   CHECK(same_bits(q.mixture.rgb_scale, p.mixture.rgb_scale));
+  CHECK(q.mixture.has_copies());
+  CHECK(same_bits(q.mixture.rgb_copies, p.mixture.rgb_copies));
+  CHECK(q.mixture.slice_copies(0).empty());
+  CHECK(q.mixture.slice_copies(1).size() == 12 * std::size_t(q.mixture.k[1]));
   REQUIRE(q.report.size() == p.report.size());
   for (std::size_t i = 0; i < p.report.size(); ++i) {
     const ReportRow &a = q.report[i], &b = p.report[i];
@@ -242,12 +251,21 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   // A part of a table without rgb comes back without it.
   BatchPart grey = p;
   grey.mixture.rgb_scale.clear();
+  grey.mixture.rgb_copies.clear();  // (copies without rgb_scale are refused: below)
   const std::vector<std::uint8_t> grey_bytes = scale::encode_part(grey);
   CHECK_FALSE(scale::decode_part(grey_bytes.data(), grey_bytes.size()).mixture.has_rgb());
   BatchPart torn = p;  // rgb_scale of the wrong length is refused
   torn.mixture.rgb_scale.pop_back();
   const std::vector<std::uint8_t> torn_bytes = scale::encode_part(torn);
   CHECK_THROWS_AS(scale::decode_part(torn_bytes.data(), torn_bytes.size()), InputError);
+  BatchPart orphan = grey;  // colour copies without rgb_scale are refused
+  orphan.mixture.rgb_copies = p.mixture.rgb_copies;
+  const std::vector<std::uint8_t> orphan_bytes = scale::encode_part(orphan);
+  CHECK_THROWS_AS(scale::decode_part(orphan_bytes.data(), orphan_bytes.size()), InputError);
+  BatchPart torn_copies = p;  // and so are rgb_copies of the wrong length
+  torn_copies.mixture.rgb_copies.pop_back();
+  const std::vector<std::uint8_t> torn_copy_bytes = scale::encode_part(torn_copies);
+  CHECK_THROWS_AS(scale::decode_part(torn_copy_bytes.data(), torn_copy_bytes.size()), InputError);
 
   // Truncated or padded bytes are refused, never half-read.
   for (std::size_t n : {std::size_t(0), std::size_t(7), bytes.size() / 2, bytes.size() - 1})

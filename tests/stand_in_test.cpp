@@ -138,15 +138,19 @@ TEST_CASE("a lobe leaking past the theta border keeps the stand-in's energy in e
       for (int c = 0; c < 3; ++c) table_e[c + 1] += w.rgb[std::size_t(c) * n + i];
     }
     // The stand-in's in-domain integral, closed form: every component's in-domain mass
-    // times its amplitude (scale * weight for the luminance, rgb_scale per channel).
+    // times its amplitude (scale * weight for the luminance, rgb_scale per channel, or the
+    // colour copies' amplitudes where the slice has them).
     const mix::SliceMixture& sm = set.slices[s];
     double e[4] = {0, 0, 0, 0}, fitted_mass = 0;
     for (const auto& g : sm.components) {
       const double z = in_domain_mass(Domain::Hemisphere, g.mu_t, g.s_tt);
       e[0] += sm.scale * g.weight * z;
       fitted_mass += g.weight * z;
-      for (int c = 0; c < 3; ++c) e[c + 1] += g.rgb[c] * z;
+      if (sm.colour.empty())
+        for (int c = 0; c < 3; ++c) e[c + 1] += g.rgb[c] * z;
     }
+    for (const auto& g : sm.colour)
+      for (int c = 0; c < 3; ++c) e[c + 1] += g.rgb[c] * in_domain_mass(Domain::Hemisphere, g.mu_t, g.s_tt);
     CHECK(fitted_mass < 0.97);  // the fitted Gaussians leak: scale = the cells' sum would lose > 3%
     // The same by the header at the cell centers (what a renderer's quadrature sees).
     double q[4] = {0, 0, 0, 0};
@@ -217,15 +221,29 @@ TEST_CASE("the report's errors are the stand-in's through the header, recomputed
     const SliceWeights w = read_weights(table, s);
     const std::size_t n = w.y.size();
     // The refined components are at least half a cell wide (fit/gmm.hpp sub_cell), so every
-    // cell's stand-in is the header's value at its center.
-    for (const auto& g : set.slices[s].components)
-      REQUIRE_FALSE(sub_cell(g.s_tt, g.s_tp, g.s_pp, axis_step(meta.theta_i), axis_step(meta.phi_i)));
-    // The renderer's view: eval_f and eval_rgb at the cell centers, as integrand weights.
+    // cell's luminance is the header's value at its center; colour copies may be narrower
+    // (0.875 times a component's covariance), and such a copy's cell mass is its mean over
+    // 3 x 3 points of the cell, the rule of the report (docs/formats.md).
+    const double dth = axis_step(meta.theta_i), dph = axis_step(meta.phi_i);
+    for (const auto& g : set.slices[s].components) REQUIRE_FALSE(sub_cell(g.s_tt, g.s_tp, g.s_pp, dth, dph));
+    const mix::SliceMixture& sm = set.slices[s];
+    // The renderer's view: eval_f and eval_rgb at the cell centers (or the copies' rule), as
+    // integrand weights.
     double y = 0, ye = 0, a = 0, ae = 0, ne = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const double th = meta.theta_i[i / np], ph = meta.phi_i[i % np], jc = std::cos(th) * std::sin(th) * area;
-      double rgb[3];
+      double rgb[3] = {0, 0, 0};
       set.eval_rgb(m.theta_o[s], 0.0, th, ph, rgb);
+      if (!sm.colour.empty()) {
+        rgb[0] = rgb[1] = rgb[2] = 0;
+        for (const auto& g : sm.colour) {
+          double d = 0;
+          const int r = sub_cell(g.s_tt, g.s_tp, g.s_pp, dth, dph) ? 1 : 0;
+          for (int u = -r; u <= r; ++u)
+            for (int v = -r; v <= r; ++v) d += g.density(th + u * dth / 3, wrap_phi(ph + v * dph / 3));
+          for (int c = 0; c < 3; ++c) rgb[c] += g.rgb[c] * d / (r ? 9.0 : 1.0) / (std::cos(th) * std::sin(th));
+        }
+      }
       y += w.y[i];
       ye += std::abs(w.y[i] - set.eval_f(m.theta_o[s], 0.0, th, ph) * jc);
       for (int c = 0; c < 3; ++c) {
@@ -330,6 +348,7 @@ TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured mate
     f.search_report = (temp_dir() / (stem + "_search.csv")).string();
     f.k_max = 16;
     f.refine_rgb = with ? 0.5 : 0.0;
+    f.rgb_copies.reset();  // the components' colour alone: the refinement's effect on it
     run_sweep(table, f, "");
     const auto rows = csv_rows(f.report);
     REQUIRE(rows.size() == 11);

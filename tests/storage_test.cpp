@@ -49,8 +49,9 @@ bool has_dataset(const std::string& path, const char* name) {
   return r;
 }
 
-// Three slices of K 1, 3 and 2 on every 2nd slice of a 5-slice theta_o grid, with colour.
-MixtureFile sample_file(bool rgb) {
+// Three slices of K 1, 3 and 2 on every 2nd slice of a 5-slice theta_o grid, with colour
+// (and colour copies on the middle slice).
+MixtureFile sample_file(bool rgb, bool copies = false) {
   MixtureFile m;
   m.domain = Domain::Hemisphere;
   m.table_theta_o = {0.1, 0.4, 0.7, 1.0, 1.3};
@@ -59,8 +60,10 @@ MixtureFile sample_file(bool rgb) {
   const std::vector<double> r3 = {0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.123456789012, 0.2, 0.3};
   const std::vector<double> r2 = {0.3, 0.2, 0.1, 0.05, 0.06, 0.07};
   m.add_slice(0.1, 0, 1.0, -1, 0.1, {1.0}, {0.5, 0.0}, {0.1, 0.0, 0.2}, rgb ? &r1 : nullptr);
+  std::vector<double> c3;
+  for (int i = 0; copies && i < 36; ++i) c3.push_back(0.01 * (1 + i % 7) + 0.000123456789 * i);
   m.add_slice(0.7, 0, 2.0, -1, 0.1, {0.5, 0.3, 0.2}, {0.5, 0.0, 0.7, 1.0, 1.2, -2.0},
-              {0.1, 0.0, 0.2, 0.1, 0.01, 0.2, 0.05, -0.01, 0.3}, rgb ? &r3 : nullptr);
+              {0.1, 0.0, 0.2, 0.1, 0.01, 0.2, 0.05, -0.01, 0.3}, rgb ? &r3 : nullptr, &c3);
   m.add_slice(1.3, 0, 0.5, -1, 0.1, {0.6, 0.4}, {0.9, 0.3, 0.2, -0.5}, {0.02, 0.0, 0.1, 0.2, 0.05, 0.4},
               rgb ? &r2 : nullptr);
   return m;
@@ -78,15 +81,17 @@ TEST_CASE("storage names parse and print", "[storage]") {
 
 TEST_CASE("padded and ragged files of the same mixtures read back alike; payload_bytes is what each stores",
           "[storage]") {
-  for (const bool rgb : {false, true}) {
-    const MixtureFile m = sample_file(rgb);
+  for (const int variant : {0, 1, 2}) {
+    const bool rgb = variant >= 1, copies = variant == 2;
+    const MixtureFile m = sample_file(rgb, copies);
+    CHECK(m.has_copies() == copies);
     const mix::MixtureSet ref = to_mixture_set(m);
     std::uint64_t padded_bytes = 0, ragged_bytes = 0;
     for (const auto& st : kAll) {
       INFO("rgb " << rgb << " storage " << storage_name(st));
       MixtureFile w = m;
       w.storage = st;
-      const std::string path = temp_path("s_" + storage_name(st) + (rgb ? "_rgb" : "") + ".h5");
+      const std::string path = temp_path("s_" + storage_name(st) + (rgb ? "_rgb" : "") + (copies ? "_copies" : "") + ".h5");
       write_mixture_file(path, w);
       CHECK(has_dataset(path, "/mixture/offset") == st.ragged);
       const MixtureFile r = read_mixture_file(path);
@@ -108,6 +113,13 @@ TEST_CASE("padded and ragged files of the same mixtures read back alike; payload
         if (st.float32) CHECK(r.rgb_scale[i] == double(float(m.rgb_scale[i])));  // float rounding, no more
         else CHECK(r.rgb_scale[i] == m.rgb_scale[i]);
       }
+      REQUIRE(r.rgb_copies.size() == m.rgb_copies.size());
+      for (std::size_t i = 0; i < m.rgb_copies.size(); ++i) {
+        if (st.float32) CHECK(r.rgb_copies[i] == double(float(m.rgb_copies[i])));
+        else CHECK(r.rgb_copies[i] == m.rgb_copies[i]);
+      }
+      CHECK(r.slice_copies(0).empty());
+      CHECK(r.slice_copies(1).size() == (copies ? 36u : 0u));
       // The same stand-in, at fitted and blended slices alike.
       const mix::MixtureSet set = to_mixture_set(r);
       REQUIRE(set.slices.size() == ref.slices.size());

@@ -373,6 +373,7 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   CHECK(a.scale == b.scale);
   CHECK(a.l1_rel == b.l1_rel);
   CHECK(a.rgb_scale == b.rgb_scale);
+  CHECK(a.rgb_copies == b.rgb_copies);
   CHECK(a.has_rgb() == colour);
   CHECK(slurp(whole.search_report) == slurp(part.search_report));
   // The report rows come back from the part files as they were fitted (but the time), the
@@ -435,6 +436,7 @@ TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") 
     CHECK(m.loglik == file.loglik);
     CHECK(m.l1_rel == file.l1_rel);
     CHECK(m.rgb_scale == file.rgb_scale);
+    CHECK(m.rgb_copies == file.rgb_copies);
     CHECK(m.has_rgb());
     CHECK(m.theta_o == file.theta_o);
     CHECK(m.table_theta_o == file.table_theta_o);

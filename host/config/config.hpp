@@ -55,6 +55,9 @@ struct FitSection {
   int refine_evaluations = 150;
   double refine_kl = 5.0;       // weight of the KL divergence (EM's objective) beside the L1 error
   double refine_rgb = 0.5;      // with colour: the R, G, B error's share of the refinement's L1 part; 0: luminance alone
+  // with colour: a slice whose RGB error exceeds this times its luminance error gets colour
+  // copies (docs/fitting.md, "Colour copies"); empty: none
+  std::optional<double> rgb_copies = 1.2;
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 

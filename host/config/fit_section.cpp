@@ -47,6 +47,8 @@ FitSection parse_fit(const ConfigNode& n) {
   f.refine_evaluations = static_cast<int>(n.integer("refine_evaluations", 1, 100000));
   f.refine_kl = n.number("refine_kl", 0.0, 1000.0);
   f.refine_rgb = n.number("refine_rgb", 0.0, 0.9);
+  f.rgb_copies.reset();
+  if (n.has("rgb_copies")) f.rgb_copies = n.number("rgb_copies", 0.0, 100.0);
   if (n.has("theta_o")) {
     f.theta_o = n.numbers("theta_o");
     for (double t : f.theta_o)

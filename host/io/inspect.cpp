@@ -165,6 +165,9 @@ std::string describe_generic(const std::string& path) {
       s << "  slices     " << m.slices() << " fitted, all valid; components per slice:";
       for (auto [kk, n] : hist) s << " K=" << kk << " x" << n;
       s << (m.has_rgb() ? "\n  colour     rgb_scale: R, G, B amplitudes per component" : "\n  colour     none (grey)");
+      std::size_t copied = 0;
+      for (std::size_t i = 0; i < m.slices(); ++i) copied += m.slice_copies(i).empty() ? 0 : 1;
+      if (copied > 0) s << "; colour copies (4 per component) on " << copied << " of " << m.slices() << " slices";
       std::vector<double> l1 = m.l1_rel;
       std::sort(l1.begin(), l1.end());
       char buf[160];

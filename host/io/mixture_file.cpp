@@ -13,18 +13,25 @@ namespace bsdfmix {
 
 void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
                             const std::vector<double>& w, const std::vector<double>& mean,
-                            const std::vector<double>& cov, const std::vector<double>* rgb) {
+                            const std::vector<double>& cov, const std::vector<double>* rgb,
+                            const std::vector<double>* copies) {
   const int kk = static_cast<int>(w.size());
-  if (mean.size() != 2 * w.size() || cov.size() != 3 * w.size() || (rgb && rgb->size() != 3 * w.size()))
+  if (copies && copies->empty()) copies = nullptr;
+  if (mean.size() != 2 * w.size() || cov.size() != 3 * w.size() || (rgb && rgb->size() != 3 * w.size()) ||
+      (copies && (!rgb || copies->size() != kCopyValues * w.size())))
     throw Error("MixtureFile::add_slice: inconsistent component arrays");
   if (slices() > 0 && (rgb != nullptr) != has_rgb())
     throw Error("MixtureFile::add_slice: every slice has rgb_scale, or none");
+  if (copies && !has_copies()) rgb_copies.assign(slices() * std::size_t(kmax) * kCopyValues, 0.0);
   if (kk > kmax) {  // widen every stored slice
     const std::size_t s = slices();
     std::vector<float> nw(s * kk, 0.f), nm(s * kk * 2, 0.f), nc(s * kk * 3, 0.f);
-    std::vector<double> nr(has_rgb() ? s * kk * 3 : 0, 0.0);
+    std::vector<double> nr(has_rgb() ? s * kk * 3 : 0, 0.0), ncp(has_copies() ? s * kk * kCopyValues : 0, 0.0);
     for (std::size_t i = 0; i < s; ++i)
       for (int j = 0; j < kmax; ++j) {
+        if (has_copies())
+          for (std::size_t d = 0; d < kCopyValues; ++d)
+            ncp[(i * kk + j) * kCopyValues + d] = rgb_copies[(i * kmax + j) * kCopyValues + d];
         nw[i * kk + j] = weights[i * kmax + j];
         for (int d = 0; d < 2; ++d) nm[(i * kk + j) * 2 + d] = means[(i * kmax + j) * 2 + d];
         for (int d = 0; d < 3; ++d) nc[(i * kk + j) * 3 + d] = covariances[(i * kmax + j) * 3 + d];
@@ -35,6 +42,7 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
     means.swap(nm);
     covariances.swap(nc);
     rgb_scale.swap(nr);
+    rgb_copies.swap(ncp);
     kmax = kk;
   }
   theta_o.push_back(theta_o_);
@@ -50,6 +58,8 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
     for (int d = 0; d < 3; ++d) covariances.push_back(used ? float(cov[3 * j + d]) : 0.f);
     if (rgb)
       for (int d = 0; d < 3; ++d) rgb_scale.push_back(used ? (*rgb)[3 * j + d] : 0.0);
+    if (copies || has_copies())  // (the first slice with copies starts the array)
+      for (std::size_t d = 0; d < kCopyValues; ++d) rgb_copies.push_back(used && copies ? (*copies)[kCopyValues * j + d] : 0.0);
   }
 }
 
@@ -73,12 +83,20 @@ std::vector<double> MixtureFile::slice_rgb(std::size_t s) const {
   return std::vector<double>(rgb_scale.begin() + long(s * K * 3), rgb_scale.begin() + long((s * K + k[s]) * 3));
 }
 
+std::vector<double> MixtureFile::slice_copies(std::size_t s) const {
+  if (!has_copies()) return {};
+  const std::size_t K = static_cast<std::size_t>(kmax);
+  std::vector<double> c(rgb_copies.begin() + long(s * K * kCopyValues),
+                        rgb_copies.begin() + long((s * K + k[s]) * kCopyValues));
+  return std::any_of(c.begin(), c.end(), [](double x) { return x != 0; }) ? c : std::vector<double>{};
+}
+
 void MixtureFile::add_slice_from(const MixtureFile& from, std::size_t s) {
   std::vector<double> w, mean, cov;
   from.slice_params(s, w, mean, cov);
-  const std::vector<double> rgb = from.slice_rgb(s);
+  const std::vector<double> rgb = from.slice_rgb(s), copies = from.slice_copies(s);
   add_slice(from.theta_o[s], from.phi_o[s], from.scale[s], from.loglik[s], from.l1_rel[s], w, mean, cov,
-            from.has_rgb() ? &rgb : nullptr);
+            from.has_rgb() ? &rgb : nullptr, &copies);
 }
 
 MixtureFile MixtureFile::header_only() const {
@@ -117,10 +135,26 @@ std::uint64_t MixtureFile::payload_bytes() const {
   // (and, ragged, int32 offset), and the table's omega_o axes.
   const std::uint64_t S = slices(), N = stored_components();
   const std::uint64_t rgb_bytes = storage.float32 ? sizeof(float) : sizeof(double);
-  return N * 6 * sizeof(float) + (has_rgb() ? N * 3 * rgb_bytes : 0) + S * 5 * sizeof(double) +
+  std::uint64_t copied = 0;  // the components of the slices with colour copies: rgb_copies' rows
+  for (std::size_t i = 0; has_copies() && i < S; ++i)
+    if (!slice_copies(i).empty()) copied += std::uint64_t(k[i]);
+  return N * 6 * sizeof(float) + (has_rgb() ? N * 3 * rgb_bytes : 0) +
+         (has_copies() ? copied * kCopyValues * rgb_bytes + S * sizeof(std::int32_t) : 0) + S * 5 * sizeof(double) +
          S * sizeof(std::int32_t) * (storage.ragged ? 2 : 1) +
          (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
 }
+
+namespace {
+
+// A colour amplitude dataset (rgb_scale, rgb_copies) in float64 or float32.
+void write_amplitudes(hid_t id, const char* name, const std::vector<hsize_t>& dims, const std::vector<double>& v,
+                      bool float32, const std::string& path) {
+  if (!float32) return h5::write_doubles(id, name, dims, v.data(), path);
+  const std::vector<float> f(v.begin(), v.end());
+  h5::write_floats(id, name, dims, f.data(), path);
+}
+
+}  // namespace
 
 void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& path) {
   const std::size_t s = m.slices();
@@ -132,7 +166,7 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_ints(id, "k", {S}, m.k.data(), path);
   if (m.storage.ragged) {  // one flat [sum k, ...] array per quantity, slice s at offset[s]
     std::vector<std::int32_t> offset;
-    std::vector<float> w, mu, cov, rgbf;
+    std::vector<float> w, mu, cov;
     std::vector<double> rgbd;
     for (std::size_t i = 0; i < s; ++i) {
       offset.push_back(static_cast<std::int32_t>(w.size()));
@@ -142,10 +176,7 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
         for (int d = 0; d < 2; ++d) mu.push_back(m.means[c * 2 + d]);
         for (int d = 0; d < 3; ++d) cov.push_back(m.covariances[c * 3 + d]);
         if (m.has_rgb())
-          for (int d = 0; d < 3; ++d) {
-            rgbd.push_back(m.rgb_scale[c * 3 + d]);
-            rgbf.push_back(float(m.rgb_scale[c * 3 + d]));
-          }
+          for (int d = 0; d < 3; ++d) rgbd.push_back(m.rgb_scale[c * 3 + d]);
       }
     }
     const hsize_t N = w.size();
@@ -153,22 +184,23 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
     h5::write_floats(id, "weights", {N}, w.data(), path);
     h5::write_floats(id, "means", {N, 2}, mu.data(), path);
     h5::write_floats(id, "covariances", {N, 3}, cov.data(), path);
-    if (m.has_rgb()) {
-      if (m.storage.float32) h5::write_floats(id, "rgb_scale", {N, 3}, rgbf.data(), path);
-      else h5::write_doubles(id, "rgb_scale", {N, 3}, rgbd.data(), path);
-    }
+    if (m.has_rgb()) write_amplitudes(id, "rgb_scale", {N, 3}, rgbd, m.storage.float32, path);
   } else {
     h5::write_floats(id, "weights", {S, K}, m.weights.data(), path);
     h5::write_floats(id, "means", {S, K, 2}, m.means.data(), path);
     h5::write_floats(id, "covariances", {S, K, 3}, m.covariances.data(), path);
-    if (m.has_rgb()) {
-      if (m.storage.float32) {
-        const std::vector<float> rgbf(m.rgb_scale.begin(), m.rgb_scale.end());
-        h5::write_floats(id, "rgb_scale", {S, K, 3}, rgbf.data(), path);
-      } else {
-        h5::write_doubles(id, "rgb_scale", {S, K, 3}, m.rgb_scale.data(), path);
-      }
+    if (m.has_rgb()) write_amplitudes(id, "rgb_scale", {S, K, 3}, m.rgb_scale, m.storage.float32, path);
+  }
+  if (m.has_copies()) {  // the slices with colour copies alone, in either storage
+    std::vector<std::int32_t> offset;
+    std::vector<double> rows;
+    for (std::size_t i = 0; i < s; ++i) {
+      const std::vector<double> c = m.slice_copies(i);
+      offset.push_back(c.empty() ? -1 : static_cast<std::int32_t>(rows.size() / kCopyValues));
+      rows.insert(rows.end(), c.begin(), c.end());
     }
+    h5::write_ints(id, "copies_offset", {S}, offset.data(), path);
+    write_amplitudes(id, "rgb_copies", {rows.size() / kCopyValues, 4, 3}, rows, m.storage.float32, path);
   }
   h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
   h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
@@ -253,6 +285,35 @@ void read_ragged(hid_t id, const std::string& where, MixtureFile& m) {
     }
 }
 
+// The colour copies: copies_offset [S] (-1: none) and rgb_copies [M, 4, 3], the rows of
+// the slices with copies in order, k[s] rows each; spread into the padded array of memory.
+void read_copies(hid_t id, const std::string& where, MixtureFile& m) {
+  const std::size_t S = m.slices(), K = std::size_t(m.kmax);
+  const std::vector<std::int32_t> offset = h5::read_ints(id, "copies_offset", where);
+  if (offset.size() != S)
+    throw InputError(where + "/copies_offset: length " + std::to_string(offset.size()) + ", expected " + std::to_string(S));
+  std::size_t M = 0;
+  for (std::size_t s = 0; s < S; ++s) {
+    if (offset[s] < 0) continue;
+    if (offset[s] != std::int32_t(M))
+      throw InputError(where + "/copies_offset: slice " + std::to_string(s) + " starts at " + std::to_string(offset[s]) +
+                       ", expected " + std::to_string(M) + " (the sum of k of the slices with copies before it)");
+    M += std::size_t(m.k[s]);
+  }
+  h5::Handle d = h5::open_dataset(id, "rgb_copies", where);
+  const std::vector<hsize_t> dims = h5::shape(d.get()), want = {M, 4, 3};
+  if (dims != want)
+    throw InputError(where + "/rgb_copies: shape [" + dims_text(dims) + "], expected [" + dims_text(want) +
+                     "] (the components of the slices with copies, 4 copies, R, G, B)");
+  const std::vector<double> rows = h5::read_doubles(id, "rgb_copies", where);
+  m.rgb_copies.assign(S * K * kCopyValues, 0.0);
+  for (std::size_t s = 0; s < S; ++s)
+    if (offset[s] >= 0)
+      std::copy(rows.begin() + long(std::size_t(offset[s]) * kCopyValues),
+                rows.begin() + long((std::size_t(offset[s]) + std::size_t(m.k[s])) * kCopyValues),
+                m.rgb_copies.begin() + long(s * K * kCopyValues));
+}
+
 }  // namespace
 
 MixtureFile read_mixture_file(const std::string& path) {
@@ -310,6 +371,7 @@ MixtureFile read_mixture_file(const std::string& path) {
       m.rgb_scale = h5::read_doubles(id, "rgb_scale", where);
     }
   }
+  if (m.has_rgb() && h5::exists(id, "rgb_copies")) read_copies(id, where, m);  // optional, in either storage
   const std::size_t K = static_cast<std::size_t>(m.kmax);
   if (h5::exists(id, "table_theta_o")) {
     m.table_theta_o = h5::read_doubles(id, "table_theta_o", where);
@@ -337,6 +399,12 @@ MixtureFile read_mixture_file(const std::string& path) {
           const double a = m.rgb_scale[(s * K + j) * 3 + ch];
           if (!std::isfinite(a) || a < 0)
             throw InputError(at + " component " + std::to_string(j) + ": rgb_scale is not a finite non-negative number");
+        }
+      if (m.has_copies())
+        for (std::size_t d = 0; d < kCopyValues; ++d) {
+          const double a = m.rgb_copies[(s * K + j) * kCopyValues + d];
+          if (!std::isfinite(a) || a < 0)
+            throw InputError(at + " component " + std::to_string(j) + ": rgb_copies is not a finite non-negative number");
         }
     }
     if (std::abs(wsum - 1.0) > 1e-3) throw InputError(at + ": weights sum to " + std::to_string(wsum) + ", expected 1");
@@ -366,6 +434,8 @@ mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
       for (int c = 0; c < 3; ++c) g.rgb[c] = m.rgb_scale[(s * K + j) * 3 + c];
     sm.components.push_back(g);
   }
+  const std::vector<double> copies = m.slice_copies(s);
+  if (!copies.empty()) sm.set_copies(copies);
   return sm;
 }
 

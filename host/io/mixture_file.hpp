@@ -29,6 +29,9 @@ struct MixtureStorage {
 std::string storage_name(const MixtureStorage& s);
 MixtureStorage parse_storage(const std::string& name, const std::string& where);
 
+// Values per component of rgb_copies: kCopies copies x R, G, B.
+constexpr std::size_t kCopyValues = std::size_t(mix::kCopies) * 3;
+
 struct MixtureFile {
   MixtureStorage storage;            // as written; read_mixture_file sets what it found
   Domain domain = Domain::Fiber;
@@ -46,18 +49,25 @@ struct MixtureFile {
   // [S, kmax, 3]: per component the integral of each channel (R, G, B) of the integrand,
   // as `scale` is the luminance's (docs/formats.md, "Mixture file"); empty: no colour.
   std::vector<double> rgb_scale;
+  // [S, kmax, 4, 3]: the colour copies' amplitudes (the header's copy_of; docs/formats.md,
+  // "Colour copies"), all zero on a slice without them; empty: no slice has them.
+  std::vector<double> rgb_copies;
 
   std::size_t slices() const { return theta_o.size(); }
   bool has_rgb() const { return !rgb_scale.empty(); }
+  bool has_copies() const { return !rgb_copies.empty(); }
   // Appends one slice; pads or widens to kmax as needed. `rgb` (3K, [component][channel])
-  // gives its rgb_scale: every slice of a file has it, or none.
+  // gives its rgb_scale: every slice of a file has it, or none. `copies` (12K,
+  // [component][copy][channel]; null or empty: none) its colour copies.
   void add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
                  const std::vector<double>& w, const std::vector<double>& mean, const std::vector<double>& cov,
-                 const std::vector<double>* rgb = nullptr);
+                 const std::vector<double>* rgb = nullptr, const std::vector<double>* copies = nullptr);
   // The k used components of slice s as parameter arrays (K, 2K, 3K).
   void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
   // The k used components' rgb_scale of slice s (3K, [component][channel]); empty without colour.
   std::vector<double> slice_rgb(std::size_t s) const;
+  // The k used components' colour copies of slice s (12K); empty where it has none.
+  std::vector<double> slice_copies(std::size_t s) const;
   // Appends slice s of `from` as it is (components, rgb_scale, per-slice values).
   void add_slice_from(const MixtureFile& from, std::size_t s);
   // This file's header (storage, domain, symmetry, table source, fit settings, omega_o

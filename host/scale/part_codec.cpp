@@ -17,8 +17,9 @@ constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
 // The fewest bytes a report row (9 numbers, two string lengths) and a search row take.
 constexpr std::size_t kReportRowBytes = 8 + 8 + 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8 + 8 + 8;
 constexpr std::size_t kSearchRowBytes = 8 + 4 + 4 + 8 + 8 + 8 + 1;
-// 2: the report and search rows as fields, not CSV text; 3: rgb_scale and the rows' RGB errors
-constexpr std::uint32_t kVersion = 3;
+// 2: the report and search rows as fields, not CSV text; 3: rgb_scale and the rows' RGB errors;
+// 4: rgb_copies
+constexpr std::uint32_t kVersion = 4;
 
 class Writer {
  public:
@@ -111,6 +112,7 @@ std::vector<std::uint8_t> encode_part(const BatchPart& p) {
   w.vec(m.means);
   w.vec(m.covariances);
   w.vec(m.rgb_scale);
+  w.vec(m.rgb_copies);
   w.pod(std::uint64_t(p.report.size()));
   for (const ReportRow& r : p.report) {
     w.pod(std::uint64_t(r.slice));
@@ -163,6 +165,7 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   m.means = r.vec<float>();
   m.covariances = r.vec<float>();
   m.rgb_scale = r.vec<double>();
+  m.rgb_copies = r.vec<double>();
   p.report.resize(r.count(kReportRowBytes));
   for (ReportRow& row : p.report) {
     row.slice = std::size_t(r.pod<std::uint64_t>());
@@ -195,7 +198,8 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   if (!r.done() || p.slice_index.size() != S || m.phi_o.size() != S || m.scale.size() != S ||
       m.loglik.size() != S || m.l1_rel.size() != S || m.k.size() != S || m.weights.size() != S * K ||
       m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K ||
-      (!m.rgb_scale.empty() && m.rgb_scale.size() != 3 * S * K) || p.report.size() != S)
+      (!m.rgb_scale.empty() && m.rgb_scale.size() != 3 * S * K) ||
+      (!m.rgb_copies.empty() && (m.rgb_scale.empty() || m.rgb_copies.size() != kCopyValues * S * K)) || p.report.size() != S)
     Reader::fail();
   return p;
 }

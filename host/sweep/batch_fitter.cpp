@@ -263,7 +263,7 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
     stand.push_back({&f.gmm, &w.full.w, meta.rgb ? &w.rgb : nullptr});
   }
   // The stand-ins on the kept Gaussians: the luminance's amplitudes become scale and weights.
-  const std::vector<StandIn> stand_ins = fit_stand_ins(b.engine, b.full_set.grid, stand);
+  const std::vector<StandIn> stand_ins = fit_stand_ins(b.engine, b.full_set.grid, stand, fit_.rgb_copies ? *fit_.rgb_copies : -1.0);
   for (std::size_t s = 0; s < b.size(); ++s) {
     Fitted& f = kept[s];
     f.gmm.weight = stand_ins[s].weight;
@@ -271,7 +271,7 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
     const double theta_o = meta.theta_o[w.ref.t_o], phi_o = meta.phi_o[w.ref.p_o];
     part.slice_index.push_back(w.ref.index);
     part.mixture.add_slice(theta_o, phi_o, stand_ins[s].scale, f.loglik, 0.0, f.gmm.weight, f.gmm.mean, f.gmm.cov,
-                           meta.rgb ? &stand_ins[s].rgb : nullptr);
+                           meta.rgb ? &stand_ins[s].rgb : nullptr, &stand_ins[s].copies);
   }
   // Their errors as the header evaluates the slices stored (float32 parameters), and the
   // log-likelihood of the weights stored.

@@ -86,8 +86,18 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
   const std::size_t nt = s.theta.size(), np = s.phi.size(), n = nt * np;
   const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
   const bool colour = !rgb.empty();
-  std::vector<bool> narrow;
+  // A Gaussian's mass in a cell: its density there, by the header, times the area (over
+  // 3 x 3 points for one narrower than half a cell).
+  auto mass = [&](const mix::Gaussian& g, bool narrow, double theta, double phi) {
+    if (!narrow) return g.density(theta, phi) * area;
+    double d = 0;
+    for (int a = -1; a <= 1; ++a)
+      for (int b = -1; b <= 1; ++b) d += g.density(theta + a * dt / 3, wrap_phi(phi + b * dp / 3));
+    return d / 9 * area;
+  };
+  std::vector<bool> narrow, narrow_colour;
   for (const auto& g : m.components) narrow.push_back(sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
+  for (const auto& g : m.colour) narrow_colour.push_back(sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
   // Each component's mass in a cell (its density there, by the header, times the area),
   // its luminance amplitude scale * weight and, with colour, its rgb amplitudes.
   double lum = 0, lum_err = 0, abs_rgb = 0, rgb_err = 0, neg_err = 0;
@@ -97,18 +107,16 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
       double y = 0, c[3] = {0, 0, 0};
       for (std::size_t k = 0; k < m.components.size(); ++k) {
         const mix::Gaussian& g = m.components[k];
-        double d = 0;
-        if (!narrow[k]) {
-          d = g.density(s.theta[t], s.phi[p]);
-        } else {
-          for (int a = -1; a <= 1; ++a)
-            for (int b = -1; b <= 1; ++b) d += g.density(s.theta[t] + a * dt / 3, wrap_phi(s.phi[p] + b * dp / 3));
-          d /= 9;
-        }
-        d *= area;
+        const double d = mass(g, narrow[k], s.theta[t], s.phi[p]);
         y += m.scale * g.weight * d;
-        for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? g.rgb[q] : m.scale * g.weight) * d;
+        if (m.colour.empty())
+          for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? g.rgb[q] : m.scale * g.weight) * d;
       }
+      if (colour)
+        for (std::size_t k = 0; k < m.colour.size(); ++k) {
+          const double d = mass(m.colour[k], narrow_colour[k], s.theta[t], s.phi[p]);
+          for (int q = 0; q < 3; ++q) c[q] += m.colour[k].rgb[q] * d;
+        }
       lum += s.w[i];
       lum_err += std::abs(s.w[i] - y);
       if (!colour) continue;

@@ -35,7 +35,8 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m);
 // The errors of a slice's stand-in exactly as a renderer evaluates it through the header:
 // each component's mass in each cell by the header's density (as l1_rel_error: at the cell
 // center, or over 3 x 3 points for a component narrower than half a cell; fit/gmm.hpp
-// sub_cell) times its amplitudes as stored (scale * weight; rgb with colour), every
+// sub_cell) times its amplitudes as stored (scale * weight; rgb with colour, or the colour
+// copies' rgb where the slice has them), every
 // Gaussian whole, its mass past the theta border lost, against the table's integrand weights.
 struct StandInError {
   double l1_rel = 0;        // sum |w - stand-in| / sum w over the luminance (0 for a zero slice)

@@ -100,6 +100,7 @@ std::string fit_settings_json(const FitSection& f) {
     << ", \"search_pool\": " << f.search_pool << ", \"search\": \"" << search_name(f.search)
     << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
     << ", \"refine_kl\": " << num(f.refine_kl) << ", \"refine_rgb\": " << num(f.refine_rgb)
+    << ", \"rgb_copies\": " << (f.rgb_copies ? num(*f.rgb_copies) : std::string("null"))
     << ", \"criterion\": \"l1_rel + k_penalty * K\"}";
   return s.str();
 }

@@ -11,7 +11,8 @@
 // 1 - P(invalid). pdf_omega = pdf_param / J(theta), J = cos(theta) (fiber) or sin(theta)
 // (hemisphere). The stand-in for f is scale * pdf_omega [/ cos(theta_i) for the hemisphere];
 // with colour (has_rgb), channel c of it is sum_k rgb[c] of component k times its density,
-// over J [and cos(theta_i)] alike (eval_rgb).
+// over J [and cos(theta_i)] alike (eval_rgb); a slice with colour copies (SliceMixture::colour)
+// sums their densities instead, kCopies copies of each component (copy_of).
 #pragma once
 
 #include <algorithm>
@@ -127,6 +128,31 @@ struct Gaussian {
   }
 };
 
+// Colour copies (bsdfmix's docs/formats.md, "Colour copies"): a slice whose colour varies
+// across a component carries four amplitudes per component and channel, one on each of
+// four copies of it. Copy m is the component moved by kCopyOffset along one axis of its
+// Cholesky factor L (m = 0, 1: -, + L e_theta; m = 2, 3: -, + L e_phi), with covariance
+// (1 - kCopyOffset^2 / 2) times the component's: four copies of equal amplitude have the
+// component's mean and covariance. Only the colour uses them; sampling and the luminance
+// stand-in keep the components.
+constexpr int kCopies = 4;
+constexpr double kCopyOffset = 0.5;
+
+// Copy m (0 .. kCopies - 1) of g, with amplitudes rgb (not prepared).
+inline Gaussian copy_of(const Gaussian& g, int m, const double rgb[3]) {
+  const double l_tt = std::sqrt(g.s_tt), l_pt = g.s_tp / l_tt;
+  const double l_pp = std::sqrt(std::max(g.s_pp - l_pt * l_pt, 0.0));
+  const double sign = (m % 2) ? 1.0 : -1.0, shrink = 1 - 0.5 * kCopyOffset * kCopyOffset;
+  Gaussian c;
+  c.mu_t = g.mu_t + (m < 2 ? sign * kCopyOffset * l_tt : 0.0);
+  c.mu_p = g.mu_p + (m < 2 ? sign * kCopyOffset * l_pt : sign * kCopyOffset * l_pp);
+  c.s_tt = shrink * g.s_tt;
+  c.s_tp = shrink * g.s_tp;
+  c.s_pp = shrink * g.s_pp;
+  for (int q = 0; q < 3; ++q) c.rgb[q] = rgb[q];
+  return c;
+}
+
 struct Sample {
   double theta = 0, phi = 0;  // radians; phi wrapped into [-pi, pi)
   double pdf_omega = 0;       // density per steradian of what was sampled
@@ -146,9 +172,23 @@ struct SliceMixture {
   double scale = 0;  // the luminance stand-in's amplitude: scale * pdf_param is the integrand
   bool has_rgb = false;  // the components' rgb amplitudes are set (else the colour is grey: eval_f)
   std::vector<Gaussian> components;
+  // With colour copies: the Gaussians that carry the colour (copy_of each component's
+  // kCopies copies, component-major, each with its own rgb); empty: the components' rgb.
+  std::vector<Gaussian> colour;
   std::vector<double> cdf;  // cumulative weights, built by prepare()
 
+  // Gives the slice colour copies: amp holds kCopies x 3 amplitudes per component
+  // ([component][copy][channel]); call before prepare().
+  void set_copies(const std::vector<double>& amp) {
+    if (amp.size() != components.size() * kCopies * 3)
+      throw std::invalid_argument("bsdfmix::mix::SliceMixture: colour copies need 12 amplitudes per component");
+    colour.clear();
+    for (std::size_t k = 0; k < components.size(); ++k)
+      for (int m = 0; m < kCopies; ++m) colour.push_back(copy_of(components[k], m, &amp[(k * kCopies + m) * 3]));
+  }
+
   void prepare() {
+    for (auto& g : colour) g.prepare();
     cdf.clear();
     double acc = 0;
     for (auto& g : components) {
@@ -177,7 +217,7 @@ struct SliceMixture {
       return;
     }
     out[0] = out[1] = out[2] = 0;
-    for (const auto& g : components) {
+    for (const auto& g : colour.empty() ? components : colour) {
       const double d = g.density(theta, phi);
       for (int c = 0; c < 3; ++c) out[c] += g.rgb[c] * d;
     }
@@ -488,13 +528,17 @@ class MixtureSet {
   // The blended mixture of omega_o (thesis eq. 3.7) as one slice mixture in the world
   // phi frame: every component of the blended slices, weighted by its slice's blend
   // weight, its mean rotated by phi_o under azimuthal symmetry. scale is the blended scale;
-  // when every blended slice has rgb, so has the result (amplitudes times the blend weights).
+  // when every blended slice has rgb, so has the result (amplitudes times the blend weights),
+  // and when one of them has colour copies, the result's colour holds every slice's colour
+  // Gaussians (its copies, or its components).
   SliceMixture blended(double theta_o, double phi_o) const {
     const Blend b = blend(theta_o, phi_o);
     SliceMixture out;
     out.theta_o = theta_o;
     out.phi_o = phi_o;
     out.has_rgb = true;
+    bool copies = false;
+    for (int k = 0; k < b.count; ++k) copies = copies || !slices[b.slice[k]].colour.empty();
     for (int k = 0; k < b.count; ++k) {
       const SliceMixture& s = slices[b.slice[k]];
       out.scale += b.weight[k] * s.scale;
@@ -505,7 +549,14 @@ class MixtureSet {
         g.mu_p = wrap_phi(g.mu_p + b.rotate);
         out.components.push_back(g);
       }
+      if (copies)
+        for (Gaussian g : s.colour.empty() ? s.components : s.colour) {
+          for (double& c : g.rgb) c *= b.weight[k];
+          g.mu_p = wrap_phi(g.mu_p + b.rotate);
+          out.colour.push_back(g);
+        }
     }
+    if (!out.has_rgb) out.colour.clear();
     out.prepare();
     return out;
   }
