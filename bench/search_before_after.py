@@ -57,11 +57,13 @@ def main():
     os.makedirs(a.work, exist_ok=True)
     out = []
     cpu, cores = cpu_model(), os.cpu_count()
-    # Warm-up, untimed: each build fits one slice of the first table first, so that the
-    # OpenCL compiler's first build of its kernels (cached after) is in neither's time.
+    # Warm-up, untimed: each build fits one slice of the first table at K pinned to every
+    # kernel size a fit can use (4 to 64), so that the OpenCL compiler's first build of its
+    # kernels (cached after) is in neither's time.
     first = a.tables.split(",")[0].split("=", 1)[1]
     for label, binary in (("before", a.before), ("after", a.after)):
-        fit(binary, first, os.path.join(a.work, f"warmup_{label}"), "  k_max: 4\n  theta_o: [0.5]\n")
+        for k in (4, 8, 16, 32, 64):
+            fit(binary, first, os.path.join(a.work, f"warmup_{label}_{k}"), f"  k_min: {k}\n  k_max: {k}\n  theta_o: [0.5]\n")
     for item in a.tables.split(","):
         name, path = item.split("=", 1)
         for label, binary in (("before", a.before), ("after", a.after)):
