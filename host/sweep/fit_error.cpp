@@ -54,6 +54,21 @@ mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const st
   return m;
 }
 
+namespace {
+
+// A Gaussian's mean density over a dtheta x dphi cell centered at (theta, phi): its density
+// at the center, or, narrower than half a cell (sub_cell: the table cannot resolve it), its
+// mean over 3 x 3 points of the cell (offsets -1/3, 0, 1/3 of a step).
+double cell_density(const mix::Gaussian& g, bool narrow, double theta, double phi, double dt, double dp) {
+  if (!narrow) return g.density(theta, phi);
+  double sub = 0;
+  for (int a = -1; a <= 1; ++a)
+    for (int b = -1; b <= 1; ++b) sub += g.density(theta + a * dt / 3, wrap_phi(phi + b * dp / 3));
+  return sub / 9;
+}
+
+}  // namespace
+
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
   const double total = s.total();
   if (!(total > 0)) return 0.0;
@@ -69,13 +84,7 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
     for (std::size_t p = 0; p < np; ++p) {
       double density = 0;
       for (const auto* g : broad) density += g->weight * g->density(s.theta[t], s.phi[p]);
-      for (const auto* g : narrow) {
-        double sub = 0;
-        for (int a = -1; a <= 1; ++a)
-          for (int b = -1; b <= 1; ++b)
-            sub += g->density(s.theta[t] + a * dt / 3, wrap_phi(s.phi[p] + b * dp / 3));
-        density += g->weight * sub / 9;
-      }
+      for (const auto* g : narrow) density += g->weight * cell_density(*g, true, s.theta[t], s.phi[p], dt, dp);
       err += std::abs(s.w[t * np + p] - total * density * area);
     }
   return err / total;
@@ -86,14 +95,9 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
   const std::size_t nt = s.theta.size(), np = s.phi.size(), n = nt * np;
   const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
   const bool colour = !rgb.empty();
-  // A Gaussian's mass in a cell: its density there, by the header, times the area (over
-  // 3 x 3 points for one narrower than half a cell).
+  // A Gaussian's mass in a cell: its mean density there, by the header, times the area.
   auto mass = [&](const mix::Gaussian& g, bool narrow, double theta, double phi) {
-    if (!narrow) return g.density(theta, phi) * area;
-    double d = 0;
-    for (int a = -1; a <= 1; ++a)
-      for (int b = -1; b <= 1; ++b) d += g.density(theta + a * dt / 3, wrap_phi(phi + b * dp / 3));
-    return d / 9 * area;
+    return cell_density(g, narrow, theta, phi, dt, dp) * area;
   };
   std::vector<bool> narrow, narrow_colour;
   for (const auto& g : m.components) narrow.push_back(sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
