@@ -234,12 +234,17 @@ def cloth():
     bad = [x for x in r if x["vs_cdf"] > 1.5]
     vertex = [x["ns_product"] / x["ns_cdf"] for x in r if x["ns_product"] and x["ns_cdf"]]
     prod = [x["product_vs_cdf"] for x in r if x["product_vs_cdf"]]
+    guided = [x for x in r if x["guided_vs_cdf"]]
+    guiding = ("; guided paths (`guided`, `guided_product`, trained within the budget): %s and %s `mis_light_cdf`'s "
+               "error at equal time on the %d rendered with them" % (
+                   span([x["guided_vs_cdf"] for x in guided]), span([x["guided_product_vs_cdf"] for x in guided]),
+                   len(guided)) if guided else "")
     return ("| rendered cloth, 256 x 256, 64 spp: silk, cotton, wool and polyester under the sky and under the sky map | "
             "at equal time the best mixture estimator (%s) has %s less relative MSE than uniform sampling under the sky, "
             "%s under the map; %s the table CDF estimator's error (`mis_light_cdf`, the renderers' baseline) on %d of "
             "the %d%s, with mixtures %s smaller than the table and %s smaller than the full 4D table; product sampling "
             "with the lighting (`mis_product`): %s `mis_light_cdf`'s error at equal time, a vertex %s dearer (target "
-            "0.5x%s); the stand-in image within %s of the table image (4 x 4 blocks)%s; 64 spp in %.0f-%.0f s, %s-%s M "
+            "0.5x%s)%s; the stand-in image within %s of the table image (4 x 4 blocks)%s; 64 spp in %.0f-%.0f s, %s-%s M "
             "rays/s on 2 cores | `bench/reproduce.sh render` (`build/bsdfmix render configs/render/<fiber>_<scene>.yaml`), "
             "`scripts/render_targets.py` ([CSVs](bench/results/render/), docs/render.md) |" % (
                 "`mis_light_gmm`" if len(gmm) == len(r) else "mostly `mis_light_gmm`",
@@ -249,7 +254,7 @@ def cloth():
                 "".join(", %.2fx on %s under the %s" % (x["vs_cdf"], x["fiber"], "sky" if x["scene"] == "sky" else "map")
                         for x in bad),
                 span([x["memory"] for x in r]), span([x["memory_full"] for x in r]), span(prod), span(vertex),
-                ", missed" if max(prod) > 0.5 else ", met", span([x["stand_in_4x4"] for x in r], "%"),
+                ", missed" if max(prod) > 0.5 else ", met", guiding, span([x["stand_in_4x4"] for x in r], "%"),
                 "" if all(x["stand_in_4x4"] <= 2 for x in r) else ", above 2% only under the table image's own noise"
                 if all(x["stand_in_4x4"] <= 2 or x["stand_in_4x4"] < x["noise_4x4"] for x in r)
                 else ", above 2% and above the table image's own noise on some",
