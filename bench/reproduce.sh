@@ -33,6 +33,7 @@ studies=(
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:6:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
   "search_unseen:3:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
+  "parameterization:15:no:the pole and the border: plain EM in three parameterizations of the hemisphere against the project's fits (parameterization.csv)"
   "search_compare:26:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
   "catalog:1:no:the catalog job (catalog_summary.csv)"
@@ -91,6 +92,7 @@ outputs() {
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
     search_unseen) echo "$results/search_unseen.csv" ;;
+    parameterization) echo "$results/parameterization.csv" ;;
     search_compare) echo "$results/search_compare*.csv $results/search_chi_square.csv docs/images/search_l1_vs_k.png" ;;
     fit_sweep) echo "$results/fit_sweep.csv" ;;
     catalog) echo "$results/catalog_summary.csv" ;;
@@ -180,6 +182,23 @@ run_study() {
       done
       [ -n "$t" ] || { echo "reproduce: search_unseen: no unshipped *_rgb.bsdf in $RGL_DIR" >&2; return 1; }
       $py bench/search_before_after.py --before "$BEFORE" --tables "$t" --work out/unseen/fits --csv $results/search_unseen.csv ;;
+    parameterization)
+      mkdir -p out/parameterization
+      local rows=0,5,10,45,70,75,80,85,89
+      [ -f out/parameterization/satin.h5 ] || $bin import rgl -q data/rgl/satin_rosaline_rgb.bsdf -o out/parameterization/satin.h5
+      [ -f out/parameterization/iris.h5 ] || $bin import rgl -q data/rgl/cc_iris_purple_gem_rgb.bsdf -o out/parameterization/iris.h5
+      # the two tables at once, one per core; then the project's fits of the same rows
+      $py bench/parameterization.py --table out/parameterization/satin.h5 --name satin_rosaline --rows $rows \
+        --csv out/parameterization/satin.csv > out/parameterization/satin.log &
+      $py bench/parameterization.py --table out/parameterization/iris.h5 --name cc_iris_purple_gem --rows $rows \
+        --csv out/parameterization/iris.csv > out/parameterization/iris.log
+      wait
+      $py bench/parameterization.py --table out/parameterization/satin.h5 --name satin_rosaline --rows $rows --k 4,8,16 \
+        --restarts 0 --bsdfmix $bin --csv out/parameterization/satin.csv --append > /dev/null
+      $py bench/parameterization.py --table out/parameterization/iris.h5 --name cc_iris_purple_gem --rows $rows --k 4,8,16 \
+        --restarts 0 --bsdfmix $bin --csv out/parameterization/iris.csv --append > /dev/null
+      cat out/parameterization/satin.csv > $results/parameterization.csv
+      tail -n +2 out/parameterization/iris.csv >> $results/parameterization.csv ;;
     search_compare)
       $py bench/search_compare.py --runs 1 --chart
       $py bench/search_compare.py --tables polyester --csv $results/search_compare_polyester_best3.csv

@@ -1,0 +1,230 @@
+#!/usr/bin/python3
+"""The pole and the border: does a pole-free parameterization of the hemisphere pay?
+
+Fits the same weighted EM at pinned K to chosen slices of a hemisphere table in three
+parameterizations of omega_i, and scores each fit as a stand-in in the table's own cells
+(the relative L1 error of docs/fitting.md, mass past the border counted as missing):
+
+  native  (theta_i, phi_i), the project's parameterization, phi turned so that the slice's
+          peak sits at phi = 0 (the seam opposite it; the project's phi images do the same
+          job);
+  disk    Lambert's equal-area map of omega_i, u = 2 sin(theta_i / 2) (cos phi_i, sin phi_i):
+          no pole at the normal, no seam, the border a circle of radius sqrt(2);
+  half    the same map of the half vector h = (omega_i + omega_o) / |omega_i + omega_o|
+          (Rusinkiewicz 1998): a specular peak sits at h = n, u = 0, for every view.
+
+A fit in u has density p(u) there; its mass in cell i is p(u) |det du/d(theta, phi)|
+dtheta dphi averaged over 3 x 3 points of the cell (so that a component narrower than a
+cell, or a map that shrinks cells, is not judged by one point), the Jacobian by central
+differences.
+
+EM is the plain weighted EM (k-means++ seeds, a covariance floor of a quarter cell),
+without the project's split-and-merge or L1 refinement, the same for the three maps: the
+comparison is between parameterizations, not against the project's fits. Numpy only.
+With --bsdfmix the project's own fits of the same slices are added for scale: `project`,
+the search pinned at each K (k-means++, split-and-merge, L1 refinement, colour
+amplitudes), and `project_default`, the default search's chosen K (in `k`).
+
+    /usr/bin/python3 bench/parameterization.py --table T.h5 --name satin --rows 0,3,6,80,84,88 \
+        --k 4,8,16 --csv bench/results/parameterization.csv [--append] [--bsdfmix build/bsdfmix]
+"""
+import argparse
+import csv
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import h5py
+import numpy as np
+
+
+def lambert(x, y, z):
+    """Equal-area map of unit vectors with z >= 0 to the disk of radius sqrt(2)."""
+    theta = np.arccos(np.clip(z, -1.0, 1.0))
+    phi = np.arctan2(y, x)
+    r = 2.0 * np.sin(0.5 * theta)
+    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+
+
+def direction(theta, phi):
+    return np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)
+
+
+def make_map(kind, theta_o, phi_o, phi_turn):
+    wo = np.array(direction(theta_o, phi_o))
+
+    def native(t, p):
+        q = np.mod(p - phi_turn + np.pi, 2.0 * np.pi) - np.pi
+        return np.stack([t, q], axis=-1)
+
+    def disk(t, p):
+        return lambert(*direction(t, p))
+
+    def half(t, p):
+        x, y, z = direction(t, p)
+        hx, hy, hz = x + wo[0], y + wo[1], z + wo[2]
+        n = np.sqrt(hx * hx + hy * hy + hz * hz)
+        return lambert(hx / n, hy / n, hz / n)
+
+    return {"native": native, "disk": disk, "half": half}[kind]
+
+
+def jacobian(fmap, t, p, eps=1e-5):
+    ut = (fmap(t + eps, p) - fmap(t - eps, p)) / (2 * eps)
+    up = (fmap(t, p + eps) - fmap(t, p - eps)) / (2 * eps)
+    return np.abs(ut[:, 0] * up[:, 1] - ut[:, 1] * up[:, 0])
+
+
+def gauss_pdf(u, mean, cov):
+    d = u - mean
+    a, b, c = cov[0, 0], cov[0, 1], cov[1, 1]
+    det = a * c - b * b
+    q = (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / det
+    return np.exp(-0.5 * q) / (2 * np.pi * np.sqrt(det))
+
+
+def mixture_pdf(u, pi, mu, cov):
+    return sum(pi[k] * gauss_pdf(u, mu[k], cov[k]) for k in range(len(pi)))
+
+
+def em(u, w, k, floor, rng, iterations):
+    """Weighted EM of k Gaussians to points u with weights w (sum 1)."""
+    n = len(w)
+    centers = [u[rng.choice(n, p=w)]]
+    for _ in range(1, k):
+        d2 = np.min([np.sum((u - c) ** 2, axis=1) for c in centers], axis=0)
+        p = w * d2
+        centers.append(u[rng.choice(n, p=p / p.sum())] if p.sum() > 0 else u[rng.choice(n, p=w)])
+    mu = np.array(centers)
+    spread = np.cov(u.T, aweights=w) + floor * np.eye(2)
+    cov = np.array([spread / k for _ in range(k)])
+    pi = np.full(k, 1.0 / k)
+    for _ in range(iterations):
+        dens = np.stack([pi[j] * gauss_pdf(u, mu[j], cov[j]) for j in range(k)], axis=1)
+        tot = dens.sum(axis=1, keepdims=True)
+        tot[tot <= 0] = 1e-300
+        r = dens / tot * w[:, None]
+        nk = r.sum(axis=0)
+        keep = nk > 1e-12
+        if not keep.all():
+            r, nk, k = r[:, keep], nk[keep], int(keep.sum())
+        pi = nk / nk.sum()
+        mu = (r.T @ u) / nk[:, None]
+        cov = np.empty((k, 2, 2))
+        for j in range(k):
+            d = u - mu[j]
+            cj = (r[:, j, None] * d).T @ d / nk[j]
+            vals, vecs = np.linalg.eigh(cj)
+            vals = np.maximum(vals, floor)
+            cov[j] = (vecs * vals) @ vecs.T
+    return pi, mu, cov
+
+
+def project_fits(a, theta_o, rows, ks):
+    """The project's fits of the rows: pinned at each K, and the default search."""
+    out = []
+    with tempfile.TemporaryDirectory() as work:
+        for k in ks + [None]:
+            tag = f"k{k}" if k else "default"
+            cfg = os.path.join(work, tag + ".yaml")
+            with open(cfg, "w") as f:
+                f.write(f"table: {os.path.abspath(a.table)}\nfit:\n"
+                        f"  output: {work}/{tag}.h5\n  report: {work}/{tag}.csv\n  seed: 1\n")
+                if k:
+                    f.write(f"  k_min: {k}\n  k_max: {k}\n")
+                f.write("  theta_o: [" + ", ".join(repr(float(theta_o[r])) for r in rows) + "]\n")
+            t0 = time.time()
+            subprocess.run([a.bsdfmix, "fit", cfg, "--quiet"], check=True, stdout=subprocess.DEVNULL)
+            seconds = (time.time() - t0) / len(rows)
+            with open(os.path.join(work, tag + ".csv")) as f:
+                for rec in csv.DictReader(f):
+                    r = int(rec["slice"])
+                    if r in rows:
+                        out.append([a.name, r, f"{theta_o[r]:.6f}", "project" if k else "project_default",
+                                    rec["k"], f"{float(rec['l1_rel']):.6f}", f"{seconds:.2f}"])
+                        print(",".join(str(x) for x in out[-1]), flush=True)
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--table", required=True)
+    ap.add_argument("--name", required=True)
+    ap.add_argument("--rows", required=True, help="theta_o rows, comma separated")
+    ap.add_argument("--k", default="4,8,16")
+    ap.add_argument("--restarts", type=int, default=3, help="EM restarts per fit; 0: no EM of this script")
+    ap.add_argument("--iterations", type=int, default=150)
+    ap.add_argument("--csv", required=True)
+    ap.add_argument("--append", action="store_true")
+    ap.add_argument("--bsdfmix", help="also fit the slices with this build (pinned K and default)")
+    a = ap.parse_args()
+
+    with h5py.File(a.table, "r") as h:
+        f = h["table"]
+        domain = f.attrs.get("domain", "")
+        if (domain.decode() if isinstance(domain, bytes) else domain) != "hemisphere":
+            sys.exit(f"{a.table}: domain is not hemisphere")
+        theta_o = f["theta_o"][:]
+        ti = f["theta_i"][:]
+        pi_ = f["phi_i"][:]
+        values = f["values"]
+        rows = [int(s) for s in a.rows.split(",")]
+        slices = {r: values[r, 0, :, :].astype(np.float64) for r in rows}
+    dt, dp = ti[1] - ti[0], pi_[1] - pi_[0]
+    T, P = np.meshgrid(ti, pi_, indexing="ij")
+    T, P = T.ravel(), P.ravel()
+    ks = [int(s) for s in a.k.split(",")]
+    out_rows = []
+    for r in rows:
+        f = slices[r].ravel()
+        w = f * np.cos(T) * np.sin(T) * dt * dp
+        W = w.sum()
+        if W <= 0:
+            continue
+        wn = w / W
+        peak = int(np.argmax(wn))
+        phi_turn = P[peak]
+        # The mirror direction of omega_o is the slice's peak: omega_o's azimuth is opposite.
+        phi_o = phi_turn + np.pi
+        for kind in ("native", "disk", "half") if a.restarts > 0 else ():  # 0: the project's fits alone
+            fmap = make_map(kind, theta_o[r], phi_o, phi_turn)
+            u = fmap(T, P)
+            # native: the turn of phi is a shift (Jacobian 1; differences would cross the seam)
+            jac = np.ones_like(T) if kind == "native" else jacobian(fmap, T, P)
+            sub = [(a_ * dt / 3, b_ * dp / 3) for a_ in (-1, 0, 1) for b_ in (-1, 0, 1)]
+            pts = [(fmap(T + x, P + y),
+                    np.ones_like(T) if kind == "native" else jacobian(fmap, T + x, P + y))
+                   for x, y in sub]
+            cellu = np.sqrt(np.median(jac) * dt * dp)
+            floor = (0.25 * cellu) ** 2
+            for k in ks:
+                best = None
+                t0 = time.time()
+                for s in range(a.restarts):
+                    rng = np.random.default_rng(1000 * r + 17 * k + s)
+                    pi, mu, cov = em(u, wn, k, floor, rng, a.iterations)
+                    m = sum(mixture_pdf(us, pi, mu, cov) * js for us, js in pts) * dt * dp / 9
+                    l1 = float(np.abs(wn - m).sum())
+                    best = l1 if best is None else min(best, l1)
+                out_rows.append([a.name, r, f"{theta_o[r]:.6f}", kind, k, f"{best:.6f}",
+                                 f"{time.time() - t0:.2f}"])
+                print(",".join(str(x) for x in out_rows[-1]), flush=True)
+    if a.bsdfmix:
+        out_rows += project_fits(a, theta_o, rows, ks)
+    exists = os.path.exists(a.csv) and a.append
+    tmp = a.csv + ".tmp"
+    with open(tmp, "w", newline="") as fo:
+        wr = csv.writer(fo)
+        if exists:
+            with open(a.csv) as fi:
+                fo.write(fi.read())
+        else:
+            wr.writerow(["table", "row", "theta_o", "map", "k", "l1_rel", "seconds"])
+        wr.writerows(out_rows)
+    os.replace(tmp, a.csv)
+
+
+if __name__ == "__main__":
+    main()
