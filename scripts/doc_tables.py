@@ -18,6 +18,7 @@ The tables (NAME: CSV):
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   search_unseen        bench/results/search_unseen.csv (docs/fitting.md, the same section)
+  parameterization     bench/results/parameterization.csv (docs/fitting.md, "The pole and the border")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
   render_reading       the same renders' reading under that table, by scripts/render_targets.py
@@ -138,6 +139,26 @@ def search_before_after(name="search_before_after.csv"):
             label.get(t, t), float(b["mean_k"]), float(a["mean_k"]), pct(b["l1_median"]), pct(a["l1_median"]),
             pct(b["l1_p90"]), pct(a["l1_p90"]), pct(b["l1_max"]), pct(a["l1_max"]),
             float(a["seconds"]) / float(b["seconds"])))
+    return out
+
+
+def parameterization():
+    """Per table and row: plain EM's L1 in each map at K 4 / 8 / 16, the project's fits beside."""
+    out = ["| table | theta_o | plain EM, (theta, phi) | plain EM, equal-area disk | plain EM, half vector | "
+           "the project's fit pinned at K | the project's default (K) |", "|---|---|---|---|---|---|---|"]
+    by = {}
+    for r in rows("parameterization.csv"):
+        by.setdefault((r["table"], int(r["row"])), {}).setdefault(r["map"], []).append(r)
+
+    def cells(fits):
+        fits = sorted(fits or [], key=lambda r: int(r["k"]))
+        return " / ".join(pct(r["l1_rel"], 1) if float(r["l1_rel"]) < 1 else "> 100%" for r in fits) or "-"
+    for (table, row), maps in by.items():
+        d = maps.get("project_default", [{}])[0]
+        out.append("| %s | %.1f deg | %s | %s | %s | %s | %s |" % (
+            table, math.degrees(float(maps[next(iter(maps))][0]["theta_o"])), cells(maps.get("native")),
+            cells(maps.get("disk")), cells(maps.get("half")), cells(maps.get("project")),
+            "%s (%s)" % (pct(d["l1_rel"], 1), d["k"]) if d else "-"))
     return out
 
 
@@ -388,6 +409,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": 
           "em_precision": em_precision,
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
+          "parameterization": parameterization,
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity}
