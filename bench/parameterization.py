@@ -190,13 +190,14 @@ def main():
         phi_o = phi_turn + np.pi
         for kind in ("native", "disk", "half") if a.restarts > 0 else ():  # 0: the project's fits alone
             fmap = make_map(kind, theta_o[r], phi_o, phi_turn)
-            u = fmap(T, P)
-            # native: the turn of phi is a shift (Jacobian 1; differences would cross the seam)
-            jac = np.ones_like(T) if kind == "native" else jacobian(fmap, T, P)
+            # 3 x 3 points of each cell, the map and its Jacobian there; the middle one is
+            # the cell center, where EM sees the cell. native: the turn of phi is a shift
+            # (Jacobian 1; differences would cross the seam).
             sub = [(a_ * dt / 3, b_ * dp / 3) for a_ in (-1, 0, 1) for b_ in (-1, 0, 1)]
             pts = [(fmap(T + x, P + y),
                     np.ones_like(T) if kind == "native" else jacobian(fmap, T + x, P + y))
                    for x, y in sub]
+            u, jac = pts[4]
             cellu = np.sqrt(np.median(jac) * dt * dp)
             floor = (0.25 * cellu) ** 2
             for k in ks:

@@ -27,6 +27,7 @@
 #include "fit/synthetic.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
+#include "sweep/criterion.hpp"
 #include "sweep/fit_error.hpp"
 #include "sweep/sweep.hpp"
 #include "tables/rgl_import.hpp"
@@ -521,10 +522,12 @@ TEST_CASE("a walk that stalls still reaches the score of the best pinned fit", "
   };
   const MixtureFile walk = fit_at("stall_walk", 1, 32);
   REQUIRE(walk.slices() == 2);
+  const double k_penalty = FitSection{}.k_penalty;
   for (int pinned : {4, 8, 16}) {
     const MixtureFile p = fit_at("stall_k" + std::to_string(pinned), pinned, pinned);
     for (std::size_t s = 0; s < 2; ++s) {
-      const double chosen = walk.l1_rel[s] + 0.004 * walk.k[s], at_k = p.l1_rel[s] + 0.004 * pinned;
+      const double chosen = candidate_score(walk.k[s], walk.l1_rel[s], k_penalty),
+                   at_k = candidate_score(pinned, p.l1_rel[s], k_penalty);
       INFO("slice " << s << ": the walk K " << walk.k[s] << " l1 " << walk.l1_rel[s] << ", pinned K " << pinned
                     << " l1 " << p.l1_rel[s]);
       CHECK(chosen <= at_k + 0.01);  // within a point of L1
@@ -564,7 +567,7 @@ TEST_CASE("a stalled walk with a poor best fit is fitted past its last K, as wel
   }
   INFO("walked to K " << walked << ", fitted past it at K " << beyond << "; chosen K " << m.k[0] << " at l1 " << m.l1_rel[0]);
   CHECK(beyond > walked);
-  CHECK(m.l1_rel[0] + 0.004 * m.k[0] <= best_walk);
+  CHECK(candidate_score(m.k[0], m.l1_rel[0], f.k_penalty) <= best_walk);
   CHECK(m.l1_rel[0] < 0.12);
 
   // At 80.5 degrees the fits past the walk that the split-and-merge round keeps (by the
@@ -583,8 +586,8 @@ TEST_CASE("a stalled walk with a poor best fit is fitted past its last K, as wel
   pinned.k_min = pinned.k_max = 8;
   run_sweep(table, pinned, "");
   const MixtureFile pinned80 = read_mixture_file(pinned.output);
-  const double score = walked80.l1_rel[0] + 0.004 * walked80.k[0];
-  const double pinned_score = pinned80.l1_rel[0] + 0.004 * pinned80.k[0];
+  const double score = candidate_score(walked80.k[0], walked80.l1_rel[0], f.k_penalty);
+  const double pinned_score = candidate_score(pinned80.k[0], pinned80.l1_rel[0], f.k_penalty);
   INFO("80.5 deg: chosen K " << walked80.k[0] << " at l1 " << walked80.l1_rel[0] << "; pinned K 8 at l1 "
                              << pinned80.l1_rel[0]);
   CHECK(score <= pinned_score + 0.005);
