@@ -31,8 +31,10 @@ studies=(
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
-  "search_before_after:6:no:the walk of this build against BEFORE's (search_before_after.csv, search_before_after_chi_square.csv)"
+  "search_before_after:6:no:the walk of this build against BEFORE's, with this build's colour work off too (search_before_after.csv, search_before_after_chi_square.csv)"
+  "search_time:15:no:the thesis-scale polyester sweep by this build and BEFORE's, best of 3 (search_time.csv)"
   "search_unseen:3:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
+  "pinned_k:3:no:satin's grazing slices fitted by the default search and at pinned K 8, 16, 32 (pinned_k.csv)"
   "parameterization:15:no:the pole and the border: plain EM in three parameterizations of the hemisphere against the project's fits (parameterization.csv)"
   "search_compare:26:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
@@ -92,6 +94,8 @@ outputs() {
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
     search_unseen) echo "$results/search_unseen.csv" ;;
+    search_time) echo "$results/search_time.csv" ;;
+    pinned_k) echo "$results/pinned_k.csv" ;;
     parameterization) echo "$results/parameterization.csv" ;;
     search_compare) echo "$results/search_compare*.csv $results/search_chi_square.csv docs/images/search_l1_vs_k.png" ;;
     fit_sweep) echo "$results/fit_sweep.csv" ;;
@@ -160,14 +164,27 @@ run_study() {
       [ -f out/bench_rgb/iris.h5 ] || $bin import rgl -q data/rgl/cc_iris_purple_gem_rgb.bsdf --theta-o 90 --theta-i 90 --phi-i 180 -o out/bench_rgb/iris.h5
       local t="hard=out/hard.h5"
       for m in satin paper sunflower iris silk cotton polyester wool; do t="$t,$m=out/bench_rgb/$m.h5"; done
-      $py bench/search_before_after.py --before "$BEFORE" --tables "$t"
+      $py bench/search_before_after.py --before "$BEFORE" --tables "$t" --walk-only
       rm -f $results/search_before_after_chi_square.csv
       for m in hard satin paper sunflower iris silk cotton polyester wool; do
         local tb=out/bench_rgb/$m.h5
         [ $m = hard ] && tb=out/hard.h5
-        $py bench/mixture_chi_square.py $tb out/search_before_after/${m}_before_mixture.h5 \
-          out/search_before_after/${m}_after_mixture.h5 --label $m --csv $results/search_before_after_chi_square.csv
+        for after in after after_walk; do
+          $py bench/mixture_chi_square.py $tb out/search_before_after/${m}_before_mixture.h5 \
+            out/search_before_after/${m}_${after}_mixture.h5 --label $m${after#after} --csv $results/search_before_after_chi_square.csv
+        done
       done ;;
+    search_time)
+      if [ -z "${BEFORE:-}" ]; then echo "reproduce: search_time skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
+      mkdir -p out/search_time
+      [ -f out/search_time/polyester.h5 ] ||
+        $bin generate fiber -q --preset polyester --theta-o 180 --theta-i 90 --phi-i 180 -o out/search_time/polyester.h5
+      $py bench/search_before_after.py --before "$BEFORE" --tables polyester_thesis=out/search_time/polyester.h5 \
+        --runs 3 --walk-only --work out/search_time --csv $results/search_time.csv ;;
+    pinned_k)
+      [ -f out/bench_rgb/satin.h5 ] || { echo "reproduce: pinned_k needs the tables of rgb_stand_in (run it first)" >&2; return 1; }
+      $py bench/pinned_k.py --table out/bench_rgb/satin.h5 --name satin --min-theta-o 1.2 --k 8,16,32 \
+        --csv $results/pinned_k.csv ;;
     search_unseen)
       if [ -z "${BEFORE:-}" ] || [ -z "${RGL_DIR:-}" ]; then
         echo "reproduce: search_unseen skipped (set BEFORE to the other build's bsdfmix and RGL_DIR to a folder of RGL .bsdf files)"; return 0

@@ -1,0 +1,63 @@
+#!/usr/bin/python3
+"""How many Gaussians a set of slices needs: the project's fits of the slices of a table
+whose theta_o is at least --min-theta-o, with the default search and with K pinned at each
+of --k (the sweep's own pinned fits: k-means++, split-and-merge, the L1 refinement, the
+colour amplitudes), one row per slice and setting: the K and the relative L1 error of the
+fit report. docs/fitting.md ("Satin at grazing") quotes it for satin's grazing slices,
+where the default search keeps its p90.
+
+    /usr/bin/python3 bench/pinned_k.py --table out/bench_rgb/satin.h5 --name satin \\
+        --min-theta-o 1.2 --k 8,16,32 --csv bench/results/pinned_k.csv [--bsdfmix build/bsdfmix]
+"""
+import argparse
+import csv
+import os
+import subprocess
+import tempfile
+
+import h5py
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--table", required=True)
+    ap.add_argument("--name", required=True)
+    ap.add_argument("--min-theta-o", type=float, required=True, help="radians")
+    ap.add_argument("--k", default="8,16,32")
+    ap.add_argument("--csv", required=True)
+    ap.add_argument("--bsdfmix", default=os.path.join(ROOT, "build", "bsdfmix"))
+    a = ap.parse_args()
+    with h5py.File(a.table, "r") as h:
+        theta_o = h["table"]["theta_o"][:]
+    rows = [r for r in range(len(theta_o)) if theta_o[r] >= a.min_theta_o]
+    out = []
+    with tempfile.TemporaryDirectory() as work:
+        for k in [None] + [int(x) for x in a.k.split(",")]:
+            tag = f"k{k}" if k else "default"
+            cfg = os.path.join(work, tag + ".yaml")
+            with open(cfg, "w") as f:
+                f.write(f"table: {os.path.abspath(a.table)}\nfit:\n  output: {work}/{tag}.h5\n"
+                        f"  report: {work}/{tag}.csv\n")
+                if k:
+                    f.write(f"  k_min: {k}\n  k_max: {k}\n")
+                f.write("  theta_o: [" + ", ".join(repr(float(theta_o[r])) for r in rows) + "]\n")
+            subprocess.run([a.bsdfmix, "fit", "-q", cfg], check=True, stdout=subprocess.DEVNULL)
+            with open(os.path.join(work, tag + ".csv")) as f:
+                for rec in csv.DictReader(f):
+                    if int(rec["slice"]) in rows:  # the fit also takes the slices beside them
+                        out.append([a.name, rec["slice"], f"{float(rec['theta_o']):.6f}", tag, rec["k"],
+                                    f"{float(rec['l1_rel']):.6f}"])
+            print(f"{a.name} {tag}: {len(rows)} slices from theta_o {a.min_theta_o} rad", flush=True)
+    tmp = a.csv + ".tmp"
+    with open(tmp, "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["table", "slice", "theta_o", "setting", "k", "l1_rel"])
+        w.writerows(out)
+    os.replace(tmp, a.csv)
+    print("wrote", a.csv)
+
+
+if __name__ == "__main__":
+    main()
