@@ -3,8 +3,12 @@
 whose theta_o is at least --min-theta-o, with the default search and with K pinned at each
 of --k (the sweep's own pinned fits: k-means++, split-and-merge, the L1 refinement, the
 colour amplitudes), one row per slice and setting: the K and the relative L1 error of the
-fit report. docs/fitting.md ("Satin at grazing") quotes it for satin's grazing slices,
-where the default search keeps its p90.
+fit report, and where the error lies: the part of it (over the slice's mass) in the cells
+within 10 degrees of phi of the slice's largest cell (`l1_peak`, with that band's share of
+the mass, `mass_peak`) and in the cells past theta_i 85 degrees (`l1_horizon`), the
+stand-in's luminance computed from the file as bench/rgb_stand_in.py does. docs/fitting.md
+("Satin at grazing") quotes it for satin's grazing slices, where the default search keeps
+its p90.
 
     /usr/bin/python3 bench/pinned_k.py --table out/bench_rgb/satin.h5 --name satin \\
         --min-theta-o 1.2 --k 8,16,32 --csv bench/results/pinned_k.csv [--bsdfmix build/bsdfmix]
@@ -16,8 +20,36 @@ import subprocess
 import tempfile
 
 import h5py
+import numpy as np
+
+from rgb_stand_in import component_mass
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def error_bands(table, mixture, rows):
+    """Per slice of `rows`: (l1_peak, mass_peak, l1_horizon), each over the slice's mass."""
+    t, m = h5py.File(table, "r")["table"], h5py.File(mixture, "r")["mixture"]
+    theta, phi = t["theta_i"][:], t["phi_i"][:]
+    dth, dph = theta[1] - theta[0], phi[1] - phi[0]
+    tt, pp = np.meshgrid(theta, phi, indexing="ij")
+    jac = np.cos(tt) * np.sin(tt) * dth * dph  # hemisphere: f cos J, J = sin theta_i
+    index = {float(x): i for i, x in enumerate(m["theta_o"][:])}
+    out = {}
+    for r in rows:
+        s = index[float(t["theta_o"][r])]
+        k = int(m["k"][s])
+        w = t["values"][r, 0].astype(np.float64) * jac
+        weights = m["weights"][s, :k].astype(np.float64)
+        y = sum(float(m["scale"][s]) * weights[j] / weights.sum() *
+                component_mass(tt, pp, *(float(x) for x in m["means"][s, j]),
+                               *(float(x) for x in m["covariances"][s, j]), dth, dph, dth * dph)
+                for j in range(k))
+        err, total = np.abs(w - y), w.sum()
+        peak = pp.ravel()[np.argmax(w)]
+        band = np.abs((pp - peak + np.pi) % (2 * np.pi) - np.pi) <= np.radians(10) + 1e-9
+        out[r] = (err[band].sum() / total, w[band].sum() / total, err[tt > np.radians(85)].sum() / total)
+    return out
 
 
 def main():
@@ -44,16 +76,17 @@ def main():
                     f.write(f"  k_min: {k}\n  k_max: {k}\n")
                 f.write("  theta_o: [" + ", ".join(repr(float(theta_o[r])) for r in rows) + "]\n")
             subprocess.run([a.bsdfmix, "fit", "-q", cfg], check=True, stdout=subprocess.DEVNULL)
+            bands = error_bands(a.table, os.path.join(work, tag + ".h5"), rows)
             with open(os.path.join(work, tag + ".csv")) as f:
                 for rec in csv.DictReader(f):
                     if int(rec["slice"]) in rows:  # the fit also takes the slices beside them
                         out.append([a.name, rec["slice"], f"{float(rec['theta_o']):.6f}", tag, rec["k"],
-                                    f"{float(rec['l1_rel']):.6f}"])
+                                    f"{float(rec['l1_rel']):.6f}"] + [f"{x:.6f}" for x in bands[int(rec["slice"])]])
             print(f"{a.name} {tag}: {len(rows)} slices from theta_o {a.min_theta_o} rad", flush=True)
     tmp = a.csv + ".tmp"
     with open(tmp, "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
-        w.writerow(["table", "slice", "theta_o", "setting", "k", "l1_rel"])
+        w.writerow(["table", "slice", "theta_o", "setting", "k", "l1_rel", "l1_peak", "mass_peak", "l1_horizon"])
         w.writerows(out)
     os.replace(tmp, a.csv)
     print("wrote", a.csv)
