@@ -8,10 +8,11 @@
 #   bench/reproduce.sh [--quick] [--list] [--help] [STUDY ...]
 #
 # With no STUDY, every study in order. --quick runs the short studies only (about 15
-# minutes on 2 cores). The full run is about 5 hours on 2 cores (PoCL; the sum of each
+# minutes on 2 cores). The full run is about 6.5 hours on 2 cores (PoCL; the sum of each
 # study's last run, on the machine provenance.csv names for its files, not timed end to
 # end); the longest studies are render (about 150 minutes; RENDER_FIBERS="polyester" renders
-# one fiber's sky and sky-map configs alone), search_compare and rgb_refine.
+# one fiber's sky and sky-map configs alone), search_before_after, render_room, search_compare
+# and rgb_refine.
 # Run from the repository root after scripts/setup, whose build has the peers the em study
 # runs (BSDFMIX_BUILD_BENCH, on by default; a build-bench/ build is used when present).
 #
@@ -31,10 +32,10 @@ studies=(
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
-  "search_before_after:6:no:the walk of this build against BEFORE's, with this build's colour work off too (search_before_after.csv, search_before_after_chi_square.csv)"
-  "search_time:15:no:the thesis-scale polyester sweep by this build and BEFORE's, best of 3 (search_time.csv)"
+  "search_before_after:31:no:the walk of this build against BEFORE's, with this build's colour work off too (search_before_after.csv, search_before_after_chi_square.csv)"
+  "search_time:18:no:the thesis-scale polyester sweep by this build and BEFORE's, best of 3 (search_time.csv)"
   "search_unseen:3:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
-  "pinned_k:3:no:satin's grazing slices fitted by the default search and at pinned K 8, 16, 32 (pinned_k.csv)"
+  "pinned_k:2:no:satin's grazing slices fitted by the default search and at pinned K 8, 16, 32 (pinned_k.csv)"
   "parameterization:15:no:the pole and the border: plain EM in three parameterizations of the hemisphere against the project's fits (parameterization.csv)"
   "search_compare:26:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"

@@ -18,6 +18,8 @@ The tables (NAME: CSV):
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
   search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
   search_unseen        bench/results/search_unseen.csv (docs/fitting.md, the same section)
+  search_time          bench/results/search_time.csv (docs/fitting.md, the same section)
+  pinned_k             bench/results/pinned_k.csv (docs/fitting.md, "Satin at grazing")
   parameterization     bench/results/parameterization.csv (docs/fitting.md, "The pole and the border")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
@@ -126,19 +128,39 @@ def stand_in_smallest():
 
 
 def search_before_after(name="search_before_after.csv"):
+    """Before / after per table; with `after_walk` rows (the after build, colour work off),
+    before / the walk alone / after."""
     label = {"hard": "hard (bench/hard_table.py)", "satin": "satin_rosaline", "paper": "paper_white",
-             "sunflower": "cg_sunflower", "iris": "cc_iris_purple_gem"}
-    out = ["| table | mean K, before / after | L1 median | L1 p90 | L1 max | fit time, after / before |",
-           "|---|---|---|---|---|---|"]
+             "sunflower": "cg_sunflower", "iris": "cc_iris_purple_gem", "polyester_thesis": "polyester, thesis-scale"}
     by = {}
     for r in rows(name):
         by.setdefault(r["table"], {})[r["build"]] = r
-    for t, pair in by.items():
-        b, a = pair["before"], pair["after"]
-        out.append("| %s | %.2f / %.2f | %s / %s | %s / %s | %s / %s | %.2fx |" % (
-            label.get(t, t), float(b["mean_k"]), float(a["mean_k"]), pct(b["l1_median"]), pct(a["l1_median"]),
-            pct(b["l1_p90"]), pct(a["l1_p90"]), pct(b["l1_max"]), pct(a["l1_max"]),
-            float(a["seconds"]) / float(b["seconds"])))
+    walk = all("after_walk" in b for b in by.values())
+    builds = ["before", "after_walk", "after"] if walk else ["before", "after"]
+    head = "before / walk / after" if walk else "before / after"
+    out = ["| table | mean K, %s | L1 median | L1 p90 | L1 max | fit time, %s |" % (
+               head, "walk / before, after / before" if walk else "after / before"), "|---|---|---|---|---|---|"]
+    for t, b in by.items():
+        time = ", ".join("%.2fx" % (float(b[x]["seconds"]) / float(b["before"]["seconds"])) for x in builds[1:])
+        out.append("| %s | %s | %s | %s | %s | %s |" % (
+            label.get(t, t), " / ".join("%.2f" % float(b[x]["mean_k"]) for x in builds),
+            *(" / ".join(pct(b[x][c]) for x in builds) for c in ("l1_median", "l1_p90", "l1_max")), time))
+    return out
+
+
+def pinned_k():
+    """Satin's grazing slices: the default search and pinned K, and where the default's error lies."""
+    out = ["| theta_o | default search: K, L1 | pinned K 8 / 16 / 32 | default's error within 10 deg of the peak's "
+           "phi (that band's share of the mass) | past theta_i 85 deg |", "|---|---|---|---|---|"]
+    by = {}
+    for r in rows("pinned_k.csv"):
+        by.setdefault(int(r["slice"]), {})[r["setting"]] = r
+    for s, b in sorted(by.items()):
+        d = b["default"]
+        out.append("| %.1f deg | %s, %s | %s | %s (%s) | %s |" % (
+            math.degrees(float(d["theta_o"])), d["k"], pct(d["l1_rel"], 1),
+            " / ".join(pct(b[k]["l1_rel"], 1) for k in ("k8", "k16", "k32")), pct(d["l1_peak"], 1),
+            pct(d["mass_peak"], 0), pct(d["l1_horizon"], 1)))
     return out
 
 
@@ -409,6 +431,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": 
           "em_precision": em_precision,
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
+          "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k,
           "parameterization": parameterization,
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,

@@ -136,6 +136,22 @@ def before_after():
     time_r = [f(t, "after", "seconds") / f(t, "before", "seconds") for t in tables if t != "hard"]
     dk = {t: f(t, "after", "mean_k") - f(t, "before", "mean_k") for t in tables if t != "hard"}
     most = max(dk, key=dk.get)
+    # The walk alone (the after build with the colour work off), and the thesis-scale sweep's time.
+    walk = [t for t in tables if t != "hard" and (t, "after_walk") in by]
+    thesis = {r["build"]: r for r in rows("search_time.csv")}
+    walk_text = ""
+    if walk and {"before", "after", "after_walk"} <= set(thesis):
+        sec = lambda b: float(thesis[b]["seconds"])
+        walk_text = ("; the walk alone (the colour work off): %s the fit time in the same run (one run per row, "
+                     "read to about 0.4) and %.2f to %.2f more components on the mean; the thesis-scale polyester "
+                     "sweep, best of 3: %.2fx (the walk alone) and "
+                     "%.2fx (with the colour work) the time before, mean K %.2f and %.2f against %.2f" % (
+                         span([f(t, "after_walk", "seconds") / f(t, "before", "seconds") for t in walk]),
+                         min(f(t, "after_walk", "mean_k") - f(t, "before", "mean_k") for t in walk),
+                         max(f(t, "after_walk", "mean_k") - f(t, "before", "mean_k") for t in walk),
+                         sec("after_walk") / sec("before"), sec("after") / sec("before"),
+                         float(thesis["after_walk"]["mean_k"]), float(thesis["after"]["mean_k"]),
+                         float(thesis["before"]["mean_k"])))
     return ("| the walk over K on a sharp peak 30x its base with fringes (`bench/hard_table.py`), the RGL materials and "
             "the fiber presets, before and after it restarts stalled Ks twice (the last fit grown, the best fit seeded "
             "at the residual), weighs the K above, and fits a stalled walk with a poor best fit past its last K | hard "
@@ -144,10 +160,10 @@ def before_after():
             "the Gaussians on the coloured tables included); %s, %s, %d medians or p90s up by at most %.2f points; "
             "importance sampling (mean chi-square "
             "divergence) %s, %s's worst slice %.2fx; %s the fit time and up to %.2f more components on the mean on the "
-            "measured and fiber tables (%s) | "
-            "`BEFORE=OLD/build/bsdfmix bench/reproduce.sh search_before_after` "
+            "measured and fiber tables (%s)%s | "
+            "`BEFORE=OLD/build/bsdfmix bench/reproduce.sh search_before_after search_time` "
             "([CSV](bench/results/search_before_after.csv), [chi-square](bench/results/search_before_after_chi_square.csv), "
-            "docs/fitting.md \"A walk that does not give up\") |" % (
+            "[time](bench/results/search_time.csv), docs/fitting.md \"A walk that does not give up\") |" % (
                 pair("hard", "l1_p90"), pair("hard", "l1_max"), pair("satin", "l1_p90"), pair("satin", "l1_max"),
                 pair("paper", "l1_max"), pair("sunflower", "l1_max"), pair("iris", "l1_median"), pair("iris", "l1_p90"),
                 pair("iris", "l1_max"),
@@ -156,7 +172,7 @@ def before_after():
                 "every max lower" if all(f(t, "after", "l1_max") <= f(t, "before", "l1_max") for t in tables)
                 else "not every max lower", len(up), 100 * up_by,
                 "the same or better on every table" if chi_ok else "worse on some tables", worst,
-                float(chi[worst]["ratio_max"]), span(time_r), max(dk.values()), name.get(most, most)))
+                float(chi[worst]["ratio_max"]), span(time_r), max(dk.values()), name.get(most, most), walk_text))
 
 
 def stand_in():
@@ -302,7 +318,7 @@ def markdown():
     return ["| what | result | reproduce |", "|---|---|---|", with_machine(em(), em_file(50)),
             with_machine(sweep[0], "fit_sweep.csv"), sweep[1],
             with_machine(search(), "search_compare.csv", "search_compare_polyester_best3.csv"),
-            with_machine(before_after(), "search_before_after.csv"),
+            with_machine(before_after(), "search_before_after.csv", "search_time.csv"),
             with_machine(stand_in(), "rgb_stand_in.csv", "rgb_stand_in_no_copies.csv", "rgb_refine.csv"),
             with_machine(smallest(), "stand_in_bytes.csv"), with_machine(lighting(), *light),
             with_machine(cloth(), *cloth_files),
