@@ -122,23 +122,30 @@ def em(u, w, k, floor, rng, iterations):
     return pi, mu, cov
 
 
+def fit_rows(bsdfmix, table, theta_o, rows, k, work, extra=""):
+    """The project's fit of the table's theta_o `rows` (K pinned at k, or the default search
+    when k is None) in `work`, with the fit: lines `extra`: (report CSV, mixture, seconds)."""
+    tag = f"k{k}" if k else "default"
+    cfg = os.path.join(work, tag + ".yaml")
+    with open(cfg, "w") as f:
+        f.write(f"table: {os.path.abspath(table)}\nfit:\n"
+                f"  output: {work}/{tag}.h5\n  report: {work}/{tag}.csv\n{extra}")
+        if k:
+            f.write(f"  k_min: {k}\n  k_max: {k}\n")
+        f.write("  theta_o: [" + ", ".join(repr(float(theta_o[r])) for r in rows) + "]\n")
+    t0 = time.time()
+    subprocess.run([bsdfmix, "fit", cfg, "--quiet"], check=True, stdout=subprocess.DEVNULL)
+    return os.path.join(work, tag + ".csv"), os.path.join(work, tag + ".h5"), time.time() - t0
+
+
 def project_fits(a, theta_o, rows, ks):
     """The project's fits of the rows: pinned at each K, and the default search."""
     out = []
     with tempfile.TemporaryDirectory() as work:
         for k in ks + [None]:
-            tag = f"k{k}" if k else "default"
-            cfg = os.path.join(work, tag + ".yaml")
-            with open(cfg, "w") as f:
-                f.write(f"table: {os.path.abspath(a.table)}\nfit:\n"
-                        f"  output: {work}/{tag}.h5\n  report: {work}/{tag}.csv\n  seed: 1\n")
-                if k:
-                    f.write(f"  k_min: {k}\n  k_max: {k}\n")
-                f.write("  theta_o: [" + ", ".join(repr(float(theta_o[r])) for r in rows) + "]\n")
-            t0 = time.time()
-            subprocess.run([a.bsdfmix, "fit", cfg, "--quiet"], check=True, stdout=subprocess.DEVNULL)
-            seconds = (time.time() - t0) / len(rows)
-            with open(os.path.join(work, tag + ".csv")) as f:
+            report, _, seconds = fit_rows(a.bsdfmix, a.table, theta_o, rows, k, work, "  seed: 1\n")
+            seconds /= len(rows)
+            with open(report) as f:
                 for rec in csv.DictReader(f):
                     r = int(rec["slice"])
                     if r in rows:

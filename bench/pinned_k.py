@@ -16,12 +16,12 @@ its p90.
 import argparse
 import csv
 import os
-import subprocess
 import tempfile
 
 import h5py
 import numpy as np
 
+from parameterization import fit_rows
 from rgb_stand_in import component_mass
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -68,16 +68,9 @@ def main():
     with tempfile.TemporaryDirectory() as work:
         for k in [None] + [int(x) for x in a.k.split(",")]:
             tag = f"k{k}" if k else "default"
-            cfg = os.path.join(work, tag + ".yaml")
-            with open(cfg, "w") as f:
-                f.write(f"table: {os.path.abspath(a.table)}\nfit:\n  output: {work}/{tag}.h5\n"
-                        f"  report: {work}/{tag}.csv\n")
-                if k:
-                    f.write(f"  k_min: {k}\n  k_max: {k}\n")
-                f.write("  theta_o: [" + ", ".join(repr(float(theta_o[r])) for r in rows) + "]\n")
-            subprocess.run([a.bsdfmix, "fit", "-q", cfg], check=True, stdout=subprocess.DEVNULL)
-            bands = error_bands(a.table, os.path.join(work, tag + ".h5"), rows)
-            with open(os.path.join(work, tag + ".csv")) as f:
+            report, mixture, _ = fit_rows(a.bsdfmix, a.table, theta_o, rows, k, work)
+            bands = error_bands(a.table, mixture, rows)
+            with open(report) as f:
                 for rec in csv.DictReader(f):
                     if int(rec["slice"]) in rows:  # the fit also takes the slices beside them
                         out.append([a.name, rec["slice"], f"{float(rec['theta_o']):.6f}", tag, rec["k"],
