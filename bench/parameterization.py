@@ -18,6 +18,11 @@ dtheta dphi averaged over 3 x 3 points of the cell (so that a component narrower
 cell, or a map that shrinks cells, is not judged by one point), the Jacobian by central
 differences.
 
+  native_t  (theta_i, phi_i) as native, with Student-t components of --nu degrees of
+          freedom instead of Gaussians (tails that fall as a power of the distance): does a
+          heavier-tailed lobe pay where Gaussians need many components (--maps; the CSV's
+          map is native_t<nu>)?
+
 EM is the plain weighted EM (k-means++ seeds, a covariance floor of a quarter cell),
 without the project's split-and-merge or L1 refinement, the same for the three maps: the
 comparison is between parameterizations, not against the project's fits. Numpy only.
@@ -68,7 +73,7 @@ def make_map(kind, theta_o, phi_o, phi_turn):
         n = np.sqrt(hx * hx + hy * hy + hz * hz)
         return lambert(hx / n, hy / n, hz / n)
 
-    return {"native": native, "disk": disk, "half": half}[kind]
+    return {"native": native, "native_t": native, "disk": disk, "half": half}[kind]
 
 
 def jacobian(fmap, t, p, eps=1e-5):
@@ -85,12 +90,30 @@ def gauss_pdf(u, mean, cov):
     return np.exp(-0.5 * q) / (2 * np.pi * np.sqrt(det))
 
 
-def mixture_pdf(u, pi, mu, cov):
-    return sum(pi[k] * gauss_pdf(u, mu[k], cov[k]) for k in range(len(pi)))
+def t_pdf(u, mean, cov, nu):
+    """The bivariate Student-t density of nu degrees of freedom (scale matrix cov)."""
+    d = u - mean
+    a, b, c = cov[0, 0], cov[0, 1], cov[1, 1]
+    det = a * c - b * b
+    q = (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / det
+    return (1 + q / nu) ** (-0.5 * (nu + 2)) / (2 * np.pi * np.sqrt(det))
 
 
-def em(u, w, k, floor, rng, iterations):
-    """Weighted EM of k Gaussians to points u with weights w (sum 1)."""
+def quadratic(u, mean, cov):
+    d = u - mean
+    a, b, c = cov[0, 0], cov[0, 1], cov[1, 1]
+    return (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / (a * c - b * b)
+
+
+def mixture_pdf(u, pi, mu, cov, nu=None):
+    pdf = gauss_pdf if nu is None else (lambda x, m, c: t_pdf(x, m, c, nu))
+    return sum(pi[k] * pdf(u, mu[k], cov[k]) for k in range(len(pi)))
+
+
+def em(u, w, k, floor, rng, iterations, nu=None):
+    """Weighted EM of k Gaussians (or, with nu, Student-t components of nu degrees of
+    freedom: each point's latent scale (nu + 2) / (nu + q) weighs the mean and covariance)
+    to points u with weights w (sum 1)."""
     n = len(w)
     centers = [u[rng.choice(n, p=w)]]
     for _ in range(1, k):
@@ -102,7 +125,8 @@ def em(u, w, k, floor, rng, iterations):
     cov = np.array([spread / k for _ in range(k)])
     pi = np.full(k, 1.0 / k)
     for _ in range(iterations):
-        dens = np.stack([pi[j] * gauss_pdf(u, mu[j], cov[j]) for j in range(k)], axis=1)
+        pdf = gauss_pdf if nu is None else (lambda x, m, c: t_pdf(x, m, c, nu))
+        dens = np.stack([pi[j] * pdf(u, mu[j], cov[j]) for j in range(k)], axis=1)
         tot = dens.sum(axis=1, keepdims=True)
         tot[tot <= 0] = 1e-300
         r = dens / tot * w[:, None]
@@ -111,11 +135,15 @@ def em(u, w, k, floor, rng, iterations):
         if not keep.all():
             r, nk, k = r[:, keep], nk[keep], int(keep.sum())
         pi = nk / nk.sum()
-        mu = (r.T @ u) / nk[:, None]
+        # Student-t: the latent scales at the current parameters (1 for Gaussians)
+        scale = np.ones_like(r) if nu is None else np.stack(
+            [(nu + 2) / (nu + quadratic(u, mu[j], cov[j])) for j in range(k)], axis=1)
+        ru = r * scale
+        mu = (ru.T @ u) / ru.sum(axis=0)[:, None]
         cov = np.empty((k, 2, 2))
         for j in range(k):
             d = u - mu[j]
-            cj = (r[:, j, None] * d).T @ d / nk[j]
+            cj = (ru[:, j, None] * d).T @ d / nk[j]
             vals, vecs = np.linalg.eigh(cj)
             vals = np.maximum(vals, floor)
             cov[j] = (vecs * vals) @ vecs.T
@@ -163,6 +191,8 @@ def main():
     ap.add_argument("--k", default="4,8,16")
     ap.add_argument("--restarts", type=int, default=3, help="EM restarts per fit; 0: no EM of this script")
     ap.add_argument("--iterations", type=int, default=150)
+    ap.add_argument("--maps", default="native,disk,half", help="of native, disk, half, native_t")
+    ap.add_argument("--nu", type=float, default=3.0, help="native_t: the Student-t components' degrees of freedom")
     ap.add_argument("--csv", required=True)
     ap.add_argument("--append", action="store_true")
     ap.add_argument("--bsdfmix", help="also fit the slices with this build (pinned K and default)")
@@ -195,14 +225,14 @@ def main():
         phi_turn = P[peak]
         # The mirror direction of omega_o is the slice's peak: omega_o's azimuth is opposite.
         phi_o = phi_turn + np.pi
-        for kind in ("native", "disk", "half") if a.restarts > 0 else ():  # 0: the project's fits alone
+        for kind in a.maps.split(",") if a.restarts > 0 else ():  # 0: the project's fits alone
             fmap = make_map(kind, theta_o[r], phi_o, phi_turn)
             # 3 x 3 points of each cell, the map and its Jacobian there; the middle one is
             # the cell center, where EM sees the cell. native: the turn of phi is a shift
             # (Jacobian 1; differences would cross the seam).
             sub = [(a_ * dt / 3, b_ * dp / 3) for a_ in (-1, 0, 1) for b_ in (-1, 0, 1)]
             pts = [(fmap(T + x, P + y),
-                    np.ones_like(T) if kind == "native" else jacobian(fmap, T + x, P + y))
+                    np.ones_like(T) if kind.startswith("native") else jacobian(fmap, T + x, P + y))
                    for x, y in sub]
             u, jac = pts[4]
             cellu = np.sqrt(np.median(jac) * dt * dp)
@@ -212,11 +242,13 @@ def main():
                 t0 = time.time()
                 for s in range(a.restarts):
                     rng = np.random.default_rng(1000 * r + 17 * k + s)
-                    pi, mu, cov = em(u, wn, k, floor, rng, a.iterations)
-                    m = sum(mixture_pdf(us, pi, mu, cov) * js for us, js in pts) * dt * dp / 9
+                    nu = a.nu if kind == "native_t" else None
+                    pi, mu, cov = em(u, wn, k, floor, rng, a.iterations, nu)
+                    m = sum(mixture_pdf(us, pi, mu, cov, nu) * js for us, js in pts) * dt * dp / 9
                     l1 = float(np.abs(wn - m).sum())
                     best = l1 if best is None else min(best, l1)
-                out_rows.append([a.name, r, f"{theta_o[r]:.6f}", kind, k, f"{best:.6f}",
+                label = f"native_t{a.nu:g}" if kind == "native_t" else kind  # the degrees of freedom named
+                out_rows.append([a.name, r, f"{theta_o[r]:.6f}", label, k, f"{best:.6f}",
                                  f"{time.time() - t0:.2f}"])
                 print(",".join(str(x) for x in out_rows[-1]), flush=True)
     if a.bsdfmix:

@@ -36,6 +36,7 @@ studies=(
   "search_time:18:no:the thesis-scale polyester sweep by this build and BEFORE's, best of 3 (search_time.csv)"
   "search_unseen:3:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
   "pinned_k:2:no:satin's grazing slices fitted by the default search and at pinned K 8, 16, 32 (pinned_k.csv)"
+  "tails:4:no:satin's grazing slices by plain EM with Gaussians and with Student-t components of 3 and 10 degrees of freedom (tails.csv)"
   "parameterization:15:no:the pole and the border: plain EM in three parameterizations of the hemisphere against the project's fits (parameterization.csv)"
   "search_compare:26:no:the Gaussian-count search methods, and the refinement's chi-square on the RGL rows (search_compare*.csv, search_chi_square.csv, docs/images/search_l1_vs_k.png)"
   "fit_sweep:10:no:thesis-scale silk and polyester sweeps, best of 3 (fit_sweep.csv)"
@@ -98,6 +99,7 @@ outputs() {
     search_time) echo "$results/search_time.csv" ;;
     pinned_k) echo "$results/pinned_k.csv" ;;
     parameterization) echo "$results/parameterization.csv" ;;
+    tails) echo "$results/tails.csv" ;;
     search_compare) echo "$results/search_compare*.csv $results/search_chi_square.csv docs/images/search_l1_vs_k.png" ;;
     fit_sweep) echo "$results/fit_sweep.csv" ;;
     catalog) echo "$results/catalog_summary.csv" ;;
@@ -200,6 +202,14 @@ run_study() {
       done
       [ -n "$t" ] || { echo "reproduce: search_unseen: no unshipped *_rgb.bsdf in $RGL_DIR" >&2; return 1; }
       $py bench/search_before_after.py --before "$BEFORE" --tables "$t" --work out/unseen/fits --csv $results/search_unseen.csv ;;
+    tails)
+      mkdir -p out/parameterization
+      [ -f out/parameterization/satin.h5 ] || $bin import rgl -q data/rgl/satin_rosaline_rgb.bsdf -o out/parameterization/satin.h5
+      $py bench/parameterization.py --table out/parameterization/satin.h5 --name satin_rosaline --rows 70,75,80,85,89 \
+        --maps native,native_t --nu 3 --csv out/parameterization/tails.csv > /dev/null
+      $py bench/parameterization.py --table out/parameterization/satin.h5 --name satin_rosaline --rows 70,75,80,85,89 \
+        --maps native_t --nu 10 --csv out/parameterization/tails.csv --append > /dev/null
+      cp out/parameterization/tails.csv $results/tails.csv ;;
     parameterization)
       mkdir -p out/parameterization
       local rows=0,5,10,45,70,75,80,85,89
