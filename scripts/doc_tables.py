@@ -20,6 +20,7 @@ The tables (NAME: CSV):
   search_unseen        bench/results/search_unseen.csv (docs/fitting.md, the same section)
   search_time          bench/results/search_time.csv (docs/fitting.md, the same section)
   pinned_k             bench/results/pinned_k.csv (docs/fitting.md, "Satin at grazing")
+  tails                bench/results/tails.csv (docs/fitting.md, the same section)
   parameterization     bench/results/parameterization.csv (docs/fitting.md, "The pole and the border")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
@@ -161,6 +162,19 @@ def pinned_k():
             math.degrees(float(d["theta_o"])), d["k"], pct(d["l1_rel"], 1),
             " / ".join(pct(b[k]["l1_rel"], 1) for k in ("k8", "k16", "k32")), pct(d["l1_peak"], 1),
             pct(d["mass_peak"], 0), pct(d["l1_horizon"], 1)))
+    return out
+
+
+def tails():
+    """Satin's grazing slices: plain EM's L1 at K 4 / 8 / 16 with Gaussians and Student-t components."""
+    out = ["| theta_o | plain EM, Gaussians | Student-t, 3 degrees of freedom | Student-t, 10 |", "|---|---|---|---|"]
+    by = {}
+    for r in rows("tails.csv"):
+        by.setdefault(int(r["row"]), {}).setdefault(r["map"], []).append(r)
+    for row, maps in sorted(by.items()):
+        cell = lambda m: " / ".join(pct(r["l1_rel"], 1) for r in sorted(maps.get(m, []), key=lambda r: int(r["k"])))
+        out.append("| %.1f deg | %s | %s | %s |" % (math.degrees(float(maps["native"][0]["theta_o"])), cell("native"),
+                                                   cell("native_t3"), cell("native_t10")))
     return out
 
 
@@ -431,7 +445,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": 
           "em_precision": em_precision,
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
-          "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k,
+          "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k, "tails": tails,
           "parameterization": parameterization,
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
