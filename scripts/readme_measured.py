@@ -143,7 +143,7 @@ def before_after():
     if walk and {"before", "after", "after_walk"} <= set(thesis):
         sec = lambda b: float(thesis[b]["seconds"])
         walk_text = ("; the walk alone (the colour work off): %s the fit time in the same run (one run per row, "
-                     "read to about 0.4) and %.2f to %.2f more components on the mean; the thesis-scale polyester "
+                     "noisy) and %.2f to %.2f more components on the mean; the thesis-scale polyester "
                      "sweep, best of 3: %.2fx (the walk alone) and "
                      "%.2fx (with the colour work) the time before, mean K %.2f and %.2f against %.2f" % (
                          span([f(t, "after_walk", "seconds") / f(t, "before", "seconds") for t in walk]),
