@@ -82,32 +82,23 @@ def jacobian(fmap, t, p, eps=1e-5):
     return np.abs(ut[:, 0] * up[:, 1] - ut[:, 1] * up[:, 0])
 
 
-def gauss_pdf(u, mean, cov):
-    d = u - mean
-    a, b, c = cov[0, 0], cov[0, 1], cov[1, 1]
-    det = a * c - b * b
-    q = (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / det
-    return np.exp(-0.5 * q) / (2 * np.pi * np.sqrt(det))
-
-
-def t_pdf(u, mean, cov, nu):
-    """The bivariate Student-t density of nu degrees of freedom (scale matrix cov)."""
-    d = u - mean
-    a, b, c = cov[0, 0], cov[0, 1], cov[1, 1]
-    det = a * c - b * b
-    q = (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / det
-    return (1 + q / nu) ** (-0.5 * (nu + 2)) / (2 * np.pi * np.sqrt(det))
-
-
 def quadratic(u, mean, cov):
+    """The quadratic form (u - mean)^T cov^-1 (u - mean) at every point of u."""
     d = u - mean
     a, b, c = cov[0, 0], cov[0, 1], cov[1, 1]
     return (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / (a * c - b * b)
 
 
+def density(q, cov, nu=None):
+    """A component's density from its quadratic form q: a Gaussian, or with nu a bivariate
+    Student-t of nu degrees of freedom (scale matrix cov)."""
+    det = cov[0, 0] * cov[1, 1] - cov[0, 1] * cov[0, 1]
+    shape = np.exp(-0.5 * q) if nu is None else (1 + q / nu) ** (-0.5 * (nu + 2))
+    return shape / (2 * np.pi * np.sqrt(det))
+
+
 def mixture_pdf(u, pi, mu, cov, nu=None):
-    pdf = gauss_pdf if nu is None else (lambda x, m, c: t_pdf(x, m, c, nu))
-    return sum(pi[k] * pdf(u, mu[k], cov[k]) for k in range(len(pi)))
+    return sum(pi[k] * density(quadratic(u, mu[k], cov[k]), cov[k], nu) for k in range(len(pi)))
 
 
 def em(u, w, k, floor, rng, iterations, nu=None):
@@ -125,20 +116,18 @@ def em(u, w, k, floor, rng, iterations, nu=None):
     cov = np.array([spread / k for _ in range(k)])
     pi = np.full(k, 1.0 / k)
     for _ in range(iterations):
-        pdf = gauss_pdf if nu is None else (lambda x, m, c: t_pdf(x, m, c, nu))
-        dens = np.stack([pi[j] * pdf(u, mu[j], cov[j]) for j in range(k)], axis=1)
+        q = np.stack([quadratic(u, mu[j], cov[j]) for j in range(k)], axis=1)
+        dens = np.stack([pi[j] * density(q[:, j], cov[j], nu) for j in range(k)], axis=1)
         tot = dens.sum(axis=1, keepdims=True)
         tot[tot <= 0] = 1e-300
         r = dens / tot * w[:, None]
         nk = r.sum(axis=0)
         keep = nk > 1e-12
         if not keep.all():
-            r, nk, k = r[:, keep], nk[keep], int(keep.sum())
+            r, nk, k, q = r[:, keep], nk[keep], int(keep.sum()), q[:, keep]
         pi = nk / nk.sum()
-        # Student-t: the latent scales at the current parameters (1 for Gaussians)
-        scale = np.ones_like(r) if nu is None else np.stack(
-            [(nu + 2) / (nu + quadratic(u, mu[j], cov[j])) for j in range(k)], axis=1)
-        ru = r * scale
+        # Student-t: each point weighed by its latent scale at the E-step's parameters
+        ru = r if nu is None else r * (nu + 2) / (nu + q)
         mu = (ru.T @ u) / ru.sum(axis=0)[:, None]
         cov = np.empty((k, 2, 2))
         for j in range(k):

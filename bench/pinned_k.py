@@ -29,26 +29,27 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 def error_bands(table, mixture, rows):
     """Per slice of `rows`: (l1_peak, mass_peak, l1_horizon), each over the slice's mass."""
-    t, m = h5py.File(table, "r")["table"], h5py.File(mixture, "r")["mixture"]
-    theta, phi = t["theta_i"][:], t["phi_i"][:]
-    dth, dph = theta[1] - theta[0], phi[1] - phi[0]
-    tt, pp = np.meshgrid(theta, phi, indexing="ij")
-    jac = np.cos(tt) * np.sin(tt) * dth * dph  # hemisphere: f cos J, J = sin theta_i
-    index = {float(x): i for i, x in enumerate(m["theta_o"][:])}
-    out = {}
-    for r in rows:
-        s = index[float(t["theta_o"][r])]
-        k = int(m["k"][s])
-        w = t["values"][r, 0].astype(np.float64) * jac
-        weights = m["weights"][s, :k].astype(np.float64)
-        y = sum(float(m["scale"][s]) * weights[j] / weights.sum() *
-                component_mass(tt, pp, *(float(x) for x in m["means"][s, j]),
-                               *(float(x) for x in m["covariances"][s, j]), dth, dph, dth * dph)
-                for j in range(k))
-        err, total = np.abs(w - y), w.sum()
-        peak = pp.ravel()[np.argmax(w)]
-        band = np.abs((pp - peak + np.pi) % (2 * np.pi) - np.pi) <= np.radians(10) + 1e-9
-        out[r] = (err[band].sum() / total, w[band].sum() / total, err[tt > np.radians(85)].sum() / total)
+    with h5py.File(table, "r") as ft, h5py.File(mixture, "r") as fm:
+        t, m = ft["table"], fm["mixture"]
+        theta, phi = t["theta_i"][:], t["phi_i"][:]
+        dth, dph = theta[1] - theta[0], phi[1] - phi[0]
+        tt, pp = np.meshgrid(theta, phi, indexing="ij")
+        jac = np.cos(tt) * np.sin(tt) * dth * dph  # hemisphere: f cos J, J = sin theta_i
+        index = {float(x): i for i, x in enumerate(m["theta_o"][:])}
+        out = {}
+        for r in rows:
+            s = index[float(t["theta_o"][r])]
+            k = int(m["k"][s])
+            w = t["values"][r, 0].astype(np.float64) * jac
+            weights = m["weights"][s, :k].astype(np.float64)
+            y = sum(float(m["scale"][s]) * weights[j] / weights.sum() *
+                    component_mass(tt, pp, *(float(x) for x in m["means"][s, j]),
+                                   *(float(x) for x in m["covariances"][s, j]), dth, dph, dth * dph)
+                    for j in range(k))
+            err, total = np.abs(w - y), w.sum()
+            peak = pp.ravel()[np.argmax(w)]
+            band = np.abs((pp - peak + np.pi) % (2 * np.pi) - np.pi) <= np.radians(10) + 1e-9
+            out[r] = (err[band].sum() / total, w[band].sum() / total, err[tt > np.radians(85)].sum() / total)
     return out
 
 

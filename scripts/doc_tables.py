@@ -165,6 +165,12 @@ def pinned_k():
     return out
 
 
+def k_cells(fits):
+    """A map's or fit's L1 at each K of parameterization.py's rows, in K order: "a / b / c"."""
+    fits = sorted(fits or [], key=lambda r: int(r["k"]))
+    return " / ".join(pct(r["l1_rel"], 1) if float(r["l1_rel"]) < 1 else "> 100%" for r in fits) or "-"
+
+
 def tails():
     """Satin's grazing slices: plain EM's L1 at K 4 / 8 / 16 with Gaussians and Student-t components."""
     out = ["| theta_o | plain EM, Gaussians | Student-t, 3 degrees of freedom | Student-t, 10 |", "|---|---|---|---|"]
@@ -172,9 +178,8 @@ def tails():
     for r in rows("tails.csv"):
         by.setdefault(int(r["row"]), {}).setdefault(r["map"], []).append(r)
     for row, maps in sorted(by.items()):
-        cell = lambda m: " / ".join(pct(r["l1_rel"], 1) for r in sorted(maps.get(m, []), key=lambda r: int(r["k"])))
-        out.append("| %.1f deg | %s | %s | %s |" % (math.degrees(float(maps["native"][0]["theta_o"])), cell("native"),
-                                                   cell("native_t3"), cell("native_t10")))
+        out.append("| %.1f deg | %s | %s | %s |" % (math.degrees(float(maps["native"][0]["theta_o"])),
+                                                   *(k_cells(maps.get(m)) for m in ("native", "native_t3", "native_t10"))))
     return out
 
 
@@ -185,15 +190,11 @@ def parameterization():
     by = {}
     for r in rows("parameterization.csv"):
         by.setdefault((r["table"], int(r["row"])), {}).setdefault(r["map"], []).append(r)
-
-    def cells(fits):
-        fits = sorted(fits or [], key=lambda r: int(r["k"]))
-        return " / ".join(pct(r["l1_rel"], 1) if float(r["l1_rel"]) < 1 else "> 100%" for r in fits) or "-"
     for (table, row), maps in by.items():
         d = maps.get("project_default", [{}])[0]
         out.append("| %s | %.1f deg | %s | %s | %s | %s | %s |" % (
-            table, math.degrees(float(maps[next(iter(maps))][0]["theta_o"])), cells(maps.get("native")),
-            cells(maps.get("disk")), cells(maps.get("half")), cells(maps.get("project")),
+            table, math.degrees(float(maps[next(iter(maps))][0]["theta_o"])), k_cells(maps.get("native")),
+            k_cells(maps.get("disk")), k_cells(maps.get("half")), k_cells(maps.get("project")),
             "%s (%s)" % (pct(d["l1_rel"], 1), d["k"]) if d else "-"))
     return out
 

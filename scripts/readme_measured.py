@@ -142,13 +142,13 @@ def before_after():
     walk_text = ""
     if walk and {"before", "after", "after_walk"} <= set(thesis):
         sec = lambda b: float(thesis[b]["seconds"])
+        dk_walk = [f(t, "after_walk", "mean_k") - f(t, "before", "mean_k") for t in walk]
         walk_text = ("; the walk alone (the colour work off): %s the fit time in the same run (one run per row, "
                      "noisy) and %.2f to %.2f more components on the mean; the thesis-scale polyester "
                      "sweep, best of 3: %.2fx (the walk alone) and "
                      "%.2fx (with the colour work) the time before, mean K %.2f and %.2f against %.2f" % (
                          span([f(t, "after_walk", "seconds") / f(t, "before", "seconds") for t in walk]),
-                         min(f(t, "after_walk", "mean_k") - f(t, "before", "mean_k") for t in walk),
-                         max(f(t, "after_walk", "mean_k") - f(t, "before", "mean_k") for t in walk),
+                         min(dk_walk), max(dk_walk),
                          sec("after_walk") / sec("before"), sec("after") / sec("before"),
                          float(thesis["after_walk"]["mean_k"]), float(thesis["after"]["mean_k"]),
                          float(thesis["before"]["mean_k"])))
