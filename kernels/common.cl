@@ -50,3 +50,29 @@ uint4 philox4x32_10(uint4 c, uint2 k) {
 
 BSDFMIX_WRAP_PHI(float, , BSDFMIX_PI_F)
 BSDFMIX_LANE_SUMS(float, )
+
+// ---- 2^x ---------------------------------------------------------------------------------
+//
+// T bsdfmix_exp2S(T x) for T = float (S empty), float4, float8, float16 (S = 4, 8, 16): 2^x
+// for x in [-125, 127], x clamped to that range (callers zero what lies below their own
+// cutoff). x = n + f with n = rint(x) (adding and removing 1.5 x 2^23, which leaves n in the
+// low mantissa bits), f in [-1/2, 1/2]; 2^f by a degree-6 polynomial (relative error < 2e-7)
+// and n added to its exponent bits. No library call and no rounding mode: the fitting
+// (kernels/fit_common.cl exp2_neg) and sampling (kernels/sample.cl) kernels share it.
+#define BSDFMIX_EXP2(T, TI, S)                                            \
+  T bsdfmix_exp2##S(T x) {                                                \
+    x = fmin(fmax(x, (T)(-125.0f)), (T)(127.0f));                         \
+    const T t = x + (T)(12582912.0f);                                     \
+    const T f = x - (t - (T)(12582912.0f));                               \
+    T p = fma(f, (T)(1.5403530e-4f), (T)(1.3333558e-3f));                 \
+    p = fma(p, f, (T)(9.6181291e-3f));                                    \
+    p = fma(p, f, (T)(5.5504109e-2f));                                    \
+    p = fma(p, f, (T)(2.4022651e-1f));                                    \
+    p = fma(p, f, (T)(6.9314718e-1f));                                    \
+    p = fma(p, f, (T)(1.0f));                                             \
+    return as_##T(as_##TI(p) + ((as_##TI(t) - 0x4B400000) << 23));       \
+  }
+BSDFMIX_EXP2(float, int, )
+BSDFMIX_EXP2(float4, int4, 4)
+BSDFMIX_EXP2(float8, int8, 8)
+BSDFMIX_EXP2(float16, int16, 16)

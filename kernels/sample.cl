@@ -132,23 +132,8 @@ float log_unit(const float v) {
   return mad((float)e, 0.693147181f, 2.0f * s * p);
 }
 
-// 2^x for x <= 127, 0 below -125: x = n + f with n = rint(x) (by adding and removing
-// 1.5 x 2^23, which also leaves n in the low mantissa bits), f in [-1/2, 1/2], a degree-6
-// polynomial for 2^f (relative error 1e-7, float rounding) and n added to its exponent.
-VF exp2_v(VF x) {
-  const VI dead = x < -125.0f;
-  x = fmin(fmax(x, -125.0f), 127.0f);
-  const VF big = x + ROUND_MAGIC;
-  const VF f = x - (big - ROUND_MAGIC);
-  VF p = fma(f, 1.537071014e-4f, 1.339985307e-3f);
-  p = fma(p, f, 9.618373264e-3f);
-  p = fma(p, f, 5.550329023e-2f);
-  p = fma(p, f, 2.402264846e-1f);
-  p = fma(p, f, 6.931472056e-1f);
-  p = fma(p, f, 1.0f);
-  const VF r = AS_VF(AS_VI(p) + ((AS_VI(big) - 0x4B400000) << 23));
-  return select(r, (VF)(0.0f), dead);
-}
+// 2^x for x <= 127, 0 below -125 (kernels/common.cl bsdfmix_exp2).
+VF exp2_v(VF x) { return select(CAT(bsdfmix_exp2, PDF_LANES)(x), (VF)(0.0f), x < -125.0f); }
 
 // ---- the mixture ---------------------------------------------------------------------
 

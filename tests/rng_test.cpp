@@ -188,4 +188,6 @@ TEST_CASE("common.cl is no program of its own", "[rng][device]") {
   const std::string em = kernel_source("em");
   CHECK(em.find("uint4 philox4x32_10(") != std::string::npos);
   CHECK(em.find("#line 1 \"em.cl\"") != std::string::npos);
+  CHECK(em.find("#line 1 \"fit_common.cl\"") != std::string::npos);
+  CHECK_THROWS_WITH(kernel_source("fit_common"), Catch::Contains("not built on its own"));
 }

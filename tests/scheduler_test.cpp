@@ -14,6 +14,7 @@
 
 #include "core/progress.hpp"
 #include "fit/em.hpp"
+#include "device/batch_pool.hpp"
 #include "fit/scheduler.hpp"
 #include "fit/synthetic.hpp"
 
@@ -103,4 +104,45 @@ TEST_CASE("1, 2 and 3 devices or queues give identical mixtures", "[scheduler]")
       CHECK(a.gmm.cov == b.gmm.cov);
     }
   }
+}
+
+TEST_CASE("BatchPool: a batch stuck on one device is run again on the other, and kept once", "[scheduler]") {
+  const auto both = select_devices("0,1");
+  REQUIRE(both.size() == 2);
+  BatchPool pool(both, 1);
+  // Device 1 is stuck: in the first call (its rate unmeasured) each of its runs waits until
+  // another run of the same batch has claimed it, so the call completes only if device 0
+  // takes over what device 1 holds; later, until that or until every other batch is claimed.
+  // No clock decides anything. Every batch must be claimed by exactly one run.
+  for (int call = 0; call < 3; ++call) {
+    const std::size_t n = 12;
+    std::vector<std::atomic<int>> claimed(n);
+    std::atomic<int> total{0}, stuck{0};
+    pool.run("test", std::vector<double>(n, 1.0), [&](const BatchRun& run) {
+      if (run.device == 1) {
+        ++stuck;
+        while (!run.cancelled() && (call == 0 || total < static_cast<int>(n) - 1)) std::this_thread::yield();
+      }
+      if (run.claim()) {
+        ++claimed[run.batch];
+        ++total;
+      }
+    });
+    for (std::size_t b = 0; b < n; ++b) CHECK(claimed[b] == 1);
+    if (call == 0 && stuck > 0) CHECK(pool.repeated() >= 1);
+  }
+  CHECK(pool.rate("test", 0) > 0);
+}
+
+TEST_CASE("BatchPool: an error stops the hand-out and is rethrown", "[scheduler]") {
+  BatchPool pool(select_devices("0"), 2);
+  std::atomic<int> started{0};
+  CHECK_THROWS_WITH(pool.run("test", std::vector<double>(500, 1.0),
+                             [&](const BatchRun& run) {
+                               ++started;
+                               if (run.batch == 3) throw std::runtime_error("batch 3 failed");
+                               run.claim();
+                             }),
+                    "batch 3 failed");
+  CHECK(started < 500);
 }

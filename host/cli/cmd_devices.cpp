@@ -4,6 +4,7 @@
 #include "cli/commands.hpp"
 #include "core/error.hpp"
 #include "device/device.hpp"
+#include "device/shapes.hpp"
 #include "device/selftest.hpp"
 
 namespace bsdfmix::cli {
@@ -21,11 +22,14 @@ void add_devices(CLI::App& app, Common& common) {
         platform = i.platform_index;
         std::printf("platform %d: %s\n", platform, i.platform.c_str());
       }
-      std::printf("  [%d] %s\n      type %s, %u compute units, %.1f GiB global memory, %.0f KiB local, "
-                  "max work-group %zu, fp64 %s\n      %s, driver %s\n",
+      const ShapeChoice shape = choose_shape(i);
+      std::printf("  [%d] %s\n      type %s, %u compute units, %.1f GiB global memory (%.1f GiB in one "
+                  "allocation), %.0f KiB local, max work-group %zu, fp64 %s\n      %s, driver %s\n"
+                  "      fitting kernels: %s (%s)\n",
                   i.index, i.name.c_str(), i.type.c_str(), i.compute_units, double(i.global_mem) / (1 << 30),
-                  double(i.local_mem) / 1024, i.max_work_group, i.fp64 ? "yes" : "no", i.version.c_str(),
-                  i.driver.c_str());
+                  double(i.max_alloc) / (1 << 30), double(i.local_mem) / 1024, i.max_work_group,
+                  i.fp64 ? "yes" : "no (fp32 fits)", i.version.c_str(), i.driver.c_str(), shape.shape.label().c_str(),
+                  shape.source.c_str());
     }
     std::printf("select with --device INDEX|NAME|cpu|gpu|all or BSDFMIX_DEVICE; default: %s\n",
                 effective_selector(common.device).c_str());

@@ -26,6 +26,7 @@ void add_catalog(CLI::App& app, Common& common);
 void add_render(CLI::App& app, Common& common);
 void add_compare(CLI::App& app, Common& common);
 void add_pack(CLI::App& app, Common& common);
+void add_tune(CLI::App& app, Common& common);
 
 // Adds --device and --quiet to a subcommand.
 void add_common_options(CLI::App& sub, Common& common);

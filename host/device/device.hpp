@@ -3,6 +3,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -22,6 +25,15 @@ struct DeviceInfo {
   std::string label() const;  // "name [platform]"
 };
 
+// The programs built for one device's context, keyed by (name, build options): owned by the
+// Device (shared by its copies), so that every cl::Program is released while the OpenCL
+// runtime is still there, never during static destruction (which some implementations,
+// oclgrind among them, do not survive).
+struct ProgramCache {
+  std::mutex mutex;
+  std::map<std::pair<std::string, std::string>, cl::Program> programs;
+};
+
 // One selected device with its own context.
 class Device {
  public:
@@ -30,11 +42,13 @@ class Device {
   const cl::Device& cl_device() const { return device_; }
   const cl::Context& context() const { return context_; }
   cl::CommandQueue make_queue(bool profiling = false) const;
+  ProgramCache& programs() const { return *programs_; }
 
  private:
   cl::Device device_;
   cl::Context context_;
   DeviceInfo info_;
+  std::shared_ptr<ProgramCache> programs_ = std::make_shared<ProgramCache>();
 };
 
 // Every device of every platform. Throws DeviceError, saying how to install PoCL,

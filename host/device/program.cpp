@@ -2,13 +2,11 @@
 // and checked launches.
 #include "device/program.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
-#include <map>
-#include <mutex>
 #include <sstream>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -26,18 +24,27 @@ namespace {
 
 constexpr const char* kCommon = "common";
 
+// The files put between kernels/common.cl and a program's own file, and the programs that
+// need them; such a file is no program of its own.
+struct Prelude {
+  const char* file;
+  std::vector<std::string> programs;
+};
+const std::vector<Prelude>& preludes() {
+  static const std::vector<Prelude> list = {{"fit_common", {"em", "l1", "amplitudes"}}};
+  return list;
+}
+
 // Builds the source of `label` ("kernels/em.cl") for `device`, cached under `key_name` and
 // the options.
 cl::Program build_cached(const Device& device, const std::string& label, const std::string& key_name,
                          const std::string& options, const std::function<std::string()>& source_of) {
-  using Key = std::tuple<cl_context, cl_device_id, std::string, std::string>;
-  static std::mutex mutex;
-  static std::map<Key, cl::Program> cache;
-  const std::string full = "-cl-std=CL1.2" + device_defines(device.info()) + " " + options;
-  const Key key{device.context()(), device.cl_device()(), key_name, full};
+  ProgramCache& cache = device.programs();
+  const std::string full = "-cl-std=CL1.2 -cl-kernel-arg-info" + device_defines(device.info()) + " " + options;
+  const std::pair<std::string, std::string> key{key_name, full};
   {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (auto it = cache.find(key); it != cache.end()) return it->second;
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    if (auto it = cache.programs.find(key); it != cache.programs.end()) return it->second;
   }
   const std::string source = source_of();
   cl::Program program;
@@ -60,8 +67,8 @@ cl::Program build_cached(const Device& device, const std::string& label, const s
                       " with options '" + full + "' failed with " + cl_error_name(e.err()) +
                       "; build log:\n" + log);
   }
-  std::lock_guard<std::mutex> lock(mutex);
-  cache.emplace(key, program);
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  cache.programs.emplace(key, program);
   return program;
 }
 
@@ -80,13 +87,20 @@ std::string kernel_file(const std::string& name) {
 }
 
 std::string program_text(const std::string& name, const std::string& text) {
-  // "#line 1" restarts the count, so that the build log gives the lines of <name>.cl itself.
-  return kernel_file(kCommon) + "\n#line 1 \"" + name + ".cl\"\n" + text;
+  // "#line 1" restarts the count, so that the build log gives the lines of each file itself.
+  std::string out = kernel_file(kCommon);
+  for (const Prelude& p : preludes())
+    if (std::find(p.programs.begin(), p.programs.end(), name) != p.programs.end())
+      out += "\n#line 1 \"" + std::string(p.file) + ".cl\"\n" + kernel_file(p.file);
+  return out + "\n#line 1 \"" + name + ".cl\"\n" + text;
 }
 
 std::string kernel_source(const std::string& name) {
   if (name == kCommon)
     throw DeviceError("kernels/common.cl is put in front of every program, not built on its own");
+  for (const Prelude& p : preludes())
+    if (name == p.file)
+      throw DeviceError("kernels/" + name + ".cl is put in front of other programs, not built on its own");
   const std::string own = kernel_file(name);
   return program_text(name, own);
 }

@@ -1,4 +1,4 @@
-// The one compile entry point for OpenCL programs, cached per (context, device, options),
+// The one compile entry point for OpenCL programs, cached per device (Device::programs) and options,
 // and launches checked against the device's limits before they are enqueued.
 #pragma once
 
@@ -14,11 +14,13 @@ std::string kernel_file(const std::string& name);
 
 // The OpenCL C source of the program kernels/<name>.cl, as build_program compiles it:
 // kernels/common.cl (the primitives every program shares: Philox, the phi wrap, the lane
-// sums), then the file itself, its lines numbered from 1 again. Both files come from the
-// same place (kernel_file). DeviceError for "common", which is no program of its own.
+// sums, 2^x), then kernels/fit_common.cl for the fitting programs (em, l1, amplitudes),
+// then the file itself, each file's lines numbered from 1 again. All come from the same
+// place (kernel_file). DeviceError for "common" and "fit_common", no programs of their own.
 std::string kernel_source(const std::string& name);
 
-// kernels/common.cl, then `text` (lines numbered as <name>.cl).
+// kernels/common.cl (and kernels/fit_common.cl for a fitting program), then `text`
+// (lines numbered as <name>.cl).
 std::string program_text(const std::string& name, const std::string& text);
 
 // Builds kernels/<name>.cl (kernel_source) for `device` with `options` plus the device

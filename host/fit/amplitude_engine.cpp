@@ -1,4 +1,4 @@
-// The amplitude fit's sums on the devices: kernels/em.cl amp_basis and amp_sums, batched by K bucket.
+// The amplitude fit's sums on the devices: kernels/amplitudes.cl amp_basis and amp_sums, batched by K bucket.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -7,7 +7,6 @@
 #include "device/program.hpp"
 #include "fit/em.hpp"
 #include "fit/em_internal.hpp"
-#include "fit/scheduler.hpp"
 
 namespace bsdfmix {
 
@@ -59,19 +58,18 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
   std::map<int, std::vector<std::size_t>> groups;
   for (std::size_t i = 0; i < queries.size(); ++i) groups[k_bucket(queries[i].gmm.k())].push_back(i);
   // The basis (K_MAX rows) and the weights (kMaxChannels rows) of each problem stay on the device.
-  const auto batches = bucket_batches(groups, stride, kMaxChannels, batch_budget_);
+  for (const auto& [bucket, list] : groups) check_problem_fits(stride, bucket, kMaxChannels, device_limit());
+  const auto batches = bucket_batches(groups, stride, kMaxChannels, budget());
+  std::vector<double> cost;
+  for (const auto& [K, items] : batches) cost.push_back(static_cast<double>(items.size()) * stride * (K + kMaxChannels));
 
-  std::vector<cl::CommandQueue> queues;
-  std::vector<std::size_t> queue_device;
-  make_queues(queues, queue_device);
-
-  auto run_batch = [&](std::size_t worker, std::size_t bi) {
-    const int K = batches[bi].first;
-    const std::vector<std::size_t>& items = batches[bi].second;
-    const std::size_t d = queue_device[worker];
+  auto run_batch = [&](const BatchRun& run) {
+    const int K = batches[run.batch].first;
+    const std::vector<std::size_t>& items = batches[run.batch].second;
+    const std::size_t d = run.device;
     const Device& dev = devices_[d];
     const bool fp64 = uses_fp64(d);
-    const KernelShape shape = shape_for(dev.info(), gpu_layout_);
+    const KernelShape shape = this->shape(d);
     const std::size_t P = items.size(), real_size = fp64 ? 8 : 4, nconst = 6 * static_cast<std::size_t>(K);
     const std::size_t row = static_cast<std::size_t>(K) + 1, per_problem = static_cast<std::size_t>(K) * kMaxChannels * row;
 
@@ -101,53 +99,37 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
                 channels.begin() + static_cast<std::ptrdiff_t>(local) * kMaxChannels * stride);
     std::vector<unsigned char> l1_parts(P * n_chunks * kMaxChannels * real_size), sums(P * per_problem * real_size);
     try {
-      cl::Program program = build_program(dev, "em", em_program_options(K, shape, fp64));
-      const cl::Context& ctx = dev.context();
-      const cl::CommandQueue& queue = queues[worker];
-      cl::Buffer b_channels(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, channels.size() * 4, channels.data());
-      cl::Buffer b_slice(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_slice.data());
-      cl::Buffer b_k(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_k.data());
-      cl::Buffer b_const(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, cparams.size() * 4, cparams.data());
-      cl::Buffer b_images(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, images.size() * sizeof(int), images.data());
-      cl::Buffer b_sub(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sub.size() * sizeof(int), sub.data());
-      cl::Buffer b_amps(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, amps.size() * 4, amps.data());
-      cl::Buffer b_deltas(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, deltas.size() * 4, deltas.data());
-      cl::Buffer b_basis(ctx, CL_MEM_READ_WRITE, P * static_cast<std::size_t>(K) * stride * 4);
-      cl::Buffer b_dw(ctx, CL_MEM_READ_WRITE, P * kMaxChannels * stride * 4);
-      cl::Buffer b_l1(ctx, CL_MEM_WRITE_ONLY, l1_parts.size());
-      cl::Buffer b_sums(ctx, CL_MEM_WRITE_ONLY, sums.size());
-      cl::Kernel basis(program, "amp_basis"), normal(program, "amp_sums");
+      cl::Program program = build_program(dev, "amplitudes", em_program_options(K, shape, fp64));
+      const cl::CommandQueue& queue = *run.queue;
+      cl::Buffer b_channels = upload(dev, "channels", channels), b_slice = upload(dev, "prob_slice", prob_slice),
+                 b_k = upload(dev, "prob_k", prob_k);
+      cl::Buffer b_basis = device_buffer(dev, "basis", P * static_cast<std::size_t>(K) * stride * 4, CL_MEM_READ_WRITE);
+      cl::Buffer b_dw = device_buffer(dev, "dw", P * kMaxChannels * stride * 4, CL_MEM_READ_WRITE);
+      cl::Buffer b_l1 = device_buffer(dev, "l1 partials", l1_parts.size(), CL_MEM_WRITE_ONLY);
+      cl::Buffer b_sums = device_buffer(dev, "sums", sums.size(), CL_MEM_WRITE_ONLY);
+      Routine basis(program, "amp_basis"), normal(program, "amp_sums");
       set_grid_args(basis, layout, grid);
-      basis.setArg(7, b_channels);
-      basis.setArg(8, b_slice);
-      basis.setArg(9, b_k);
-      basis.setArg(10, b_const);
-      basis.setArg(11, b_images);
-      basis.setArg(12, b_sub);
-      basis.setArg(13, static_cast<cl_uint>(n_cells));
-      basis.setArg(14, static_cast<cl_int>(C));
-      basis.setArg(15, b_amps);
-      basis.setArg(16, b_deltas);
-      basis.setArg(17, b_basis);
-      basis.setArg(18, b_dw);
-      basis.setArg(19, b_l1);
-      normal.setArg(0, static_cast<cl_uint>(stride));
-      normal.setArg(1, static_cast<cl_uint>(n_chunks));
-      normal.setArg(2, b_channels);
-      normal.setArg(3, b_slice);
-      normal.setArg(4, b_k);
-      normal.setArg(5, static_cast<cl_int>(C));
-      normal.setArg(6, b_basis);
-      normal.setArg(7, b_dw);
-      normal.setArg(8, b_sums);
+      basis.set("channels", b_channels).set("prob_slice", b_slice).set("prob_k", b_k)
+          .set("cparams", upload(dev, "cparams", cparams))
+          .set("prob_images", upload(dev, "prob_images", images))
+          .set("prob_sub", upload(dev, "prob_sub", sub))
+          .set("n_cells", static_cast<cl_uint>(n_cells))
+          .set("n_channels", static_cast<cl_int>(C))
+          .set("amps", upload(dev, "amps", amps))
+          .set("deltas", upload(dev, "deltas", deltas))
+          .set("basis", b_basis).set("dw", b_dw).set("partials", b_l1);
+      normal.set("slice_stride", static_cast<cl_uint>(stride)).set("n_chunks", static_cast<cl_uint>(n_chunks))
+          .set("channels", b_channels).set("prob_slice", b_slice).set("prob_k", b_k)
+          .set("n_channels", static_cast<cl_int>(C)).set("basis", b_basis).set("dw", b_dw).set("partials", b_sums);
       const std::size_t wg = static_cast<std::size_t>(shape.wg);
-      launch(queue, basis, "amp_basis", cl::NDRange(n_chunks * wg, P), cl::NDRange(wg, 1));
-      launch(queue, normal, "amp_sums", cl::NDRange(wg, P, static_cast<std::size_t>(K)), cl::NDRange(wg, 1, 1));
-      queue.enqueueReadBuffer(b_l1, CL_TRUE, 0, l1_parts.size(), l1_parts.data());
-      queue.enqueueReadBuffer(b_sums, CL_TRUE, 0, sums.size(), sums.data());
+      basis.run(queue, cl::NDRange(n_chunks * wg, P), cl::NDRange(wg, 1));
+      normal.run(queue, cl::NDRange(wg, P, static_cast<std::size_t>(K)), cl::NDRange(wg, 1, 1));
+      download(queue, b_l1, l1_parts, true);
+      download(queue, b_sums, sums, true);
     } catch (const cl::Error& e) {
       throw_device_error(e, "amplitude sums on " + dev.info().label());
     }
+    if (!run.claim()) return;  // another device finished this batch first
     for (std::size_t i = 0; i < P; ++i) {
       AmplitudeSums& v = out[items[i]];
       const int k = prob_k[i];
@@ -165,7 +147,7 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
         }
     }
   };
-  run_on_workers(batches.size(), queues.size(), run_batch);
+  pool_->run("amplitudes", cost, run_batch);
   return out;
 }
 

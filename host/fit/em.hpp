@@ -4,10 +4,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "device/batch_pool.hpp"
 #include "device/device.hpp"
+#include "device/shapes.hpp"
 #include "fit/amplitudes.hpp"
 #include "fit/gmm.hpp"
 #include "fit/l1_refine.hpp"
@@ -58,10 +61,12 @@ struct EmTiming {
   double seconds = 0, init_seconds = 0, iterate_seconds = 0, finish_seconds = 0;
   std::size_t batches = 0;
   long long iterations = 0;  // EM iterations launched, summed over batches
+  std::size_t repeated = 0;  // batches run again on a faster device (device/batch_pool.hpp)
 };
 
 // The OpenCL engine: batches of problems (task x restart) handed to work queues,
-// queues_per_device on each device, one host thread per queue.
+// queues_per_device on each device, one host thread per queue (device/batch_pool.hpp:
+// devices of different speeds each take the work they finish soonest).
 class EmEngine {
  public:
   explicit EmEngine(std::vector<Device> devices, int queues_per_device = 1,
@@ -103,23 +108,35 @@ class EmEngine {
   // Upper bound on the point-component updates of one EM iteration of a batch
   // (sum over its problems of padded cells x K bucket); at least one problem per batch.
   void set_batch_budget(std::uint64_t point_components) { batch_budget_ = point_components; }
-  std::size_t queue_count() const { return devices_.size() * static_cast<std::size_t>(queues_per_device_); }
+  std::size_t queue_count() const { return pool_->queue_count(); }
   const std::vector<Device>& devices() const { return devices_; }
   bool uses_fp64(std::size_t device) const;
+  // The kernel shape of the fitting routines on device d (device/shapes.hpp choose_shape).
+  KernelShape shape(std::size_t d) const;
   const EmTiming& last_timing() const { return timing_; }
   // Runs the layout meant for GPUs (one cell per work-item, 64 work-items per
   // work-group, local-memory reductions) on every device, CPUs included.
   void set_gpu_layout(bool on) { gpu_layout_ = on; }
+  // Runs `shape` on every device instead of its table or tuned entry (`bsdfmix tune`).
+  void set_shape(const KernelShape& shape) {
+    forced_shape_ = shape;
+    has_forced_shape_ = true;
+  }
 
  private:
-  // One queue per worker: queues_per_device on each device, and each queue's device.
-  void make_queues(std::vector<cl::CommandQueue>& queues, std::vector<std::size_t>& device) const;
+  // The batch budget in effect: batch_budget_, lowered so that no buffer of a batch passes
+  // any device's largest single allocation and a batch's buffers stay within a sixteenth
+  // of its global memory (4 bytes per point-component at most in one buffer, 12 in all).
+  std::uint64_t budget() const;
+  std::uint64_t device_limit() const;
 
   std::vector<Device> devices_;
-  int queues_per_device_;
+  std::shared_ptr<BatchPool> pool_;
   EmPrecision precision_;
   std::uint64_t batch_budget_ = std::uint64_t(1) << 25;
   bool gpu_layout_ = false;
+  KernelShape forced_shape_;
+  bool has_forced_shape_ = false;
   EmTiming timing_;
 };
 

@@ -155,6 +155,15 @@ std::vector<std::pair<int, std::vector<std::size_t>>> bucket_batches(
   return batches;
 }
 
+void check_problem_fits(std::size_t stride, int bucket, int extra_rows, std::uint64_t limit) {
+  const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket + extra_rows);
+  if (per > limit)
+    throw DeviceError("a slice of " + std::to_string(stride) + " padded cells at " + std::to_string(bucket) +
+                      " components needs " + std::to_string(4 * per) +
+                      " bytes in one buffer, more than a selected device allows in one allocation (" +
+                      std::to_string(4 * limit) + "); import the table at a lower resolution");
+}
+
 void component_constants(const Gmm& gmm, int j, int K, double log2_weight, float* cp) {
   const double a = gmm.cov[3 * j], b = gmm.cov[3 * j + 1], c = gmm.cov[3 * j + 2];
   const double det = a * c - b * b, l2e = 1.4426950408889634;

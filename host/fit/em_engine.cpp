@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -31,19 +32,14 @@ ChunkLayout::ChunkLayout(const SliceGrid& grid)
       dtheta(grid.theta.size() > 1 ? axis_step(grid.theta) : 0.0),
       dphi(axis_step(grid.phi)) {}
 
-void set_grid_args(cl::Kernel& kernel, const ChunkLayout& layout, const SliceGrid& grid) {
-  kernel.setArg(0, static_cast<cl_uint>(layout.stride));
-  kernel.setArg(1, static_cast<cl_uint>(layout.n_phi));
-  kernel.setArg(2, static_cast<float>(1.0 / static_cast<double>(layout.n_phi)));
-  kernel.setArg(3, static_cast<float>(grid.theta.front()));
-  kernel.setArg(4, static_cast<float>(layout.dtheta));
-  kernel.setArg(5, static_cast<float>(grid.phi.front()));
-  kernel.setArg(6, static_cast<float>(layout.dphi));
-}
-
-KernelShape shape_for(const DeviceInfo& info, bool gpu_layout) {
-  if (info.is_cpu() && !gpu_layout) return {16, 1, static_cast<int>(kChunkCells / 16)};
-  return {1, 64, static_cast<int>(kChunkCells / 64)};
+void set_grid_args(Routine& routine, const ChunkLayout& layout, const SliceGrid& grid) {
+  routine.set("slice_stride", static_cast<cl_uint>(layout.stride))
+      .set("n_phi", static_cast<cl_uint>(layout.n_phi))
+      .set("inv_nphi", static_cast<float>(1.0 / static_cast<double>(layout.n_phi)))
+      .set("theta0", static_cast<float>(grid.theta.front()))
+      .set("dtheta", static_cast<float>(layout.dtheta))
+      .set("phi0", static_cast<float>(grid.phi.front()))
+      .set("dphi", static_cast<float>(layout.dphi));
 }
 
 std::string em_program_options(int k_max, const KernelShape& shape, bool fp64) {
@@ -101,11 +97,20 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 EmEngine::EmEngine(std::vector<Device> devices, int queues_per_device, EmPrecision precision)
-    : devices_(std::move(devices)), queues_per_device_(queues_per_device), precision_(precision) {
+    : devices_(std::move(devices)), precision_(precision) {
+  // BSDFMIX_PRECISION (auto, fp32, fp64) overrides an engine left at auto: the fp32 path
+  // of a device that has fp64, for checks and comparisons.
+  if (const char* env = std::getenv("BSDFMIX_PRECISION"); env && *env && precision_ == EmPrecision::Auto) {
+    try {
+      precision_ = parse_precision(env);
+    } catch (const ConfigError& e) {
+      throw ConfigError(std::string("BSDFMIX_PRECISION: ") + e.what());
+    }
+  }
   if (devices_.empty()) throw DeviceError("EM engine: no device given");
-  if (queues_per_device_ < 1)
-    throw ConfigError("EM engine: queues per device must be at least 1, not " +
-                      std::to_string(queues_per_device_));
+  if (queues_per_device < 1)
+    throw ConfigError("EM engine: queues per device must be at least 1, not " + std::to_string(queues_per_device));
+  pool_ = std::make_shared<BatchPool>(devices_, queues_per_device);
   if (precision_ == EmPrecision::Fp64)
     for (const auto& d : devices_)
       if (!d.info().fp64)
@@ -113,12 +118,20 @@ EmEngine::EmEngine(std::vector<Device> devices, int queues_per_device, EmPrecisi
                           " has no cl_khr_fp64 (use fp32 or auto)");
 }
 
-void EmEngine::make_queues(std::vector<cl::CommandQueue>& queues, std::vector<std::size_t>& device) const {
-  for (std::size_t d = 0; d < devices_.size(); ++d)
-    for (int q = 0; q < queues_per_device_; ++q) {
-      queues.push_back(devices_[d].make_queue());
-      device.push_back(d);
-    }
+std::uint64_t EmEngine::budget() const { return std::min(batch_budget_, device_limit()); }
+
+std::uint64_t EmEngine::device_limit() const {
+  std::uint64_t limit = std::numeric_limits<std::uint64_t>::max();
+  for (const auto& d : devices_) {
+    if (d.info().max_alloc) limit = std::min<std::uint64_t>(limit, d.info().max_alloc / 4);
+    if (d.info().global_mem) limit = std::min<std::uint64_t>(limit, d.info().global_mem / 16);
+  }
+  return limit;
+}
+
+KernelShape EmEngine::shape(std::size_t d) const {
+  if (has_forced_shape_) return forced_shape_;
+  return choose_shape(devices_.at(d).info(), gpu_layout_).shape;
 }
 
 bool EmEngine::uses_fp64(std::size_t device) const {
@@ -166,31 +179,29 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     groups[Key{k_bucket(t.k), s.iterations, s.tolerance, cov_floor(grid, s), s.min_weight}].push_back(pi);
   }
   std::vector<Batch> batches;
+  std::vector<double> cost;
+  const std::uint64_t limit = device_limit();
   for (auto& [key, list] : groups) {
     const int bucket = std::get<0>(key);
-    const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket);
-    const std::size_t cap = static_cast<std::size_t>(std::max<std::uint64_t>(1, batch_budget_ / per));
-    for (std::size_t b = 0; b < list.size(); b += cap) {
-      Batch batch{bucket, &tasks[problems[list[b]].task].settings, {}};
-      batch.problems.assign(list.begin() + b, list.begin() + std::min(list.size(), b + cap));
-      batches.push_back(std::move(batch));
+    check_problem_fits(stride, bucket, 0, limit);
+    for (auto& [b, items] : bucket_batches({{bucket, list}}, stride, 0, budget())) {
+      const EmSettings& s = tasks[problems[items.front()].task].settings;
+      cost.push_back(static_cast<double>(items.size()) * static_cast<double>(stride) * b * s.iterations);
+      batches.push_back(Batch{b, &s, std::move(items)});
     }
   }
   timing_.batches = batches.size();
 
-  // One queue per worker.
-  std::vector<cl::CommandQueue> queues;
-  std::vector<std::size_t> queue_device;
-  make_queues(queues, queue_device);
   std::mutex timing_mutex;
+  const bool several = devices_.size() > 1;
 
-  auto run_batch = [&](std::size_t worker, std::size_t bi) {
-    const Batch& batch = batches[bi];
-    const std::size_t d = queue_device[worker];
+  auto run_batch = [&](const BatchRun& run) {
+    const Batch& batch = batches[run.batch];
+    const std::size_t d = run.device;
     const Device& dev = devices_[d];
-    const cl::CommandQueue& queue = queues[worker];
+    const cl::CommandQueue& queue = *run.queue;
     const bool fp64 = uses_fp64(d);
-    const KernelShape shape = shape_for(dev.info(), gpu_layout_);
+    const KernelShape shape = this->shape(d);
     const int K = batch.bucket;
     const EmSettings& s = *batch.settings;
     const std::size_t P = batch.problems.size();
@@ -241,74 +252,65 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     int launched = 0;
     try {
       cl::Program program = build_program(dev, "em", em_program_options(K, shape, fp64));
-      const cl::Context& ctx = dev.context();
-      cl::Buffer b_weights(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, weights.size() * 4, weights.data());
-      cl::Buffer b_slice(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_slice.data());
-      cl::Buffer b_k(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_k.data());
-      cl::Buffer b_status(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, status.size() * sizeof(int), status.data());
-      cl::Buffer b_state(ctx, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, state_bytes.size(), state_bytes.data());
-      cl::Buffer b_lprev(ctx, CL_MEM_READ_WRITE, P * real_size);
-      cl::Buffer b_partials(ctx, CL_MEM_READ_WRITE, P * n_chunks * nstat * real_size);
-      cl::Buffer b_const(ctx, CL_MEM_READ_WRITE, P * nstate * sizeof(float));
-      cl::Buffer b_ll(ctx, CL_MEM_WRITE_ONLY, ll_bytes.size());
+      cl::Buffer b_weights = upload(dev, "weights", weights), b_slice = upload(dev, "prob_slice", prob_slice),
+                 b_k = upload(dev, "prob_k", prob_k);
+      cl::Buffer b_status = device_buffer(dev, "status", status.size() * sizeof(int),
+                                          CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, status.data());
+      cl::Buffer b_state = device_buffer(dev, "state", state_bytes.size(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
+                                         state_bytes.data());
+      cl::Buffer b_lprev = device_buffer(dev, "lprev", P * real_size, CL_MEM_READ_WRITE);
+      cl::Buffer b_partials = device_buffer(dev, "partials", P * n_chunks * nstat * real_size, CL_MEM_READ_WRITE);
+      cl::Buffer b_const = device_buffer(dev, "cparams", P * nstate * sizeof(float), CL_MEM_READ_WRITE);
+      cl::Buffer b_ll = device_buffer(dev, "loglik partials", ll_bytes.size(), CL_MEM_WRITE_ONLY);
 
-      cl::Kernel k_const(program, "em_constants"), k_estep(program, "em_estep"),
-          k_mstep(program, "em_mstep"), k_ll(program, "em_loglik");
+      Routine k_const(program, "em_constants"), k_estep(program, "em_estep"), k_mstep(program, "em_mstep"),
+          k_ll(program, "em_loglik");
       const cl_uint nP = static_cast<cl_uint>(P);
-      k_const.setArg(0, nP);
-      k_const.setArg(1, b_k);
-      k_const.setArg(2, b_state);
-      k_const.setArg(3, b_const);
-      for (cl::Kernel* kk : {&k_estep, &k_ll}) {
+      k_const.set("n_problems", nP).set("prob_k", b_k).set("state", b_state).set("cparams", b_const);
+      for (Routine* kk : {&k_estep, &k_ll}) {
         set_grid_args(*kk, layout, grid);
-        kk->setArg(7, b_weights);
-        kk->setArg(8, b_slice);
-        kk->setArg(9, b_k);
-        kk->setArg(10, b_status);
-        kk->setArg(11, b_const);
+        kk->set("weights", b_weights).set("prob_slice", b_slice).set("prob_k", b_k).set("status", b_status)
+            .set("cparams", b_const);
       }
-      k_estep.setArg(12, b_partials);
-      k_ll.setArg(12, b_ll);
-      k_mstep.setArg(0, nP);
-      k_mstep.setArg(1, static_cast<cl_uint>(n_chunks));
-      k_mstep.setArg(3, static_cast<cl_int>(s.iterations));
-      auto set_real = [&](cl::Kernel& kk, cl_uint idx, double v) {
-        if (fp64) kk.setArg(idx, v);
-        else kk.setArg(idx, static_cast<float>(v));
-      };
-      set_real(k_mstep, 4, s.tolerance);
-      set_real(k_mstep, 5, cov_floor(grid, s));
-      set_real(k_mstep, 6, s.min_weight);
-      k_mstep.setArg(7, b_k);
-      k_mstep.setArg(8, b_status);
-      k_mstep.setArg(9, b_state);
-      k_mstep.setArg(10, b_lprev);
-      k_mstep.setArg(11, b_partials);
-      k_mstep.setArg(12, b_const);
+      k_estep.set("partials", b_partials);
+      k_ll.set("partials", b_ll);
+      k_mstep.set("n_problems", nP).set("G", static_cast<cl_uint>(n_chunks)).set("max_iter", static_cast<cl_int>(s.iterations));
+      k_mstep.set_real("tol", s.tolerance, fp64).set_real("cov_floor", cov_floor(grid, s), fp64)
+          .set_real("min_weight", s.min_weight, fp64);
+      k_mstep.set("prob_k", b_k).set("status", b_status).set("state", b_state).set("lprev", b_lprev)
+          .set("partials", b_partials).set("cparams", b_const);
 
       const cl::NDRange e_global(n_chunks * static_cast<std::size_t>(shape.wg), P);
       const cl::NDRange e_local(static_cast<std::size_t>(shape.wg), 1);
-      launch(queue, k_const, "em_constants", cl::NDRange(P));
+      k_const.run(queue, cl::NDRange(P));
       for (int it = 1; it <= s.iterations; ++it) {
-        launch(queue, k_estep, "em_estep", e_global, e_local);
-        k_mstep.setArg(2, static_cast<cl_int>(it));
-        launch(queue, k_mstep, "em_mstep", cl::NDRange(P));
+        if (run.cancelled()) break;  // another device finished this batch
+        k_estep.run(queue, e_global, e_local);
+        k_mstep.set("iter", static_cast<cl_int>(it));
+        k_mstep.run(queue, cl::NDRange(P));
         ++launched;
-        if (it % kStatusEvery == 0 && it < s.iterations) {
+        // With devices of different speeds, every iteration: a run another device finished
+        // first stops after one iteration, not kStatusEvery.
+        if ((several || it % kStatusEvery == 0) && it < s.iterations) {
           queue.enqueueReadBuffer(b_status, CL_TRUE, 0, status.size() * sizeof(int), status.data());
           bool all = true;
           for (std::size_t i = 0; i < P && all; ++i) all = status[2 * i] != 0;
           if (all) break;
         }
       }
+      if (run.cancelled()) {
+        queue.finish();
+        return;
+      }
       queue.finish();
       const double iterate_s = seconds_since(t0);
       t0 = std::chrono::steady_clock::now();
-      launch(queue, k_ll, "em_loglik", e_global, e_local);
+      k_ll.run(queue, e_global, e_local);
       queue.enqueueReadBuffer(b_status, CL_FALSE, 0, status.size() * sizeof(int), status.data());
       queue.enqueueReadBuffer(b_state, CL_FALSE, 0, state_bytes.size(), state_bytes.data());
       queue.enqueueReadBuffer(b_ll, CL_TRUE, 0, ll_bytes.size(), ll_bytes.data());
       const double finish_s = seconds_since(t0);
+      if (!run.claim()) return;  // another device finished this batch first
       std::lock_guard<std::mutex> lock(timing_mutex);
       timing_.init_seconds += init_s;
       timing_.iterate_seconds += iterate_s;
@@ -352,7 +354,8 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     }
   };
 
-  run_on_workers(batches.size(), queues.size(), run_batch);
+  pool_->run("em", cost, run_batch);
+  timing_.repeated = pool_->repeated();
 
   // Best restart per task (the first of equal log-likelihoods).
   std::vector<std::string> first_failure(tasks.size());

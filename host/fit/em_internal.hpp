@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "device/routine.hpp"
+#include "device/shapes.hpp"
 #include "fit/em.hpp"
 
 namespace bsdfmix::em_detail {
@@ -67,18 +69,8 @@ std::vector<std::pair<int, std::vector<std::size_t>>> bucket_batches(
 // inverse covariance times -log2(e) / 2, and log2_weight - log2(2 pi) - log2(det) / 2.
 void component_constants(const Gmm& gmm, int j, int K, double log2_weight, float* cp);
 
-// Cells per chunk (one work-group): WG * CPW * VEC, the same on every device kind.
-constexpr std::size_t kChunkCells = 512;
-
-// The kernel layout: CPUs one work-item per work-group walking 16-wide float vectors
-// (the CPU compiler vectorizes the vector code, not across work-items); others (and
-// CPUs with gpu_layout) scalar work-items, 64 per work-group.
-struct KernelShape {
-  int vec, wg, cpw;
-};
-KernelShape shape_for(const DeviceInfo& info, bool gpu_layout);
-
-// The build options of kernels/em.cl for a K_MAX bucket, a layout and a precision.
+// The build options of the fitting programs (kernels/em.cl, l1.cl, amplitudes.cl) for a
+// K_MAX bucket, a kernel shape and a precision.
 std::string em_program_options(int k_max, const KernelShape& shape, bool fp64);
 
 // The cells of a slice grid in chunks of kChunkCells, as the kernels walk them: a slice
@@ -89,9 +81,14 @@ struct ChunkLayout {
   explicit ChunkLayout(const SliceGrid& grid);
 };
 
-// Sets the grid arguments 0..6 that em_estep, em_loglik and em_l1 share (stride, n_phi,
-// 1 / n_phi, theta0, dtheta, phi0, dphi).
-void set_grid_args(cl::Kernel& kernel, const ChunkLayout& layout, const SliceGrid& grid);
+// Sets the grid arguments that em_estep, em_loglik, em_l1 and amp_basis share
+// (slice_stride, n_phi, inv_nphi, theta0, dtheta, phi0, dphi).
+void set_grid_args(Routine& routine, const ChunkLayout& layout, const SliceGrid& grid);
+
+// A DeviceError when one problem of `bucket` (+ extra_rows) rows of `stride` cells passes
+// `limit` point-components (EmEngine::budget's device limit): a slice too large for a
+// device's largest single allocation, the only work that cannot be split.
+void check_problem_fits(std::size_t stride, int bucket, int extra_rows, std::uint64_t limit);
 
 // Values in the device's real type (double or float), as bytes, and back.
 std::vector<unsigned char> pack(const std::vector<double>& v, bool fp64);

@@ -1,4 +1,4 @@
-// The L1 refinement's evaluations on the devices: kernels/em.cl em_l1, batched by K bucket.
+// The L1 refinement's evaluations on the devices: kernels/l1.cl em_l1, batched by K bucket.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -7,7 +7,6 @@
 #include "device/program.hpp"
 #include "fit/em.hpp"
 #include "fit/em_internal.hpp"
-#include "fit/scheduler.hpp"
 
 namespace bsdfmix {
 
@@ -65,19 +64,18 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
     if (slices.w[queries[i].slice].empty()) continue;  // a zero slice: objective 0
     groups[k_bucket(queries[i].gmm.k())].push_back(i);
   }
-  const auto batches = bucket_batches(groups, stride, 0, batch_budget_);
+  for (const auto& [bucket, list] : groups) check_problem_fits(stride, bucket, 0, device_limit());
+  const auto batches = bucket_batches(groups, stride, 0, budget());
+  std::vector<double> cost;
+  for (const auto& [K, items] : batches) cost.push_back(static_cast<double>(items.size()) * stride * K);
 
-  std::vector<cl::CommandQueue> queues;
-  std::vector<std::size_t> queue_device;
-  make_queues(queues, queue_device);
-
-  auto run_batch = [&](std::size_t worker, std::size_t bi) {
-    const int K = batches[bi].first;
-    const std::vector<std::size_t>& items = batches[bi].second;
-    const std::size_t d = queue_device[worker];
+  auto run_batch = [&](const BatchRun& run) {
+    const int K = batches[run.batch].first;
+    const std::vector<std::size_t>& items = batches[run.batch].second;
+    const std::size_t d = run.device;
     const Device& dev = devices_[d];
     const bool fp64 = uses_fp64(d);
-    const KernelShape shape = shape_for(dev.info(), gpu_layout_);
+    const KernelShape shape = this->shape(d);
     const std::size_t P = items.size(), real_size = fp64 ? 8 : 4;
     // The channels' variant of the kernel when some query of the batch has them.
     const bool colour = std::any_of(items.begin(), items.end(), [&](std::size_t i) { return !queries[i].rgb_amp.empty(); });
@@ -116,38 +114,30 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
     std::vector<unsigned char> partials(P * n_chunks * nstat * real_size);
     try {
       cl::Program program =
-          build_program(dev, "em", em_program_options(K, shape, fp64) + (colour ? " -DL1_CH=3" : ""));
-      const cl::Context& ctx = dev.context();
-      const cl::CommandQueue& queue = queues[worker];
-      cl::Buffer b_weights(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, weights.size() * 4, weights.data());
-      cl::Buffer b_slice(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_slice.data());
-      cl::Buffer b_k(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, P * sizeof(int), prob_k.data());
-      cl::Buffer b_const(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, cparams.size() * 4, cparams.data());
-      cl::Buffer b_images(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, images.size() * sizeof(int), images.data());
-      cl::Buffer b_channels(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, channels.size() * 4, channels.data());
-      cl::Buffer b_camp(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, camp.size() * 4, camp.data());
-      cl::Buffer b_weights_p(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, prob_weights.size() * 4, prob_weights.data());
-      cl::Buffer b_partials(ctx, CL_MEM_WRITE_ONLY, partials.size());
-      cl::Kernel kern(program, "em_l1");
+          build_program(dev, "l1", em_program_options(K, shape, fp64) + (colour ? " -DL1_CH=3" : ""));
+      const cl::CommandQueue& queue = *run.queue;
+      Routine kern(program, "em_l1");
       set_grid_args(kern, layout, grid);
-      kern.setArg(7, b_weights);
-      kern.setArg(8, b_slice);
-      kern.setArg(9, b_k);
-      kern.setArg(10, b_const);
-      kern.setArg(11, b_images);
-      kern.setArg(12, static_cast<cl_uint>(n_cells));
-      kern.setArg(13, static_cast<float>(area));
-      kern.setArg(14, static_cast<float>(objective.eps));
-      kern.setArg(15, b_weights_p);
-      kern.setArg(16, b_channels);
-      kern.setArg(17, b_camp);
-      kern.setArg(18, b_partials);
-      launch(queue, kern, "em_l1", cl::NDRange(n_chunks * static_cast<std::size_t>(shape.wg), P),
-             cl::NDRange(static_cast<std::size_t>(shape.wg), 1));
-      queue.enqueueReadBuffer(b_partials, CL_TRUE, 0, partials.size(), partials.data());
+      cl::Buffer b_partials = device_buffer(dev, "partials", partials.size(), CL_MEM_WRITE_ONLY);
+      kern.set("weights", upload(dev, "weights", weights))
+          .set("prob_slice", upload(dev, "prob_slice", prob_slice))
+          .set("prob_k", upload(dev, "prob_k", prob_k))
+          .set("cparams", upload(dev, "cparams", cparams))
+          .set("prob_images", upload(dev, "prob_images", images))
+          .set("n_cells", static_cast<cl_uint>(n_cells))
+          .set("area", static_cast<float>(area))
+          .set("eps", static_cast<float>(objective.eps))
+          .set("prob_weights", upload(dev, "prob_weights", prob_weights))
+          .set("channels", upload(dev, "channels", channels))
+          .set("camp", upload(dev, "camp", camp))
+          .set("partials", b_partials);
+      kern.run(queue, cl::NDRange(n_chunks * static_cast<std::size_t>(shape.wg), P),
+               cl::NDRange(static_cast<std::size_t>(shape.wg), 1));
+      download(queue, b_partials, partials, true);
     } catch (const cl::Error& e) {
       throw_device_error(e, "L1 evaluation on " + dev.info().label());
     }
+    if (!run.claim()) return;  // another device finished this batch first
     for (std::size_t i = 0; i < P; ++i) {
       L1Value& v = out[items[i]];
       const int k = prob_k[i];
@@ -159,7 +149,7 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
       }
     }
   };
-  run_on_workers(batches.size(), queues.size(), run_batch);
+  pool_->run("l1", cost, run_batch);
   return out;
 }
 

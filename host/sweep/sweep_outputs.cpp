@@ -74,18 +74,19 @@ std::string sweep_fingerprint(const std::string& table_path, const TableMeta& me
                               const FitSection& fit, std::size_t batch, const EmEngine& engine,
                               const std::vector<Device>& devices) {
   static const std::string executable = hex64(hash_file("/proc/self/exe"));
-  const std::string em_source = kernel_source("em");
+  std::string fit_sources;  // every program a fit runs
+  for (const char* program : {"em", "l1", "amplitudes"}) fit_sources += kernel_source(program);
   std::ostringstream fp;
   fp << "table " << std::filesystem::absolute(table_path).string() << " size " << std::filesystem::file_size(table_path)
      << " source " << meta.source << "\nslices";
   for (const auto& r : plan) fp << ' ' << r.index;
   fp << "\nsettings " << fit_settings_json(fit) << "\nbatch " << batch << "\nbuild bsdfmix " << BSDFMIX_VERSION
-     << " executable " << executable << " em.cl " << Hash64().update(em_source.data(), em_source.size()).hex()
+     << " executable " << executable << " kernels " << Hash64().update(fit_sources.data(), fit_sources.size()).hex()
      << "\nnumeric path";
   for (std::size_t d = 0; d < devices.size(); ++d)
     fp << " [" << devices[d].info().name << " | " << devices[d].info().platform << " | "
        << devices[d].info().version << " | " << devices[d].info().driver << " | "
-       << (engine.uses_fp64(d) ? "fp64" : "fp32") << "]";
+       << (engine.uses_fp64(d) ? "fp64" : "fp32") << " | " << engine.shape(d).label() << "]";
   fp << "\n";
   return fp.str();
 }
