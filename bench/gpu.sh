@@ -51,7 +51,7 @@ step() {  # step NAME COMMAND...: runs it, records ok/failed and the seconds
   echo "== $n: $([ $rc -eq 0 ] && echo ok || echo "FAILED ($rc)") in $s s: $detail"
 }
 echo "== device: $name ($tag)"
-"$bin" devices --device "$device" | sed -n '/\[/,/fitting/p'
+"$bin" devices | awk -v n="$name" 'index($0, "] " n) { p = 1 } p { print } p && /fitting kernels/ { exit }'
 step devices_check "$bin" devices --check --device "$device"
 if ((quick)); then
   step label_device env BSDFMIX_DEVICE="$device" ctest --test-dir build -L device -R "device_test|rng_test" --output-on-failure
@@ -63,11 +63,11 @@ if command -v oclgrind > /dev/null; then
 else
   echo "portability,skipped,0,\"oclgrind not installed\"" >> "$summary.tmp"
 fi
-ks="8 16 50"; slices=64
-((quick)) && ks="8" && slices=4
+ks="8 16 50"; slices=64; iterations=20
+((quick)) && ks="8" && slices=1 && iterations=2
 for k in $ks; do
-  step "bench_em_k$k" "$bin" bench em --device "$device" --k "$k" --slices "$slices" --repeat 3 --no-peers \
-    --csv "$results/gpu_${tag}_em_k$k.csv"
+  step "bench_em_k$k" "$bin" bench em --device "$device" --k "$k" --slices "$slices" --iterations $iterations --repeat 3 \
+    --no-peers --csv "$results/gpu_${tag}_em_k$k.csv"
 done
 work=$(mktemp -d)
 trap 'rm -rf "$work" "$results/.gpu_step.log"' EXIT

@@ -49,6 +49,8 @@ studies=(
   "render:150:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
   "render_room:30:no:the cloth of the four fibers in the room, the guided estimators against the baseline (render/<fiber>_room/)"
   "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+  "em_builds:3:no:EM throughput of this build beside BEFORE's at K 8, 16, 50, best of 5 (em_builds.csv)"
+  "mixed_devices:6:no:a thesis-length silk sweep on PoCL alone and on PoCL beside oclgrind, best of 3 (mixed_devices.csv)"
   "em_precision:1:no:the EM kernels against their reference, both precisions (em_precision.csv)"
   "theta_border:1:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
   "failure_map:1:quick:the failure map over configs/stress/ (failure_map.csv)"
@@ -97,6 +99,8 @@ outputs() {
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
     search_unseen) echo "$results/search_unseen.csv" ;;
     search_time) echo "$results/search_time.csv" ;;
+    em_builds) echo "$results/em_builds.csv" ;;
+    mixed_devices) echo "$results/mixed_devices.csv" ;;
     pinned_k) echo "$results/pinned_k.csv" ;;
     parameterization) echo "$results/parameterization.csv" ;;
     tails) echo "$results/tails.csv" ;;
@@ -184,6 +188,10 @@ run_study() {
         $bin generate fiber -q --preset polyester --theta-o 180 --theta-i 90 --phi-i 180 -o out/search_time/polyester.h5
       $py bench/search_before_after.py --before "$BEFORE" --tables polyester_thesis=out/search_time/polyester.h5 \
         --runs 3 --walk-only --work out/search_time --csv $results/search_time.csv ;;
+    em_builds)
+      if [ -z "${BEFORE:-}" ]; then echo "reproduce: em_builds skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
+      $py bench/em_builds.py --before "$BEFORE" --k 8,16,50 --runs 5 --csv $results/em_builds.csv ;;
+    mixed_devices) $py bench/mixed_devices.py --runs 3 --csv $results/mixed_devices.csv ;;
     pinned_k)
       [ -f out/bench_rgb/satin.h5 ] || { echo "reproduce: pinned_k needs the tables of rgb_stand_in (run it first)" >&2; return 1; }
       $py bench/pinned_k.py --table out/bench_rgb/satin.h5 --name satin --min-theta-o 1.2 --k 8,16,32 \

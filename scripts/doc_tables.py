@@ -412,6 +412,27 @@ def em_precision():
     return out
 
 
+def mixed_devices():
+    out = ["| devices | sweep | best of | wall time | over PoCL alone | oclgrind's runs, calibration included (seconds) | slices whose K differ | largest L1 difference | machine |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows("mixed_devices.csv"):
+        out.append("| %s | %s silk slices of %s, K up to 16 | %s | %.1f s | %.3fx | %s (%s s) | %s | %s | %s, %s cores |" % (
+            r["setup"], r["slices"], r["grid"].replace("x", " x "), r["runs"], float(r["best_seconds"]),
+            float(r["over_pocl"]), r["oclgrind_runs"], r["oclgrind_seconds"], r["slices_k_differ"],
+            "%.2g" % float(r["max_l1_difference"]), r["cpu_model"], r["logical_cpus"]))
+    return out
+
+
+def em_builds():
+    out = ["| K | slices of 90 x 180 | before, s per iteration | this build | this build over before | device | machine |",
+           "|---|---|---|---|---|---|---|"]
+    for r in rows("em_builds.csv"):
+        out.append("| %s | %s | %.5f | %.5f | %.3fx | %s | %s, %s cores |" % (
+            r["k"], r["slices"], float(r["before_s_per_iter"]), float(r["after_s_per_iter"]),
+            float(r["after_over_before"]), r["device"], r["cpu_model"], r["logical_cpus"]))
+    return out
+
+
 def failure_map():
     import failure_tables
     return failure_tables.readme()
@@ -443,7 +464,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": 
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
           "em_results": em_results, "converge_refine": converge_refine,
           "theta_border": theta_border,
-          "em_precision": em_precision,
+          "em_precision": em_precision, "mixed_devices": mixed_devices, "em_builds": em_builds,
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
           "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k, "tails": tails,

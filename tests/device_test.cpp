@@ -60,7 +60,9 @@ TEST_CASE("a failed build throws with the build log", "[device]") {
     CHECK_THAT(what, Catch::Contains("building kernels/broken.cl"));
     CHECK_THAT(what, Catch::Contains("CL_BUILD_PROGRAM_FAILURE"));
     CHECK_THAT(what, Catch::Contains("undeclared_name"));
-    CHECK_THAT(what, Catch::Contains("broken.cl:1:"));  // the log counts the kernel file's own lines
+    // PoCL's log counts the kernel file's own lines (#line); oclgrind 21.10 ignores #line
+    if (dev.info().platform.find("Portable Computing Language") != std::string::npos)
+      CHECK_THAT(what, Catch::Contains("broken.cl:1:"));
   }
   // common.cl comes from the same directory as the program
   fs::remove(dir / "common.cl");

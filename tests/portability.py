@@ -88,15 +88,35 @@ def main():
     base.pop("BSDFMIX_SHAPES", None)
     og_env = dict(base, OCL_ICD_VENDORS=icd_dir(tmp))
 
+    # The check itself can fail: a self-test kernel that reads past its buffer and races in
+    # local memory (loaded from a copy of kernels/ through BSDFMIX_KERNEL_DIR) must be reported.
+    broken = os.path.join(tmp, "broken_kernels")
+    shutil.copytree(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "kernels"), broken,
+                    dirs_exist_ok=True)
+    path = os.path.join(broken, "selftest.cl")
+    text = open(path).read()
+    bad = text.replace("if (i < n) y[i] = a * x[i] + y[i];", "if (i < n) y[i] = a * x[i + 1] + y[i];")
+    bad = bad.replace("if (lid < s) scratch[lid] += scratch[lid + s];", "scratch[lid] += scratch[(lid + s) % WGS];")
+    if bad.count("x[i + 1]") != 1 or "% WGS" not in bad:
+        fail("tests/portability.py no longer matches kernels/selftest.cl: update its broken copy")
+    open(path, "w").write(bad)
+    log = os.path.join(tmp, "broken.log")
+    subprocess.run(["oclgrind", "--data-races", "--log", log, exe, "devices", "--check", "-q"],
+                   env=dict(og_env, BSDFMIX_KERNEL_DIR=broken), capture_output=True, text=True)
+    found = open(log).read() if os.path.exists(log) else ""
+    if "Invalid read" not in found or "race" not in found.lower():
+        fail("oclgrind did not report the broken self-test's out-of-bounds read and data race:\n" + found[:2000])
+    print("portability: oclgrind reports a broken kernel (out-of-bounds read, data race)")
+
     # The PoCL fit the others must agree with (the table from the fiber kernel on PoCL).
     table = os.path.join(tmp, "silk.h5")
-    run([exe, "-q", "generate", "fiber", "--preset", "silk", "--theta-o", "2", "--theta-i", "12", "--phi-i", "24",
-         "--h-nodes", "16", "-o", table], base)
+    run([exe, "generate", "fiber", "--preset", "silk", "--theta-o", "2", "--theta-i", "12", "--phi-i", "24",
+         "--h-nodes", "16", "-o", table, "-q"], base)
     pocl = os.path.join(tmp, "pocl")
     os.makedirs(pocl, exist_ok=True)
     with open(os.path.join(pocl, "fit.yaml"), "w") as f:
         f.write(FIT.format(table=table, out=pocl))
-    run([exe, "-q", "fit", os.path.join(pocl, "fit.yaml")], base)
+    run([exe, "fit", os.path.join(pocl, "fit.yaml"), "-q"], base)
     expected = report(os.path.join(pocl, "fit.csv"))
 
     for name in a.profiles.split(","):
@@ -110,7 +130,7 @@ def main():
             def og(*args):
                 step[0] += 1
                 log = os.path.join(out, "oclgrind_%d.log" % step[0])
-                return run(["oclgrind", "--data-races", "--check-api", "--log", log] + flags + [exe, "-q"] + list(args),
+                return run(["oclgrind", "--data-races", "--check-api", "--log", log] + flags + [exe] + list(args) + ["-q"],
                            env, log)
 
             if precision == "fp64":

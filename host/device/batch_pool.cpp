@@ -39,6 +39,11 @@ double BatchPool::rate(const std::string& routine, std::size_t d) const {
   return it == rates_.end() ? 0.0 : it->second;
 }
 
+void BatchPool::seed_rate(const std::string& routine, std::size_t d, double seconds_per_unit) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  rates_.emplace(std::make_pair(routine, d), seconds_per_unit);
+}
+
 void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
                     const std::function<void(const BatchRun&)>& fn) {
   const std::size_t n = cost.size();
@@ -164,6 +169,14 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
         if (repeat) ++repeated_;
       }
       BatchRun run;
+      if (several) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        double best = 0;
+        for (std::size_t e = 0; e < devices_.size(); ++e)
+          if (const double r = rate_of(e); r > 0) best = best > 0 ? std::min(best, r) : r;
+        const double mine = rate_of(d);
+        run.watched_ = mine <= 0 || mine > 1.5 * best;
+      }
       run.batch = b;
       run.device = d;
       run.queue = &queues_[q];
@@ -180,8 +193,8 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
       }
       const double took = seconds(t0, Clock::now());
       if (std::getenv("BSDFMIX_POOL_LOG"))
-        std::fprintf(stderr, "pool %s batch %zu/%zu dev %zu cost %.3g took %.4f s%s%s\n", routine.c_str(), b, n, d, cost[b],
-                     took, repeat ? " (repeat)" : "", run.won_ ? "" : " (lost)");
+        std::fprintf(stderr, "pool %s batch %zu/%zu dev %zu [%s] cost %.3g took %.4f s%s%s\n", routine.c_str(), b, n, d,
+                     devices_[d].info().name.c_str(), cost[b], took, repeat ? " (repeat)" : "", run.won_ ? "" : " (lost)");
       if (several && cost[b] > 0) {
         std::lock_guard<std::mutex> lock(mutex_);
         double& r = rates_[{routine, d}];

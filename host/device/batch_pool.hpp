@@ -27,6 +27,10 @@ class BatchRun {
   const cl::CommandQueue* queue = nullptr;
   // Another run of this batch has finished: stop before the next launch (results unused).
   bool cancelled() const { return done_->load(std::memory_order_acquire); }
+  // Whether this run may well lose to another device (several devices, and this one
+  // unmeasured or slower than the fastest): a routine then checks cancelled() after every
+  // launch rather than every few, at the price of a wait per launch.
+  bool watched() const { return watched_; }
   // True for the first run of the batch that finishes, exactly once: only that run writes
   // the batch's results.
   bool claim() const {
@@ -39,6 +43,7 @@ class BatchRun {
   friend class BatchPool;
   std::atomic<bool>* done_ = nullptr;
   mutable bool won_ = false;
+  bool watched_ = false;
 };
 
 // Seconds per unit of work kept per (routine, device) over the pool's life.
@@ -60,6 +65,8 @@ class BatchPool {
   std::size_t repeated() const { return repeated_; }
   // The measured seconds per unit of `routine` on device d (0 while unmeasured).
   double rate(const std::string& routine, std::size_t d) const;
+  // Sets it, as measured elsewhere (a calibration run), for a device not yet measured.
+  void seed_rate(const std::string& routine, std::size_t d, double seconds_per_unit);
 
  private:
   std::vector<Device> devices_;

@@ -41,6 +41,7 @@ EmEngine::AmpSlices EmEngine::amp_prepare(const ChannelSet& set) {
 }
 
 std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, const std::vector<AmplitudeQuery>& queries) {
+  if (!calibrated_) calibrate();
   const SliceGrid& grid = slices.grid;
   const ChunkLayout layout(grid);
   const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
@@ -98,7 +99,7 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
       std::copy(slices.w[slice].begin(), slices.w[slice].end(),
                 channels.begin() + static_cast<std::ptrdiff_t>(local) * kMaxChannels * stride);
     std::vector<unsigned char> l1_parts(P * n_chunks * kMaxChannels * real_size), sums(P * per_problem * real_size);
-    try {
+    const bool won = run_on_device(run, dev, "amplitude sums", [&] {
       cl::Program program = build_program(dev, "amplitudes", em_program_options(K, shape, fp64));
       const cl::CommandQueue& queue = *run.queue;
       cl::Buffer b_channels = upload(dev, "channels", channels), b_slice = upload(dev, "prob_slice", prob_slice),
@@ -126,10 +127,8 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
       normal.run(queue, cl::NDRange(wg, P, static_cast<std::size_t>(K)), cl::NDRange(wg, 1, 1));
       download(queue, b_l1, l1_parts, true);
       download(queue, b_sums, sums, true);
-    } catch (const cl::Error& e) {
-      throw_device_error(e, "amplitude sums on " + dev.info().label());
-    }
-    if (!run.claim()) return;  // another device finished this batch first
+    });
+    if (!won) return;  // another device finished this batch first
     for (std::size_t i = 0; i < P; ++i) {
       AmplitudeSums& v = out[items[i]];
       const int k = prob_k[i];

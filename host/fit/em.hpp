@@ -129,6 +129,12 @@ class EmEngine {
   // of its global memory (4 bytes per point-component at most in one buffer, 12 in all).
   std::uint64_t budget() const;
   std::uint64_t device_limit() const;
+  // With several devices, once: a small EM fit timed on each device alone. A device more
+  // than kSlowDevice times slower than the fastest is given that rate, so that it never
+  // starts a real batch it would hold for long (a launch cannot be stopped once running);
+  // devices within that factor are measured on real batches.
+  void calibrate();
+  bool calibrated_ = false;
 
   std::vector<Device> devices_;
   std::shared_ptr<BatchPool> pool_;

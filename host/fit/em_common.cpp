@@ -155,6 +155,16 @@ std::vector<std::pair<int, std::vector<std::size_t>>> bucket_batches(
   return batches;
 }
 
+bool run_on_device(const BatchRun& run, const Device& device, const std::string& what,
+                   const std::function<void()>& work) {
+  try {
+    work();
+  } catch (const cl::Error& e) {
+    throw_device_error(e, what + " on " + device.info().label());
+  }
+  return run.claim();
+}
+
 void check_problem_fits(std::size_t stride, int bucket, int extra_rows, std::uint64_t limit) {
   const std::uint64_t per = static_cast<std::uint64_t>(stride) * static_cast<std::uint64_t>(bucket + extra_rows);
   if (per > limit)

@@ -17,6 +17,7 @@
 #include "device/program.hpp"
 #include "fit/em_internal.hpp"
 #include "fit/scheduler.hpp"
+#include "fit/synthetic.hpp"
 
 namespace bsdfmix {
 
@@ -139,8 +140,47 @@ bool EmEngine::uses_fp64(std::size_t device) const {
   return devices_.at(device).info().fp64;
 }
 
+namespace {
+// A device this many times slower than the fastest at the calibration fit is kept to that
+// rate until it measures itself otherwise.
+constexpr double kSlowDevice = 10;
+}  // namespace
+
+void EmEngine::calibrate() {
+  calibrated_ = true;
+  if (devices_.size() < 2) return;
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 16, 32);  // 512 cells: one chunk
+  set.weights.push_back(mixture_weights(set.grid, synthetic_lobes(Domain::Fiber, 4, 7)));
+  EmTask task;
+  task.k = 4;
+  task.settings.iterations = 2;
+  task.settings.tolerance = 0;
+  task.settings.restarts = 1;
+  const double cost = static_cast<double>(ChunkLayout(set.grid).stride) * k_bucket(task.k) * task.settings.iterations;
+  std::vector<double> rate(devices_.size());
+  for (std::size_t d = 0; d < devices_.size(); ++d) {
+    EmEngine one({devices_[d]}, 1, precision_);
+    one.gpu_layout_ = gpu_layout_;
+    one.forced_shape_ = forced_shape_;
+    one.has_forced_shape_ = has_forced_shape_;
+    one.fit(set, {task});  // builds the program (kept by the device for the real work)
+    const auto t0 = std::chrono::steady_clock::now();
+    one.fit(set, {task});
+    rate[d] = seconds_since(t0) / cost;
+  }
+  const double fastest = *std::min_element(rate.begin(), rate.end());
+  for (std::size_t d = 0; d < devices_.size(); ++d)
+    if (rate[d] > kSlowDevice * fastest) pool_->seed_rate("em", d, rate[d]);
+  // a slow device seeded alone carries its ratio to the others through the fastest's rate
+  if (std::any_of(rate.begin(), rate.end(), [&](double r) { return r > kSlowDevice * fastest; }))
+    for (std::size_t d = 0; d < devices_.size(); ++d)
+      if (rate[d] <= kSlowDevice * fastest) pool_->seed_rate("em", d, rate[d]);
+}
+
 std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTask>& tasks,
                                     Progress* progress) {
+  if (!calibrated_) calibrate();
   const auto fit_start = std::chrono::steady_clock::now();
   timing_ = EmTiming{};
   validate_slices(set);
@@ -193,7 +233,6 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
   timing_.batches = batches.size();
 
   std::mutex timing_mutex;
-  const bool several = devices_.size() > 1;
 
   auto run_batch = [&](const BatchRun& run) {
     const Batch& batch = batches[run.batch];
@@ -289,9 +328,9 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
         k_mstep.set("iter", static_cast<cl_int>(it));
         k_mstep.run(queue, cl::NDRange(P));
         ++launched;
-        // With devices of different speeds, every iteration: a run another device finished
-        // first stops after one iteration, not kStatusEvery.
-        if ((several || it % kStatusEvery == 0) && it < s.iterations) {
+        // A run likely to lose to a faster device reads every iteration: if another device
+        // finishes the batch first, it stops after one iteration, not kStatusEvery.
+        if ((run.watched() || it % kStatusEvery == 0) && it < s.iterations) {
           queue.enqueueReadBuffer(b_status, CL_TRUE, 0, status.size() * sizeof(int), status.data());
           bool all = true;
           for (std::size_t i = 0; i < P && all; ++i) all = status[2 * i] != 0;

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <utility>
 #include <string>
@@ -84,6 +85,12 @@ struct ChunkLayout {
 // Sets the grid arguments that em_estep, em_loglik, em_l1 and amp_basis share
 // (slice_stride, n_phi, inv_nphi, theta0, dtheta, phi0, dphi).
 void set_grid_args(Routine& routine, const ChunkLayout& layout, const SliceGrid& grid);
+
+// Runs a batch's device work: an OpenCL error becomes a DeviceError naming `what` and the
+// device. True when this run is the first to finish the batch (BatchRun::claim): only then
+// may it write the batch's results.
+bool run_on_device(const BatchRun& run, const Device& device, const std::string& what,
+                   const std::function<void()>& work);
 
 // A DeviceError when one problem of `bucket` (+ extra_rows) rows of `stride` cells passes
 // `limit` point-components (EmEngine::budget's device limit): a slice too large for a

@@ -40,6 +40,7 @@ EmEngine::L1Slices EmEngine::l1_prepare(const SliceSet& set) {
 
 std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vector<L1Query>& queries,
                                          const L1Objective& objective) {
+  if (!calibrated_) calibrate();
   const SliceGrid& grid = slices.grid;
   const ChunkLayout layout(grid);
   const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
@@ -112,7 +113,7 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
         std::copy(slices.rgb[slice].begin(), slices.rgb[slice].end(),
                   channels.begin() + static_cast<std::ptrdiff_t>(local) * 3 * stride);
     std::vector<unsigned char> partials(P * n_chunks * nstat * real_size);
-    try {
+    const bool won = run_on_device(run, dev, "L1 evaluation", [&] {
       cl::Program program =
           build_program(dev, "l1", em_program_options(K, shape, fp64) + (colour ? " -DL1_CH=3" : ""));
       const cl::CommandQueue& queue = *run.queue;
@@ -134,10 +135,8 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
       kern.run(queue, cl::NDRange(n_chunks * static_cast<std::size_t>(shape.wg), P),
                cl::NDRange(static_cast<std::size_t>(shape.wg), 1));
       download(queue, b_partials, partials, true);
-    } catch (const cl::Error& e) {
-      throw_device_error(e, "L1 evaluation on " + dev.info().label());
-    }
-    if (!run.claim()) return;  // another device finished this batch first
+    });
+    if (!won) return;  // another device finished this batch first
     for (std::size_t i = 0; i < P; ++i) {
       L1Value& v = out[items[i]];
       const int k = prob_k[i];
