@@ -56,7 +56,7 @@ BUDGETS = [2048, 4096, 8192, 16384, 32768]
 ROWS = 90
 # (every n-th theta_o row, K max) of the mixture fits: 2 to 90 slices
 MIXTURES = [(45, 4), (30, 4), (18, 4), (18, 8), (10, 8), (10, 16), (6, 16), (3, 16), (2, 16), (1, 16)]
-L_MAX = 60
+L_MAX = {"fiber": 48, "hemisphere": 64}  # the largest degree fitted (the 32 KiB budgets need less)
 COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eval", "config", "median_l1", "p90_l1",
            "median_rgb", "p90_rgb", "max_energy", "eval_ns", "relvar_median", "relvar_p90", "missed_max", "slices",
            "fit_seconds", "cpu", "cores", "command"]
@@ -219,7 +219,7 @@ def sh_configs(budget, hemisphere, with_cdf):
     for n_to in (2, 3, 4, 5, 6, 8, 10, 12, 16, 20):
         coef_budget = budget * (0.75 if with_cdf else 1.0)
         l_best = None
-        for l in range(0, L_MAX + 1):
+        for l in range(0, L_MAX["hemisphere" if hemisphere else "fiber"] + 1):
             if rival_sh.eval_bytes(n_to, l, hemisphere) <= coef_budget:
                 l_best = l
         if l_best is None or l_best < 2:
@@ -297,7 +297,7 @@ def main():
                                       ("table", c)))
 
         # spherical harmonics
-        shfit = rival_sh.Fit(table, L_MAX)
+        shfit = rival_sh.Fit(table, L_MAX[table.domain])
         for rep, with_cdf in (("sh", True), ("sh_eval", False)):
             cand[rep] = []
             seen = set()

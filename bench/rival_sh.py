@@ -75,25 +75,33 @@ def basis(l_max, hemisphere, colat, phi):
     return np.stack(cols, axis=1)
 
 
+_GRAMS = {}
+
+
 class Fit:
     """The least squares machinery of one table up to l_max: the Gram matrix over the half period of
     phi_i and the right-hand sides of every fine slice (any smaller l_max is a prefix of both)."""
 
-    def __init__(self, table, l_max):
+    def __init__(self, table, l_max, cosine=False):
         self.table, self.l_max = table, l_max
+        # cosine: on the hemisphere, fit f cos(theta_i) and divide by it to evaluate
+        self.cos = np.cos(table.theta_i) if cosine and table.domain == "hemisphere" else np.ones(len(table.theta_i))
         self.hemisphere = table.domain == "hemisphere"
         nti, npi = len(table.theta_i), len(table.phi_i)
         self.half = np.nonzero(table.phi_i >= 0)[0]  # phi in [0, pi): the mirror half
         if len(self.half) * 2 != npi:
             raise ValueError("phi_i is not symmetric about 0")
-        tt, pp = np.meshgrid(table.theta_i, table.phi_i[self.half], indexing="ij")
-        colat = (math.pi / 2 - tt) if table.domain == "fiber" else tt
-        self.a = basis(l_max, self.hemisphere, colat.ravel(), pp.ravel())  # [cells of the half, n]
-        w = np.repeat(table.solid_theta[:, None], len(self.half), axis=1).ravel() * table.dph
-        self.w = w
-        aw = self.a * w[:, None]
-        self.gram = aw.T @ self.a
+        key = (table.domain, tuple(table.theta_i), tuple(table.phi_i), l_max)
+        if key not in _GRAMS:  # the same for every table on this grid
+            tt, pp = np.meshgrid(table.theta_i, table.phi_i[self.half], indexing="ij")
+            colat = (math.pi / 2 - tt) if table.domain == "fiber" else tt
+            a = basis(l_max, self.hemisphere, colat.ravel(), pp.ravel())  # [cells of the half, n]
+            w = np.repeat(table.solid_theta[:, None], len(self.half), axis=1).ravel() * table.dph
+            aw = a * w[:, None]
+            _GRAMS[key] = (a, aw, aw.T @ a)
+        self.a, aw, self.gram = _GRAMS[key]
         sym = 0.5 * (table.rgb + table.rgb[:, :, ::-1])[:, :, self.half]  # [nto, nti, half, 3]
+        sym = sym * self.cos[None, :, None, None]
         self.rhs = np.tensordot(aw.T, sym.reshape(len(table.theta_o), -1, 3), axes=(1, 1))  # [n, nto, 3]
 
     def coefficients(self, l_max, n_to):
@@ -115,6 +123,7 @@ class Fit:
         c = np.tensordot(lin, coef, axes=(1, 0))  # [nto, n, 3]
         half = np.einsum("cn,tnk->tck", self.a[:, :n], c, optimize=True)
         half = np.maximum(half, 0.0).reshape(len(t.theta_o), len(t.theta_i), len(self.half), 3)
+        half /= self.cos[None, :, None, None]
         full = np.empty((len(t.theta_o), len(t.theta_i), len(t.phi_i), 3))
         full[:, :, self.half] = half
         full[:, :, self.half[::-1] - len(self.half)] = half  # phi -> -phi: index j -> npi - 1 - j
@@ -125,7 +134,7 @@ class Fit:
         t = self.table
         n = coef.shape[1]
         half = np.maximum(np.einsum("cn,snk->sck", self.a[:, :n], coef, optimize=True), 0.0)
-        half = half.reshape(coef.shape[0], len(t.theta_i), len(self.half), 3)
+        half = half.reshape(coef.shape[0], len(t.theta_i), len(self.half), 3) / self.cos[None, :, None, None]
         full = np.empty((coef.shape[0], len(t.theta_i), len(t.phi_i), 3))
         full[:, :, self.half] = half
         full[:, :, self.half[::-1] - len(self.half)] = half
