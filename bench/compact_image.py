@@ -91,6 +91,8 @@ def main():
     ap.add_argument("--materials", default="polyester,satin_rosaline")
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "compact_rivals_image.csv"))
+    ap.add_argument("--rivals-csv", default=os.path.join(ROOT, "bench", "results", "compact_rivals.csv"),
+                    help="the per-slice study's CSV, for each representation's bytes and configuration")
     a = ap.parse_args()
     cpu = "unknown"
     for line in open("/proc/cpuinfo"):
@@ -99,8 +101,7 @@ def main():
             break
     command = "/usr/bin/python3 bench/compact_image.py" + "".join(" " + x for x in sys.argv[1:])
     bytes_of = {}
-    rivals_csv = os.path.join(ROOT, "bench", "results", "compact_rivals.csv")
-    for r in csv.DictReader(open(rivals_csv)):
+    for r in csv.DictReader(open(a.rivals_csv)):
         if r["budget"] == "8192":
             bytes_of[(r["material"], r["representation"])] = (r["bytes"], r["config"], r["median_rgb"])
     out = []

@@ -87,25 +87,26 @@ class Table:
         os.replace(tmp, path)
 
 
-def slice_errors(table, rgb_hat, y_hat=None):
+def slice_errors(table, rgb_hat, y_hat=None, rows=None):
     """Per slice, as compare computes them: luminance L1, RGB error, its negative share, energy of the
     luminance and of each channel, and which channels are noise. rgb_hat [n_theta_o, n_theta_i, n_phi_i, 3];
     y_hat the luminance stand-in (default: the luminance of rgb_hat, a negative one as 0)."""
     if y_hat is None:
         y_hat = np.maximum(0.0, rgb_hat @ LUMA)
     g = table.g[None]
-    y = table.values
+    y = table.values if rows is None else table.values[rows]
+    t_rgb = table.rgb if rows is None else table.rgb[rows]
     l1 = (g * np.abs(y_hat - y)).sum(axis=(1, 2)) / np.maximum((g * np.abs(y)).sum(axis=(1, 2)), 1e-300)
     y_int = (g * y).sum(axis=(1, 2))
     energy_y = np.where(y_int > 0, (g * y_hat).sum(axis=(1, 2)) / np.where(y_int > 0, y_int, 1) - 1, 0.0)
     gc = g[..., None]
-    diff = gc * np.abs(rgb_hat - table.rgb)
+    diff = gc * np.abs(rgb_hat - t_rgb)
     d_c = diff.sum(axis=(1, 2))  # [n_theta_o, 3]
-    t_c = (gc * np.abs(table.rgb)).sum(axis=(1, 2))
-    neg = table.rgb < 0
+    t_c = (gc * np.abs(t_rgb)).sum(axis=(1, 2))
+    neg = t_rgb < 0
     d_neg = (diff * neg).sum(axis=(1, 2, 3))
-    t_neg = -(gc * table.rgb * neg).sum(axis=(1, 2))
-    e_c = (gc * (rgb_hat - table.rgb)).sum(axis=(1, 2)) / np.maximum(t_c, 1e-300)
+    t_neg = -(gc * t_rgb * neg).sum(axis=(1, 2))
+    e_c = (gc * (rgb_hat - t_rgb)).sum(axis=(1, 2)) / np.maximum(t_c, 1e-300)
     dsum, tsum = d_c.sum(axis=1), t_c.sum(axis=1)
     rgb_error = dsum / np.maximum(tsum, 1e-300)
     neg_share = np.where(dsum > 0, d_neg / np.maximum(dsum, 1e-300), 0.0)

@@ -55,7 +55,10 @@ RGL = ["satin_rosaline", "paper_white", "cg_sunflower", "cc_iris_purple_gem"]
 BUDGETS = [2048, 4096, 8192, 16384, 32768]
 ROWS = 90
 # (every n-th theta_o row, K max) of the mixture fits: 2 to 90 slices
-MIXTURES = [(45, 4), (30, 4), (18, 4), (18, 8), (10, 8), (10, 16), (6, 16), (3, 16), (2, 16), (1, 16)]
+# The mixture: K max tried per budget, and a first guess of the bytes per fitted slice (payload less the
+# axes); the fits themselves then say how many rows fit in the budget.
+K_MAX = {2048: (4, 8), 4096: (4, 16), 8192: (8, 16), 16384: (16,), 32768: (16,)}
+GUESS = {4: 200, 8: 350, 16: 450}
 L_MAX = {"fiber": 48, "hemisphere": 64}  # the largest degree fitted (the 32 KiB budgets need less)
 COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eval", "config", "median_l1", "p90_l1",
            "median_rgb", "p90_rgb", "max_energy", "eval_ns", "relvar_median", "relvar_p90", "missed_max", "slices",
@@ -151,14 +154,16 @@ def table_points(table, coarse, q):
     return out
 
 
-def sh_points(table, coef, hemisphere, l_max, q):
+def sh_points(fit, coef, l_max, q):
+    table, hemisphere = fit.table, fit.hemisphere
     to, ti, pi = q
     n_to = coef.shape[0]
     a0, a1, fa = clamp_bracket(to, table.lo, table.hi, n_to)
     c = (1 - fa)[:, None, None] * coef[a0] + fa[:, None, None] * coef[a1]  # [N, n, 3]
     colat = (math.pi / 2 - ti) if table.domain == "fiber" else ti
     b = rival_sh.basis(l_max, hemisphere, colat, np.abs(pi))
-    return np.maximum(np.einsum("pn,pnk->pk", b, c), 0.0)
+    v = np.maximum(np.einsum("pn,pnk->pk", b, c), 0.0)
+    return v / np.cos(ti)[:, None] if fit.cosine else v
 
 
 def mixture_points(mix, table, q):
@@ -268,52 +273,62 @@ def main():
         q = queries(table, 20000)
         cand = {}  # representation -> list of (bytes, bytes_eval, config, stats, maker)
 
-        # the mixture
+        # the mixture: per budget and K max, the most rows that fit (bytes per slice learnt from the fits)
         axis = [float(x) for x in table.theta_o]
-        fits = []
-        for every, kmax in MIXTURES:
-            if a.quick and every not in (6, 10):
-                continue
-            r = fit_mixture(mat, table.path, axis, every, kmax)
-            fits.append(r)
-            print("  mixture %s: %d B, median RGB %.2f%% (%.0f s)" % (r["config"], r["bytes"], 100 * r["stats"]["median_rgb"],
-                                                                    r["seconds"]), flush=True)
-        cand["mixture"] = [(r["bytes"], r["bytes_eval"], r["config"], r["stats"], ("mixture", r)) for r in fits]
+        fits = {}
+        per_slice = {}
+        fixed = 8 * (len(axis) + 1)  # the table's theta_o and phi_o axes, float64
 
-        # the smaller table
+        def fitted(every, kmax):
+            if (every, kmax) not in fits:
+                r = fits[(every, kmax)] = fit_mixture(mat, table.path, axis, every, kmax)
+                per_slice[kmax] = (r["bytes"] - fixed) / len(axis[::every])
+                print("  mixture %s: %d B, median RGB %.2f%% (%.0f s)" % (
+                    r["config"], r["bytes"], 100 * r["stats"]["median_rgb"], r["seconds"]), flush=True)
+            return fits[(every, kmax)]
+
+        def rows_for(b, kmax):
+            n = max(2, int((b - fixed) / per_slice.get(kmax, GUESS[kmax])))
+            return next(e for e in range(1, len(axis) + 1) if len(axis[::e]) <= n)
+
+        for b in budgets:
+            for kmax in K_MAX.get(b, (16,)):
+                every = rows_for(b, kmax)
+                for _ in range(3):
+                    r = fitted(every, kmax)
+                    better = rows_for(b, kmax)
+                    if r["bytes"] > b:
+                        every = max(every + 1, better)
+                    elif better < every and (better, kmax) not in fits:
+                        every = better
+                    else:
+                        break
+        cand["mixture"] = [(r["bytes"], r["bytes_eval"], r["config"], r["stats"]["median_rgb"], ("mixture", r))
+                           for r in fits.values()]
+
+        # the rivals: every configuration screened on every 3rd table slice, the best under each budget
+        # measured on all of them below
+        screen = np.arange(1, len(axis), 3)
         for rep, with_cdf in (("table", True), ("table_eval", False)):
             cand[rep] = []
-            seen = set()
-            for b in budgets:
-                for c in table_configs(b, with_cdf):
-                    if c in seen:
-                        continue
-                    seen.add(c)
-                    grid, coarse = rival_table.downsample(table, *c)
-                    rgb = rival_table.reconstruct(grid, coarse)
-                    st = cm.summary(cm.slice_errors(table, rgb))
-                    nb = rival_table.eval_bytes(*c) + (rival_table.cdf_bytes(*c) if with_cdf else 0)
-                    cand[rep].append((nb, rival_table.eval_bytes(*c), "%d x %d x %d (half of phi stored)" % c, st,
-                                      ("table", c)))
-
-        # spherical harmonics
-        shfit = rival_sh.Fit(table, L_MAX[table.domain])
+            for c in sorted({c for b in budgets for c in table_configs(b, with_cdf)}):
+                grid, coarse = rival_table.downsample(table, *c)
+                med = cm.summary(cm.slice_errors(table, rival_table.reconstruct(grid, coarse, screen), rows=screen))
+                nb = rival_table.eval_bytes(*c) + (rival_table.cdf_bytes(*c) if with_cdf else 0)
+                cand[rep].append((nb, rival_table.eval_bytes(*c), "%d x %d x %d (half of phi stored)" % c,
+                                  med["median_rgb"], ("table", c)))
+        shfit = rival_sh.Fit(table, L_MAX[table.domain], cosine=True)  # on the hemisphere f cos fits better than f
         for rep, with_cdf in (("sh", True), ("sh_eval", False)):
             cand[rep] = []
-            seen = set()
-            for b in budgets:
-                for c in sh_configs(b, hemi, with_cdf):
-                    if c in seen:
-                        continue
-                    seen.add(c)
-                    coef = shfit.coefficients(c[1], c[0])
-                    st = cm.summary(cm.slice_errors(table, shfit.reconstruct(coef)))
-                    eb = rival_sh.eval_bytes(c[0], c[1], hemi)
-                    nb = eb + (rival_sh.cdf_bytes(c[0], c[2]) if with_cdf else 0)
-                    cfg = "%d slices, l_max %d (%d coefficients)" % (c[0], c[1], rival_sh.count(c[1], hemi))
-                    if with_cdf:
-                        cfg += ", CDF %d x %d" % (c[2], c[2])
-                    cand[rep].append((nb, eb, cfg, st, ("sh", c)))
+            for c in sorted({c for b in budgets for c in sh_configs(b, hemi, with_cdf)}):
+                coef = shfit.coefficients(c[1], c[0])
+                med = cm.summary(cm.slice_errors(table, shfit.reconstruct(coef, screen), rows=screen))
+                eb = rival_sh.eval_bytes(c[0], c[1], hemi)
+                nb = eb + (rival_sh.cdf_bytes(c[0], c[2]) if with_cdf else 0)
+                cfg = "%d slices, l_max %d (%d coefficients)" % (c[0], c[1], rival_sh.count(c[1], hemi))
+                if with_cdf:
+                    cfg += ", CDF %d x %d" % (c[2], c[2])
+                cand[rep].append((nb, eb, cfg, med["median_rgb"], ("sh", c)))
 
         # per budget, the best of each representation under it
         for b in budgets:
@@ -321,15 +336,25 @@ def main():
             for rep, lst in cand.items():
                 ok = [x for x in lst if x[0] <= b]
                 if ok:
-                    picked[rep] = min(ok, key=lambda x: x[3]["median_rgb"])
+                    picked[rep] = min(ok, key=lambda x: x[3])
             evals = {}
-            for rep, (nb, eb, cfg, st, maker) in picked.items():
+            for rep, (nb, eb, cfg, _, maker) in picked.items():
+                kind, c = maker
+                if kind == "mixture":
+                    st = c["stats"]
+                elif kind == "table":
+                    grid, coarse = rival_table.downsample(table, *c)
+                    rgb_full = rival_table.reconstruct(grid, coarse)
+                    st = cm.summary(cm.slice_errors(table, rgb_full))
+                else:
+                    coef = shfit.coefficients(c[1], c[0])
+                    rgb_full = shfit.reconstruct(coef)
+                    st = cm.summary(cm.slice_errors(table, rgb_full))
                 row = dict(material=mat, domain=table.domain, representation=rep, budget=b, bytes=nb, bytes_eval=eb,
                            config=cfg, median_l1=st["median_l1"], p90_l1=st["p90_l1"], median_rgb=st["median_rgb"],
                            p90_rgb=st["p90_rgb"], max_energy=st["max_energy"], eval_ns="", relvar_median="",
                            relvar_p90="", missed_max="", slices=len(table.theta_o), fit_seconds="", cpu=cpu, cores=cores,
                            command=command)
-                kind, c = maker
                 if kind == "mixture":
                     mix = mixture_eval.Mixtures(c["packed"])
                     rgb, y, p = mixture_eval.on_table(mix, table)
@@ -341,17 +366,15 @@ def main():
                     evals[rep] = lambda mix=mix: mixture_points(mix, table, q)
                     keep_rgb = rgb
                 elif kind == "table":
-                    grid, coarse = rival_table.downsample(table, *c)
                     if rep == "table":
                         p = rival_table.probabilities(grid, coarse)
                     evals[rep] = lambda coarse=coarse: table_points(table, coarse, q)
-                    keep_rgb = rival_table.reconstruct(grid, coarse) if mat in keep and b == 8192 else None
+                    keep_rgb = rgb_full
                 else:
-                    coef = shfit.coefficients(c[1], c[0])
                     if rep == "sh":
                         p = rival_sh.cdf_probabilities(shfit, coef, c[2])
-                    evals[rep] = lambda coef=coef, l=c[1]: sh_points(table, coef, hemi, l, q)
-                    keep_rgb = shfit.reconstruct(coef) if mat in keep and b == 8192 else None
+                    evals[rep] = lambda coef=coef, l=c[1]: sh_points(shfit, coef, l, q)
+                    keep_rgb = rgb_full
                 if rep in ("mixture", "table", "sh"):
                     rv, missed = cm.sampling_variance(table, p)
                     row.update(relvar_median=cm.quantile(rv, 0.5), relvar_p90=cm.quantile(rv, 0.9),

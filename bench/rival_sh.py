@@ -85,6 +85,7 @@ class Fit:
     def __init__(self, table, l_max, cosine=False):
         self.table, self.l_max = table, l_max
         # cosine: on the hemisphere, fit f cos(theta_i) and divide by it to evaluate
+        self.cosine = cosine and table.domain == "hemisphere"
         self.cos = np.cos(table.theta_i) if cosine and table.domain == "hemisphere" else np.ones(len(table.theta_i))
         self.hemisphere = table.domain == "hemisphere"
         nti, npi = len(table.theta_i), len(table.phi_i)
@@ -115,16 +116,18 @@ class Fit:
         c = np.linalg.solve(g + 1e-12 * np.trace(g) / n * np.eye(n), rhs.reshape(n, -1))
         return np.moveaxis(c.reshape(n, 3, n_to), 2, 0)
 
-    def reconstruct(self, coef):
-        """The clamped expansion at every fine cell of every fine slice: [nto, nti, npi, 3]."""
+    def reconstruct(self, coef, rows=None):
+        """The clamped expansion at every fine cell of every fine slice (or those of rows): [nto, nti, npi, 3]."""
         t = self.table
         n_to, n = coef.shape[0], coef.shape[1]
         lin = linear(len(t.theta_o), n_to, t.lo, t.hi)
+        if rows is not None:
+            lin = lin[rows]
         c = np.tensordot(lin, coef, axes=(1, 0))  # [nto, n, 3]
         half = np.einsum("cn,tnk->tck", self.a[:, :n], c, optimize=True)
-        half = np.maximum(half, 0.0).reshape(len(t.theta_o), len(t.theta_i), len(self.half), 3)
+        half = np.maximum(half, 0.0).reshape(len(lin), len(t.theta_i), len(self.half), 3)
         half /= self.cos[None, :, None, None]
-        full = np.empty((len(t.theta_o), len(t.theta_i), len(t.phi_i), 3))
+        full = np.empty((len(lin), len(t.theta_i), len(t.phi_i), 3))
         full[:, :, self.half] = half
         full[:, :, self.half[::-1] - len(self.half)] = half  # phi -> -phi: index j -> npi - 1 - j
         return full

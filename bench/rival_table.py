@@ -60,9 +60,9 @@ class CoarseGrid:
         x = np.moveaxis(np.tensordot(self.avg_ti, x, axes=(1, 1)), 0, 1)
         return np.moveaxis(np.tensordot(self.avg_pi, x, axes=(1, 2)), 0, 2)
 
-    def along_theta_o(self, x):
-        """Coarse slices [n_to, ...] interpolated to every fine theta_o."""
-        return np.tensordot(self.lin_to, x, axes=(1, 0))
+    def along_theta_o(self, x, rows=None):
+        """Coarse slices [n_to, ...] interpolated to every fine theta_o (or those of rows)."""
+        return np.tensordot(self.lin_to if rows is None else self.lin_to[rows], x, axes=(1, 0))
 
     def interpolate_cells(self, x):
         """[n, n_ti, n_pi, ...] -> [n, nti, npi, ...] (bilinear within a slice)."""
@@ -88,9 +88,9 @@ def downsample(table, n_to, n_ti, n_pi):
     return grid, grid.average(sym)
 
 
-def reconstruct(grid, coarse):
-    """Its value at every fine cell center of every fine slice: [nto, nti, npi, 3]."""
-    return grid.interpolate_cells(grid.along_theta_o(coarse))
+def reconstruct(grid, coarse, rows=None):
+    """Its value at every fine cell center of every fine slice (or those of rows): [nto, nti, npi, 3]."""
+    return grid.interpolate_cells(grid.along_theta_o(coarse, rows))
 
 
 def probabilities(grid, coarse):
