@@ -406,7 +406,7 @@ def chart(rows, png):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import FixedLocator, NullLocator
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
     mats = []
     for r in rows:
         if r["material"] not in mats:
@@ -429,6 +429,8 @@ def chart(rows, png):
         ax.xaxis.set_minor_locator(NullLocator())
         ax.set_xticklabels(["%d KiB" % (t // 1024) for t in ticks])
         ax.set_xlim(1200, 40000)
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: "%g" % v))
+        ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: "%g" % v if str("%g" % v)[0] in "1235" else ""))
         ax.set_title(mat, fontsize=10)
         ax.grid(alpha=0.3, which="both")
     for ax in axes.ravel()[len(mats):]:
