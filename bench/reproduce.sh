@@ -94,7 +94,7 @@ outputs() {
     rgb_stand_in) echo "$results/rgb_stand_in.csv $results/rgb_stand_in_no_copies.csv" ;;
     rgb_refine) echo "$results/rgb_refine.csv" ;;
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
-    compact_rivals) echo "$results/compact_rivals.csv $results/compact_rivals_image.csv docs/images/compact_rivals.png" ;;
+    compact_rivals) echo "$results/compact_rivals.csv $results/compact_rivals.txt $results/compact_rivals_image.csv $results/compact_rivals_image.txt docs/images/compact_rivals.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
     search_unseen) echo "$results/search_unseen.csv" ;;
@@ -144,8 +144,8 @@ run_study() {
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
     compact_rivals)  # the per-slice study writes the 8 KiB representations the image study renders
       rm -rf out/compact_rivals
-      $py bench/compact_rivals.py
-      $py bench/compact_image.py ;;
+      $py bench/compact_rivals.py | tee $results/compact_rivals.txt
+      $py bench/compact_image.py | tee $results/compact_rivals_image.txt ;;
     render_rgl)
       for m in satin paper sunflower iris; do
         rm -f out/render_$m/${m}_mixture.h5
