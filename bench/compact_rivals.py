@@ -18,11 +18,14 @@ error, less its negative share, over every table slice):
   cannot be sampled.
 
 Per row: bytes; median and p90 luminance L1 and RGB error over every table slice (compare's
-measures, bench/compact_metrics.py); the largest energy error; the evaluation cost in ns (a
+measures, bench/compact_metrics.py), and for the mixture the median RGB error of the slices it
+fitted and of those it blends between them; the largest energy error; the evaluation cost in ns (a
 vectorised numpy evaluation of f in R, G, B at random (theta_o, theta_i, phi_i), best of 3, every
 representation timed in the same run); the relative variance per sample of importance sampling
 the luminance integral under constant light (median and p90 over the slices) where the
-representation samples; the configuration; the machine and the command.
+representation samples (and the largest share of the integral it never samples); the
+configuration; the table's largest mirror asymmetry in phi_i (the share of a slice's RGB L1
+between f(phi) and f(-phi), which the rivals take as 0); the machine and the command.
 
     /usr/bin/python3 bench/compact_rivals.py [--materials a,b] [--quick] [--csv F] [--png P]
                                              [--chart-only] [--keep-tables polyester,satin_rosaline]
@@ -61,8 +64,8 @@ K_MAX = {2048: (4, 8), 4096: (4, 16), 8192: (8, 16), 16384: (16,), 32768: (16,)}
 GUESS = {4: 200, 8: 350, 16: 450}
 L_MAX = {"fiber": 48, "hemisphere": 64}  # the largest degree fitted (the 32 KiB budgets need less)
 COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eval", "config", "median_l1", "p90_l1",
-           "median_rgb", "p90_rgb", "max_energy", "eval_ns", "relvar_median", "relvar_p90", "missed_max", "slices",
-           "fit_seconds", "cpu", "cores", "command"]
+           "median_rgb", "p90_rgb", "median_rgb_fitted", "median_rgb_between", "max_energy", "eval_ns", "relvar_median",
+           "relvar_p90", "missed_max", "slices", "phi_asymmetry", "fit_seconds", "cpu", "cores", "command"]
 
 
 def run(cmd, tries=2):
@@ -122,8 +125,13 @@ def fit_mixture(mat, table_path, axis, every, kmax):
              energy_y=np.array([float(r["energy"]) for r in rows]),
              energy_c=np.array([[float(r["energy_" + c]) for c in "rgb"] for r in rows]),
              noise=np.array([[c in r["noise"] for c in "rgb"] for r in rows]))
+    fitted = np.array([r["fitted"] == "1" for r in rows])
+    rgb = e["rgb_error"] * (1 - e["neg_share"])
+    stats = cm.summary(e)
+    stats["median_rgb_fitted"] = cm.quantile(rgb[fitted], 0.5)
+    stats["median_rgb_between"] = cm.quantile(rgb[~fitted], 0.5) if (~fitted).any() else float("nan")
     return dict(bytes=payload, bytes_eval=payload, config="every %d rows (%d slices), K max %d" % (every, len(chosen), kmax),
-                stats=cm.summary(e), packed=packed, seconds=float(open(stem + ".seconds").read()))
+                stats=stats, packed=packed, seconds=float(open(stem + ".seconds").read()))
 
 
 # ---- evaluation cost: f in R, G, B at random (theta_o, theta_i, phi_i), numpy, vectorised ----
@@ -355,9 +363,10 @@ def main():
                     rgb_full = shfit.reconstruct(coef)
                     st = cm.summary(cm.slice_errors(table, rgb_full))
                 row = dict(material=mat, domain=table.domain, representation=rep, budget=b, bytes=nb, bytes_eval=eb,
-                           config=cfg, median_l1=st["median_l1"], p90_l1=st["p90_l1"], median_rgb=st["median_rgb"],
-                           p90_rgb=st["p90_rgb"], max_energy=st["max_energy"], eval_ns="", relvar_median="",
-                           relvar_p90="", missed_max="", slices=len(table.theta_o), fit_seconds="", cpu=cpu, cores=cores,
+                           config=cfg.replace(",", ";"), median_l1=st["median_l1"], p90_l1=st["p90_l1"], median_rgb=st["median_rgb"],
+                           p90_rgb=st["p90_rgb"], median_rgb_fitted=st.get("median_rgb_fitted", ""),
+                           median_rgb_between=st.get("median_rgb_between", ""), max_energy=st["max_energy"], eval_ns="", relvar_median="",
+                           relvar_p90="", missed_max="", slices=len(table.theta_o), phi_asymmetry=asym, fit_seconds="", cpu=cpu, cores=cores,
                            command=command)
                 if kind == "mixture":
                     mix = mixture_eval.Mixtures(c["packed"])
