@@ -23,7 +23,8 @@ fitted and of those it blends between them; the largest energy error; the evalua
 vectorised numpy evaluation of f in R, G, B at random (theta_o, theta_i, phi_i), best of 3, every
 representation timed in the same run); the relative variance per sample of importance sampling
 the luminance integral under constant light (median and p90 over the slices) where the
-representation samples (and the largest share of the integral it never samples); the
+representation samples (and the largest share of the integral it never samples), and the same
+with 10% of the samples uniform in solid angle (the project's `mis_tab`); the
 configuration; the table's largest mirror asymmetry in phi_i (the share of a slice's RGB L1
 between f(phi) and f(-phi), which the rivals take as 0); the machine and the command.
 
@@ -65,7 +66,8 @@ GUESS = {4: 200, 8: 350, 16: 450}
 L_MAX = {"fiber": 48, "hemisphere": 64}  # the largest degree fitted (the 32 KiB budgets need less)
 COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eval", "config", "median_l1", "p90_l1",
            "median_rgb", "p90_rgb", "median_rgb_fitted", "median_rgb_between", "max_energy", "eval_ns", "relvar_median",
-           "relvar_p90", "missed_max", "slices", "phi_asymmetry", "fit_seconds", "cpu", "cores", "command"]
+           "relvar_p90", "missed_max", "relvar_uniform10_median", "relvar_uniform10_p90", "slices", "phi_asymmetry",
+           "fit_seconds", "cpu", "cores", "command"]
 
 
 def run(cmd, tries=2):
@@ -366,7 +368,8 @@ def main():
                            config=cfg.replace(",", ";"), median_l1=st["median_l1"], p90_l1=st["p90_l1"], median_rgb=st["median_rgb"],
                            p90_rgb=st["p90_rgb"], median_rgb_fitted=st.get("median_rgb_fitted", ""),
                            median_rgb_between=st.get("median_rgb_between", ""), max_energy=st["max_energy"], eval_ns="", relvar_median="",
-                           relvar_p90="", missed_max="", slices=len(table.theta_o), phi_asymmetry=asym, fit_seconds="", cpu=cpu, cores=cores,
+                           relvar_p90="", missed_max="", relvar_uniform10_median="", relvar_uniform10_p90="",
+                           slices=len(table.theta_o), phi_asymmetry=asym, fit_seconds="", cpu=cpu, cores=cores,
                            command=command)
                 if kind == "mixture":
                     mix = mixture_eval.Mixtures(c["packed"])
@@ -390,8 +393,12 @@ def main():
                     keep_rgb = rgb_full
                 if rep in ("mixture", "table", "sh"):
                     rv, missed = cm.sampling_variance(table, p)
+                    # with 10% uniform samples in solid angle, as the project's mis_tab draws them
+                    uni = table.solid_theta[:, None] * table.dph * np.ones(len(table.phi_i))[None]
+                    rv10, _ = cm.sampling_variance(table, 0.9 * p + 0.1 * (uni / uni.sum())[None])
                     row.update(relvar_median=cm.quantile(rv, 0.5), relvar_p90=cm.quantile(rv, 0.9),
-                               missed_max=float(np.max(missed)))
+                               missed_max=float(np.max(missed)), relvar_uniform10_median=cm.quantile(rv10, 0.5),
+                               relvar_uniform10_p90=cm.quantile(rv10, 0.9))
                 if mat in keep and b == 8192 and rep in ("mixture", "table", "sh"):
                     table.write_like(os.path.join(WORK, "%s_%s_8k_table.h5" % (mat, rep)), keep_rgb, rep + " at 8 KiB: " + cfg)
                 out.append(row)
