@@ -44,8 +44,8 @@ def at_8k():
     """Per material at 8 KiB: each representation's median RGB error and bytes, the mixture against the
     best rival."""
     rows = load()
-    out = ["| material | " + " | ".join(LABEL[k] for k in ["mixture"] + RIVALS) + " | mixture / best rival |",
-           "|---|" + "---|" * (len(RIVALS) + 2)]
+    out = ["| material | " + " | ".join(LABEL[k] for k in ["mixture"] + RIVALS) + " | mixture / best rival | the mixture: "
+           "slices fitted, K max; its error on them / between them |", "|---|" + "---|" * (len(RIVALS) + 3)]
     for m in materials(rows):
         by = at(rows, m, 8192)
         cells = []
@@ -55,7 +55,10 @@ def at_8k():
         name, best = best_rival(by)
         ratio = "%.2fx (%s)" % (float(by["mixture"]["median_rgb"]) / float(best["median_rgb"]), LABEL[name]) \
             if best and "mixture" in by else ""
-        out.append("| %s%s | %s | %s |" % (m, " (glossy)" if m in GLOSSY else "", " | ".join(cells), ratio))
+        mx = by.get("mixture")
+        fit = "%s; %s / %s" % (mx["config"].replace("every ", "1 in "), pct(mx["median_rgb_fitted"]),
+                               pct(mx["median_rgb_between"]) if mx["median_rgb_between"] != "nan" else "none") if mx else ""
+        out.append("| %s%s | %s | %s | %s |" % (m, " (glossy)" if m in GLOSSY else "", " | ".join(cells), ratio, fit))
     return out
 
 
@@ -79,20 +82,21 @@ def budgets():
 
 
 def cost():
-    """At 8 KiB: evaluation ns and the sampling variance of each representation, medians over materials."""
+    """At 8 KiB: evaluation ns and the sampling variance of each representation, per material."""
     rows = [r for r in load() if int(r["budget"]) == 8192]
-    out = ["| representation | eval ns, per material (numpy) | relative variance per sample, median over slices "
-           "(per material) | largest share of the integral never sampled |", "|---|---|---|---|"]
     mats = materials(rows)
+    out = ["| representation | eval ns (numpy), " + ", ".join(mats) + " | relative variance per sample, median over "
+           "the slices, alone / with 10% uniform | largest share of the integral never sampled |", "|---|---|---|---|"]
     for k in ["mixture"] + RIVALS:
         by = {r["material"]: r for r in rows if r["representation"] == k}
         if not by:
             continue
         ns = ", ".join("%.0f" % float(by[m]["eval_ns"]) if m in by else "-" for m in mats)
-        rv = ", ".join("%.3g" % float(by[m]["relvar_median"]) if m in by and by[m]["relvar_median"] else "-" for m in mats)
-        missed = max((float(by[m]["missed_max"]) for m in mats if m in by and by[m]["missed_max"]), default=None)
-        out.append("| %s | %s | %s | %s |" % (LABEL[k], ns, rv if rv.strip("-, ") else "cannot sample",
-                                              "" if missed is None else "%.2g" % missed))
+        sampled = [m for m in mats if m in by and by[m]["relvar_median"]]
+        rv = ", ".join("%.3g / %.3g" % (float(by[m]["relvar_median"]), float(by[m]["relvar_uniform10_median"]))
+                       for m in sampled)
+        missed = max((float(by[m]["missed_max"]) for m in sampled), default=None)
+        out.append("| %s | %s | %s | %s |" % (LABEL[k], ns, rv or "cannot sample", "" if missed is None else "%.2g" % missed))
     return out
 
 
