@@ -61,7 +61,7 @@ ROWS = 90
 # (every n-th theta_o row, K max) of the mixture fits: 2 to 90 slices
 # The mixture: K max tried per budget, and a first guess of the bytes per fitted slice (payload less the
 # axes); the fits themselves then say how many rows fit in the budget.
-K_MAX = {2048: (4, 8), 4096: (4, 16), 8192: (8, 16), 16384: (16,), 32768: (16,)}
+K_MAX = {2048: (4, 8), 4096: (4, 16), 8192: (4, 8, 16), 16384: (16,), 32768: (16,)}
 GUESS = {4: 200, 8: 350, 16: 450}
 L_MAX = {"fiber": 48, "hemisphere": 64}  # the largest degree fitted (the 32 KiB budgets need less)
 COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eval", "config", "median_l1", "p90_l1",
