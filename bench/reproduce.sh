@@ -8,7 +8,7 @@
 #   bench/reproduce.sh [--quick] [--list] [--help] [STUDY ...]
 #
 # With no STUDY, every study in order. --quick runs the short studies only (about 15
-# minutes on 2 cores). The full run is about 6.5 hours on 2 cores (PoCL; the sum of each
+# minutes on 2 cores). The full run is about 7 hours on 2 cores (PoCL; the sum of each
 # study's last run, on the machine provenance.csv names for its files, not timed end to
 # end); the longest studies are render (about 150 minutes; RENDER_FIBERS="polyester" renders
 # one fiber's sky and sky-map configs alone), search_before_after, render_room, search_compare
@@ -31,6 +31,7 @@ studies=(
   "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets, with and without colour copies (rgb_stand_in.csv, rgb_stand_in_no_copies.csv)"
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
+  "compact_rivals:30:no:the stand-in against a smaller table and spherical harmonics at 2 to 32 KiB, per slice on the fiber presets and the RGL materials, and in the image (compact_rivals.csv, compact_rivals_image.csv, docs/images/compact_rivals.png)"
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:31:no:the walk of this build against BEFORE's, with this build's colour work off too (search_before_after.csv, search_before_after_chi_square.csv)"
   "search_time:18:no:the thesis-scale polyester sweep by this build and BEFORE's, best of 3 (search_time.csv)"
@@ -95,6 +96,7 @@ outputs() {
     rgb_stand_in) echo "$results/rgb_stand_in.csv $results/rgb_stand_in_no_copies.csv" ;;
     rgb_refine) echo "$results/rgb_refine.csv" ;;
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
+    compact_rivals) echo "$results/compact_rivals.csv $results/compact_rivals.txt $results/compact_rivals_image.csv $results/compact_rivals_image.txt docs/images/compact_rivals.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
     search_unseen) echo "$results/search_unseen.csv" ;;
@@ -144,6 +146,10 @@ run_study() {
       $py bench/rgb_stand_in.py --set 'rgb_copies=~' --work out/bench_rgb_no_copies --csv $results/rgb_stand_in_no_copies.csv ;;
     rgb_refine) $py bench/rgb_refine.py ;;
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
+    compact_rivals)  # the per-slice study writes the 8 KiB representations the image study renders
+      rm -rf out/compact_rivals
+      $py bench/compact_rivals.py | tee $results/compact_rivals.txt
+      $py bench/compact_image.py | tee $results/compact_rivals_image.txt ;;
     render_rgl)
       for m in satin paper sunflower iris; do
         rm -f out/render_$m/${m}_mixture.h5

@@ -47,6 +47,9 @@ The tables (NAME: CSV):
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
                        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
+  compact_rivals, compact_rivals_budgets, compact_rivals_cost, compact_rivals_image
+                       bench/results/compact_rivals{,_image}.csv (docs/fitting.md, "The stand-in against its
+                       rivals"), by scripts/compact_tables.py
 """
 import json
 import math
@@ -62,6 +65,7 @@ DOCS = ["README.md", os.path.join("bench", "README.md")] + [os.path.join("docs",
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from readme_measured import pct, rows  # noqa: E402  (the one reader and percent format of the tables)
 import input_tables  # noqa: E402
+import compact_tables  # noqa: E402
 
 
 def rgb_stand_in():
@@ -471,7 +475,9 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": 
           "parameterization": parameterization,
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
-          "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity}
+          "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity,
+          "compact_rivals": compact_tables.at_8k, "compact_rivals_budgets": compact_tables.budgets,
+          "compact_rivals_cost": compact_tables.cost, "compact_rivals_image": compact_tables.image}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 

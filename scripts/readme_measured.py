@@ -10,6 +10,7 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join(ROOT, "bench", "results")
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import compact_tables  # noqa: E402
 
 
 def rows(name):
@@ -320,7 +321,9 @@ def markdown():
             with_machine(search(), "search_compare.csv", "search_compare_polyester_best3.csv"),
             with_machine(before_after(), "search_before_after.csv", "search_time.csv"),
             with_machine(stand_in(), "rgb_stand_in.csv", "rgb_stand_in_no_copies.csv", "rgb_refine.csv"),
-            with_machine(smallest(), "stand_in_bytes.csv"), with_machine(lighting(), *light),
+            with_machine(smallest(), "stand_in_bytes.csv"),
+            with_machine(compact_tables.readme_row(), "compact_rivals.csv", "compact_rivals_image.csv"),
+            with_machine(lighting(), *light),
             with_machine(cloth(), *cloth_files),
             with_machine(room(), *["render/%s_room/render.csv" % f for f in ("silk", "cotton", "wool", "polyester")]),
             with_machine(constant(), "converge/polyester_convergence.csv", "converge/cotton_convergence.csv")]
