@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/error.hpp"
 #include "core/progress.hpp"
 #include "fit/em.hpp"
 #include "device/batch_pool.hpp"
@@ -145,4 +146,45 @@ TEST_CASE("BatchPool: an error stops the hand-out and is rethrown", "[scheduler]
                              }),
                     "batch 3 failed");
   CHECK(started < 500);
+}
+
+TEST_CASE("a device's largest allocation splits the batches, and only a slice too large for it fails", "[scheduler]") {
+  const Device pocl = select_devices("0").front();
+  SliceSet set;
+  set.grid = make_slice_grid(Domain::Fiber, 30, 60);  // 1800 cells: a stride of 2048
+  for (int s = 0; s < 6; ++s) set.weights.push_back(mixture_weights(set.grid, synthetic_lobes(Domain::Fiber, 4, s + 21)));
+  EmSettings st;
+  st.iterations = 20;
+  st.restarts = 1;
+  std::vector<EmTask> tasks;
+  for (std::size_t s = 0; s < set.weights.size(); ++s) tasks.push_back({s, 4, st});
+  EmEngine plain({pocl});
+  const auto expected = plain.fit(set, tasks);
+  CHECK(plain.last_timing().batches == 1);
+
+  // The same device, reporting 32 KiB in one allocation: a problem (2048 cells x bucket 4,
+  // 4 bytes each) fits alone, so the work is cut into one batch per problem.
+  DeviceInfo small_info = pocl.info();
+  small_info.max_alloc = 32 * 1024;
+  EmEngine small({Device(pocl.cl_device(), small_info)});
+  const auto got = small.fit(set, tasks);
+  CHECK(small.last_timing().batches == tasks.size());
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    REQUIRE(got[i].ok);
+    CHECK(got[i].loglik == expected[i].loglik);
+    CHECK(got[i].gmm.mean == expected[i].gmm.mean);
+  }
+
+  // 16 KiB: a single slice cannot fit, a one-line error naming the bytes and the limit.
+  small_info.max_alloc = 16 * 1024;
+  EmEngine tiny({Device(pocl.cl_device(), small_info)});
+  try {
+    tiny.fit(set, tasks);
+    FAIL("a slice larger than the device's largest allocation was fitted");
+  } catch (const DeviceError& e) {
+    const std::string what = e.what();
+    CHECK_THAT(what, Catch::Contains("a slice of 2048 padded cells at 4 components needs 32768 bytes"));
+    CHECK_THAT(what, Catch::Contains("(16384)"));
+    CHECK(what.find('\n') == std::string::npos);
+  }
 }
