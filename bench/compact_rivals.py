@@ -70,12 +70,8 @@ COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eva
            "fit_seconds", "cpu", "cores", "command"]
 
 
-def run(cmd, tries=2):
-    for _ in range(tries):  # a crash without a message (a signal) is tried once more
-        r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-        if r.returncode == 0 or r.stderr.strip():
-            break
-        print("  %s: exit %d without a message, once more" % (" ".join(cmd[:2]), r.returncode), flush=True)
+def run(cmd):
+    r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit("failed: %s\n%s%s" % (" ".join(cmd), r.stdout, r.stderr))
     return r.stdout
