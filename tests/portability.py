@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""Every kernel a fit, a sample and the convergence study run, on a second OpenCL
+"""Every kernel a fit, a sample and the convergence study run, and inspect, compare, pack,
+on a second OpenCL
 implementation: oclgrind (Debian's oclgrind), which simulates a GPU-like device and checks
 every memory access, API call and data race. Run twice: oclgrind's own limits, and a
 GPU-like profile (work-group 256, local memory 32 KiB, global memory small enough that a
@@ -151,6 +152,10 @@ def main():
                 og("sample", os.path.join(out, "mixture.h5"), "--theta-o", "0.5", "-n", "256", "-o",
                    os.path.join(out, "samples.csv"))
                 og("converge", cfg)
+                # the commands without kernels exit 0 too under oclgrind
+                og("inspect", os.path.join(out, "mixture.h5"))
+                og("compare", os.path.join(out, "mixture.h5"), table, "--csv", os.path.join(out, "compare.csv"))
+                og("pack", os.path.join(out, "mixture.h5"), "-o", os.path.join(out, "packed.h5"), "--storage", "ragged_f32")
             print("portability: %s %s: clean, %s" % (name, precision,
                   ", ".join("slice %d K %d L1 %.4f (PoCL %.4f)" % (s, got[s][0], got[s][1], expected[s][1]) for s in sorted(got))))
     if not a.keep:
