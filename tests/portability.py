@@ -1,7 +1,6 @@
 #!/usr/bin/python3
-"""Every kernel a fit, a sample and the convergence study run, and inspect, compare, pack,
-on a second OpenCL
-implementation: oclgrind (Debian's oclgrind), which simulates a GPU-like device and checks
+"""Every kernel a fit, a sample and the convergence study run (and inspect, compare and
+pack) on a second OpenCL implementation: oclgrind (Debian's oclgrind), which simulates a GPU-like device and checks
 every memory access, API call and data race. Run twice: oclgrind's own limits, and a
 GPU-like profile (work-group 256, local memory 32 KiB, global memory small enough that a
 fit's work is split into several batches). Any report of oclgrind fails, as does a
