@@ -58,6 +58,7 @@ studies=(
   "render_rays:1:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
   "fiber_quadrature:1:no:the fiber model's h quadrature against 2048 nodes (fiber_quadrature.csv)"
   "fiber_generate:1:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
+  "rgl_negative:1:no:the RGL files' negative channels kept signed and clipped, the luminance compared (rgl_negative.csv)"
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
   "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
@@ -124,6 +125,7 @@ outputs() {
     amplitude_objective) echo "$results/amplitude_objective.csv" ;;
     fiber_quadrature) echo "$results/fiber_quadrature.csv" ;;
     rgl_albedo) echo "$results/rgl_albedo.csv" ;;
+    rgl_negative) echo "$results/rgl_negative.csv" ;;
     fiber_generate) echo "$results/fiber_generate.csv" ;;
   esac
 }
@@ -307,6 +309,7 @@ run_study() {
     theta_border) BSDFMIX_MEASURE_CSV=$results/theta_border.csv build/tests/search_test "[.measure]" ;;
     fiber_quadrature) BSDFMIX_MEASURE_CSV=$results/fiber_quadrature.csv build/tests/fiber_test "[.measure]" ;;
     fiber_generate) $py bench/fiber_generate.py ;;
+    rgl_negative) $py bench/rgl_negative.py --csv $results/rgl_negative.csv ;;
     rgl_albedo) BSDFMIX_MEASURE_CSV=$results/rgl_albedo.csv build/tests/rgl_test "[.measure]" ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)

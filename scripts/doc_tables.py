@@ -427,6 +427,17 @@ def mixed_devices():
     return out
 
 
+def rgl_negative():
+    out = ["| material | cells with a negative channel | luminance raised by clipping, median over those cells | largest, one cell | albedo raised, median over slices | largest |",
+           "|---|---|---|---|---|---|"]
+    for r in rows("rgl_negative.csv"):
+        out.append("| %s | %.1f%% | %.2f%% | %.1f%% | %.2f%% | %.2f%% |" % (
+            r["material"], 100 * float(r["negative_share"]), 100 * float(r["median_rel_y_difference_negative_cells"]),
+            100 * float(r["max_rel_y_difference"]), 100 * float(r["median_albedo_difference"]),
+            100 * float(r["max_albedo_difference"])))
+    return out
+
+
 def em_builds():
     out = ["| K | slices of 90 x 180 | before, s per iteration | this build | this build over before | device | machine |",
            "|---|---|---|---|---|---|---|"]
@@ -469,6 +480,7 @@ TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": 
           "em_results": em_results, "converge_refine": converge_refine,
           "theta_border": theta_border,
           "em_precision": em_precision, "mixed_devices": mixed_devices, "em_builds": em_builds,
+          "rgl_negative": rgl_negative,
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
           "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k, "tails": tails,

@@ -20,11 +20,17 @@ void add_import(CLI::App& app, Common& common) {
   rgl->add_option("--phi-i", opt.n_phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()
       ->check(CLI::PositiveNumber);
   rgl->add_option("--threads", opt.threads, "worker threads (0: all cores)")->capture_default_str();
+  static std::string negative = "keep";
+  rgl->add_option("--negative", negative,
+                  "negative RGB channels (out of the sRGB gamut): keep them signed, or clip each to 0 as Mitsuba "
+                  "and pbrt render the file (docs/rgl.md)")
+      ->capture_default_str()->check(CLI::IsMember({"keep", "clip"}));
   rgl->add_option("-o,--output", output, "the table file to write (HDF5)")->required();
   add_common_options(*rgl, common);
   sub->require_subcommand(1);
   rgl->callback([&common] {
     Progress::set_enabled(!common.quiet);
+    parse_rgl_negative(negative, opt.negative);
     import_rgl_table(opt, output);
     log_line("wrote " + output);
   });

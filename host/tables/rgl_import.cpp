@@ -15,6 +15,15 @@
 
 namespace bsdfmix {
 
+const char* rgl_negative_name(RglNegative n) { return n == RglNegative::Clip ? "clip" : "keep"; }
+
+bool parse_rgl_negative(const std::string& name, RglNegative& out) {
+  if (name == "keep") out = RglNegative::Keep;
+  else if (name == "clip") out = RglNegative::Clip;
+  else return false;
+  return true;
+}
+
 void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) {
   if (opt.n_theta_o < 1 || opt.n_theta_i < 1 || opt.n_phi_i < 1)
     throw InputError("import rgl " + opt.file + ": resolutions must be >= 1 (theta_o " +
@@ -28,7 +37,10 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   if (brdf.rounding_zeros())
     log_line(name + ": " + std::to_string(brdf.rounding_zeros()) +
              " value(s) of its non-negative fields within float rounding below zero, read as 0");
-  meta.source = "{\"model\": \"rgl\", \"file\": \"" + name + "\", \"sha256\": \"" + brdf.sha256() + "\"}";
+  // "negative" is written only when clipped: a kept table's source is what it always was.
+  meta.source = "{\"model\": \"rgl\", \"file\": \"" + name + "\", \"sha256\": \"" + brdf.sha256() + "\"" +
+                (opt.negative == RglNegative::Clip ? ", \"negative\": \"clip\"" : "") + "}";
+  const bool clip = opt.negative == RglNegative::Clip;
 
   const std::size_t n_to = meta.theta_o.size(), n_ti = meta.theta_i.size(), n_pi = meta.phi_i.size();
   const std::size_t cells = n_ti * n_pi;
@@ -44,7 +56,7 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   const std::size_t batch = std::max<std::size_t>(threads, 1) * 2;
   TableWriter writer(out_path, meta);
   Progress progress("import " + name, n_to, "slices");
-  std::atomic<std::size_t> negative{0};
+  std::atomic<std::size_t> negative{0}, negative_channel{0};
 
   std::vector<std::vector<float>> values(batch), rgb(batch);
   for (std::size_t first = 0; first < n_to; first += batch) {
@@ -58,16 +70,24 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
         auto& c = rgb[j];
         v.assign(cells, 0.0f);
         c.assign(cells * 3, 0.0f);
-        std::size_t neg = 0;
+        std::size_t neg = 0, neg_channel = 0;
         for (std::size_t k = 0; k < cells; ++k) {
-          const RglValue f = brdf.eval(wo, wi[k]);
-          // The fit target is a density: a (noise) negative luminance would make it
-          // invalid, so it is stored as 0 and counted; rgb keeps the measured values.
+          RglValue f = brdf.eval(wo, wi[k]);
+          if (f.rgb[0] < 0.0 || f.rgb[1] < 0.0 || f.rgb[2] < 0.0) {
+            ++neg_channel;
+            if (clip) {
+              for (double& ch : f.rgb) ch = std::max(0.0, ch);
+              f.y = rgb_luminance(f.rgb[0], f.rgb[1], f.rgb[2]);
+            }
+          }
+          // The fit target is a density: a negative luminance (of signed channels) would
+          // make it invalid, so it is stored as 0 and counted; rgb keeps the channels.
           if (f.y < 0.0) ++neg;
           v[k] = float(std::max(0.0, f.y));
           for (int ch = 0; ch < 3; ++ch) c[k * 3 + ch] = float(f.rgb[ch]);
         }
         negative += neg;
+        negative_channel += neg_channel;
         progress.advance();
       }
     };
@@ -80,6 +100,9 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   }
   writer.commit();
   progress.finish();
+  if (negative_channel)
+    log_line(name + ": " + std::to_string(negative_channel.load()) + " of " + std::to_string(n_to * cells) +
+             " cells hold a negative channel (out of the sRGB gamut), " + (clip ? "clipped to 0" : "kept signed"));
   if (negative) log_line(name + ": " + std::to_string(negative.load()) + " cells with negative luminance stored as 0");
 }
 

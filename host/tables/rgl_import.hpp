@@ -7,10 +7,19 @@
 
 namespace bsdfmix {
 
+// Negative RGB channels: measured colours out of the sRGB gamut (docs/rgl.md). `Keep` stores
+// them signed, with the luminance of the signed values; `Clip` sets each channel to
+// max(0, c) before the luminance, as the RGL authors' reference code, Mitsuba 3 and
+// pbrt-v4 do when they render the file.
+enum class RglNegative { Keep, Clip };
+const char* rgl_negative_name(RglNegative n);             // keep, clip
+bool parse_rgl_negative(const std::string& name, RglNegative& out);  // false: not a name
+
 struct RglImportOptions {
   std::string file;  // the .bsdf file
   std::size_t n_theta_o = 90, n_theta_i = 90, n_phi_i = 180;
   unsigned threads = 0;  // 0: std::thread::hardware_concurrency()
+  RglNegative negative = RglNegative::Keep;
 };
 
 // Writes the table (atomically) to out_path: `values` the luminance of f, `rgb` beside
