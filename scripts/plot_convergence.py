@@ -25,6 +25,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import ticker  # noqa: E402
 
 ESTIMATORS = ["us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab",
               "light", "mis_light_cdf", "mis_light_gmm", "product", "mis_product"]
@@ -231,6 +232,7 @@ def main():
 
     # Speed against accuracy at N = 1024 (or the largest N below).
     fig, ax = plt.subplots(figsize=(7.5, 5.2))
+    all_x = []
     for e in ESTIMATORS:
         xs, ys = [], []
         for k, s in series.items():
@@ -242,7 +244,17 @@ def main():
                 ys.append(max(pts[-1][1], 1e-9))
         if xs:
             ax.scatter(xs, ys, color=STYLE[e]["color"], marker=STYLE[e]["marker"], s=36, label=LABEL[e], alpha=0.8)
-    ax.set_xscale("log")
+            all_x += xs
+    # A log axis over less than a decade labels its minor ticks in scientific notation, one
+    # on top of the other: plain numbers at 1, 2, 3 and 5 per decade instead, or a linear
+    # axis where the costs span less than a factor of 3.
+    if all_x and max(all_x) < 3 * min(all_x):
+        ax.xaxis.set_major_locator(ticker.MaxNLocator(nbins=6))
+    else:
+        ax.set_xscale("log")
+        ax.xaxis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 3.0, 5.0)))
+        ax.xaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _: "%g" % v))
+        ax.xaxis.set_minor_formatter(ticker.NullFormatter())
     ax.set_yscale("log")
     ax.set_xlabel("cost: ns per sample (device)")
     ax.set_ylabel("relative RMSE at N = 1024")
