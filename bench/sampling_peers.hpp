@@ -24,7 +24,7 @@ struct SamplingPeersOptions {
   std::uint64_t samples = 65536;
   std::uint64_t seed = 1;
   double theta_max_deg = 85;    // view elevations drawn uniformly in [0, this]
-  int quadrature = 512;         // the exact integral: cells in sin^2(theta) (twice as many in phi)
+  int quadrature = 2048;        // the exact integral: cells in sin^2(theta) (twice as many in phi)
   double uniform_fraction = 0.1;  // the defensive mixture's uniform share (mis_tab's)
 };
 
