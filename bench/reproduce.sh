@@ -59,7 +59,7 @@ studies=(
   "fiber_quadrature:1:no:the fiber model's h quadrature against 2048 nodes (fiber_quadrature.csv)"
   "fiber_generate:1:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
-  "sampling_peers:12:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f (sampling_peers.csv)"
+  "sampling_peers:10:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f (sampling_peers.csv)"
   "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
 
