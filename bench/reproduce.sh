@@ -60,6 +60,7 @@ studies=(
   "fiber_generate:1:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
   "rgl_negative:1:no:the RGL files' negative channels kept signed and clipped, the luminance compared (rgl_negative.csv)"
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
+  "sampling_peers:10:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f (sampling_peers.csv)"
   "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
 
@@ -126,6 +127,7 @@ outputs() {
     fiber_quadrature) echo "$results/fiber_quadrature.csv" ;;
     rgl_albedo) echo "$results/rgl_albedo.csv" ;;
     rgl_negative) echo "$results/rgl_negative.csv" ;;
+    sampling_peers) echo "$results/sampling_peers.csv" ;;
     fiber_generate) echo "$results/fiber_generate.csv" ;;
   esac
 }
@@ -311,6 +313,24 @@ run_study() {
     fiber_generate) $py bench/fiber_generate.py ;;
     rgl_negative) $py bench/rgl_negative.py --csv $results/rgl_negative.csv ;;
     rgl_albedo) BSDFMIX_MEASURE_CSV=$results/rgl_albedo.csv build/tests/rgl_test "[.measure]" ;;
+    sampling_peers)
+      # each shipped material at the default grid and fit settings (as rgb_stand_in), then
+      # 20 random view elevations, 2^16 samples per sampler (docs/sampling.md)
+      local w=out/sampling_peers f m
+      mkdir -p $w
+      for f in data/rgl/*_rgb.bsdf; do
+        m=$(basename "$f" _rgb.bsdf)
+        [ -f $w/$m.h5 ] || $bin import rgl -q "$f" -o $w/$m.h5
+        if [ ! -f $w/${m}_mixture.h5 ]; then
+          printf 'table: %s\nfit:\n  output: %s\n  report: %s\n  search_report: %s\n' \
+            $w/$m.h5 $w/${m}_mixture.h5 $w/${m}_fit.csv $w/${m}_search.csv > $w/$m.yaml
+          $bin fit -q $w/$m.yaml > /dev/null
+        fi
+        $bin bench sampling --rgl "$f" --table $w/$m.h5 --mixture $w/${m}_mixture.h5 \
+          --directions 20 --samples 65536 --seed 1 --csv $w/$m.csv
+      done
+      { head -n 1 $w/$m.csv; for f in data/rgl/*_rgb.bsdf; do tail -n +2 $w/$(basename "$f" _rgb.bsdf).csv; done; } \
+        > $results/sampling_peers.csv ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)
       local r=build/bench/bsdfmix_bench_render_rays

@@ -47,6 +47,7 @@ The tables (NAME: CSV):
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
                        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
+  sampling_peers       bench/results/sampling_peers.csv (docs/sampling.md, "Against the file's own sampler")
   compact_rivals, compact_rivals_budgets, compact_rivals_cost, compact_rivals_image
                        bench/results/compact_rivals{,_image}.csv (docs/fitting.md, "The stand-in against its
                        rivals"), by scripts/compact_tables.py
@@ -470,7 +471,33 @@ def converge_light():
                                    for m in ("polyester", "cotton", "satin", "paper")])
 
 
-TABLES = {"rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
+def sampling_peers():
+    """Per material: each sampler's variance per sample over the RGL file's own sampler's,
+    median and largest over the views; the largest weights; the bytes each needs."""
+    by = {}
+    for r in rows("sampling_peers.csv"):
+        by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+    out = ["| material | file's own sampler: variance per sample, median (largest) | mixture alone / file's, median "
+           "(largest) | mixture + 10% uniform / file's | table CDF / file's | uniform / file's | largest weight / I: "
+           "file's, mixture + 10% uniform | bytes: mixture, file, table |", "|---|---|---|---|---|---|---|---|"]
+    f = lambda x: "%.3g" % x
+    for mat in sorted(by):
+        views = list(by[mat].values())
+        rv = lambda v, s: float(v[s]["relvar"])
+        ratio = lambda s: sorted(rv(v, s) / rv(v, "rgl") for v in views)
+        med = lambda x: x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
+        cell = lambda x: "%s (%s)" % (f(med(x)), f(max(x)))
+        own = sorted(rv(v, "rgl") for v in views)
+        wmax = lambda s: max(float(v[s]["max_weight_over_integral"]) for v in views)
+        b = views[0]
+        out.append("| %s | %s | %s | %s | %s | %s | %s, %s | %s, %s, %s |" % (
+            mat, cell(own), cell(ratio("is_mixture")), cell(ratio("mis_mixture")), cell(ratio("cdf_table")),
+            cell(ratio("uniform")), f(wmax("rgl")), f(wmax("mis_mixture")), b["is_mixture"]["bytes"], b["rgl"]["bytes"],
+            b["cdf_table"]["bytes"]))
+    return out
+
+
+TABLES = {"sampling_peers": sampling_peers, "rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "render_room": render_room, "render_room_reading": render_room_reading,

@@ -2,6 +2,8 @@
 // header (include/bsdfmix/mixture.hpp) and the six estimators of the convergence study.
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "sampling/sampling.hpp"
 
@@ -170,6 +172,42 @@ double estimator_pdf(const Problem& p, Estimator e, double th, double ph) {
     }
   }
   return 0;
+}
+
+bool draw_cpu(const Problem& p, Estimator e, const double u[4], double& th, double& ph) {
+  const Domain d = p.table.domain;
+  switch (e) {
+    case Estimator::UsTab:
+    case Estimator::UsGmm: uniform_draw(d, u[2], u[3], th, ph); return true;
+    case Estimator::IsTab:
+    case Estimator::IsGmm: {
+      const mix::Sample s = p.set->sample(p.theta_o, p.phi_o, u[0], u[1], u[2], u[3]);
+      th = s.theta;
+      ph = s.phi;
+      return s.valid;
+    }
+    case Estimator::MisTab: {
+      const double a = p.mis.uniform_fraction;
+      if (u[0] < a) {
+        uniform_draw(d, u[2], u[3], th, ph);
+        return true;
+      }
+      const mix::Sample s = p.set->sample(p.theta_o, p.phi_o, (u[0] - a) / (1 - a), u[1], u[2], u[3]);
+      th = s.theta;
+      ph = s.phi;
+      return inside(d, th);
+    }
+    case Estimator::CdfTab: return cdf_draw(p, u[0], u[1], u[2], u[3], th, ph);
+    case Estimator::Light: light_draw(p, u[0], u[1], u[2], u[3], th, ph); return inside(d, th);
+    case Estimator::Product: {
+      if (!p.has_product) return false;
+      const mix::Sample s = p.product.sample(d, u[1], u[2], u[3]);
+      th = s.theta;
+      ph = s.phi;
+      return s.valid;
+    }
+    default: throw std::invalid_argument(std::string("draw_cpu: not for ") + estimator_name(e));
+  }
 }
 
 double estimate_cpu(const Problem& p, Estimator e, const double u[4]) {

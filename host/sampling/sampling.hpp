@@ -144,6 +144,12 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
 // MIS estimators' combined density (balance), 0 outside the domain.
 double estimator_pdf(const Problem& p, Estimator e, double theta, double phi);
 
+// The direction (theta, phi; world phi) that estimator `e` draws from the uniforms u, as
+// estimate_cpu draws it, for us_tab, us_gmm, is_tab, is_gmm, mis_tab, cdf_tab, light and
+// product: false when it draws none (a sample outside the domain, an empty cell). Its
+// density is estimator_pdf. Throws std::invalid_argument for the other MIS estimators.
+bool draw_cpu(const Problem& p, Estimator e, const double u[4], double& theta, double& phi);
+
 // The uniforms of sample n of run r: counter {n lo, n hi, stream, r}.
 void run_uniforms(std::uint64_t seed, std::uint32_t stream, std::uint32_t run, std::uint64_t n, double u[4]);
 
