@@ -50,6 +50,7 @@ import compact_metrics as cm  # noqa: E402
 import mixture_eval  # noqa: E402
 import rival_sh  # noqa: E402
 import rival_table  # noqa: E402
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "build", "bsdfmix")
@@ -75,13 +76,6 @@ def run(cmd):
     if r.returncode != 0:
         sys.exit("failed: %s\n%s%s" % (" ".join(cmd), r.stdout, r.stderr))
     return r.stdout
-
-
-def cpu_model():
-    for line in open("/proc/cpuinfo"):
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip().replace(",", ";")
-    return "unknown"
 
 
 def make_table(mat):

@@ -11,18 +11,11 @@ import sys
 
 import h5py
 import numpy as np
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 COLUMNS = ("table,slices,cells_per_slice,k_min,k_max,runs,seconds_best,seconds_all,mean_k,l1_median,l1_p90,"
            "mixture_file_bytes,mixture_dataset_bytes,table_file_bytes,table_slice_bytes,full_table_bytes,"
            "ratio_files,ratio_datasets,ratio_full,cpu,cores")
-
-
-def cpu_model():
-    with open("/proc/cpuinfo") as f:
-        for line in f:
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip().replace(",", " ")
-    return "unknown"
 
 
 def dataset_bytes(group):

@@ -17,17 +17,11 @@ import subprocess
 import sys
 import tempfile
 import time
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "build", "bsdfmix")
 OCLGRIND = "/usr/lib/oclgrind/liboclgrind-rt-icd.so"
-
-
-def cpu_model():
-    for line in open("/proc/cpuinfo"):
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return "unknown"
 
 
 def fit(env, device, cfg_text, out):

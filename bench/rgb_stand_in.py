@@ -42,6 +42,7 @@ import time
 
 import h5py
 import numpy as np
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RGL = {
@@ -53,17 +54,6 @@ RGL = {
 # The fiber presets, generated at --fiber-theta-o rows (90 x 180 cells) in their colours
 # (docs/fiber.md, "Colour"). The fiber domain's integrand weights have no cos theta_i.
 FIBERS = ("silk", "cotton", "polyester", "wool")
-
-
-def cpu_model():
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name"):
-                return line.split(":", 1)[1].strip()
-    except (OSError, subprocess.CalledProcessError):
-        pass
-    return platform.processor() or "unknown"
 
 
 def erf_mass(mu, s_tt, lo, hi):

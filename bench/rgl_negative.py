@@ -16,16 +16,10 @@ import tempfile
 
 import h5py
 import numpy as np
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "build", "bsdfmix")
-
-
-def cpu_model():
-    for line in open("/proc/cpuinfo"):
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip().replace(",", ";")
-    return "unknown"
 
 
 def load(path):

@@ -23,13 +23,9 @@ import os
 import statistics
 import subprocess
 import time
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def cpu_model():
-    out = subprocess.run("lscpu | grep 'Model name'", shell=True, capture_output=True, text=True).stdout
-    return out.split(":", 1)[-1].strip().replace(",", ";") or "unknown"
 
 
 WALK_ONLY = "  refine_rgb: 0\n  rgb_copies: ~\n"

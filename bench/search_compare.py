@@ -24,6 +24,7 @@ import statistics
 import subprocess
 import sys
 import time
+from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RGL = {
@@ -31,17 +32,6 @@ RGL = {
     "paper": "paper_white_rgb.bsdf",
     "sunflower": "cg_sunflower_rgb.bsdf",
 }
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def make_table(bsdfmix, work, name):
