@@ -69,8 +69,7 @@ void tune_shapes(const TuneOptions& o, const std::string& device_selector) {
     const ShapeChoice current = choose_shape(info);
     std::printf("[%d] %s, driver %s: now %s (%s)\n", info.index, info.name.c_str(), info.driver.c_str(),
                 current.shape.label().c_str(), current.source.c_str());
-    EmEngine reference_engine({dev});
-    reference_engine.set_shape(choose_shape(info, false).shape);
+    EmEngine reference_engine({dev});  // the device's shape from its table row or tuned entry
     std::vector<EmResult> reference;
     best_seconds(reference_engine, set, tasks, 0, reference);
     KernelShape best;

@@ -52,6 +52,7 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
   const std::unique_ptr<std::atomic<bool>[]> done(new std::atomic<bool>[n]);
   for (std::size_t b = 0; b < n; ++b) done[b] = false;
   const bool several = devices_.size() > 1;
+  const bool log = std::getenv("BSDFMIX_POOL_LOG") != nullptr;
 
   // Hand-out state, under mutex_.
   std::vector<char> started(n, 0);
@@ -151,6 +152,7 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
     for (;;) {
       std::size_t b;
       bool repeat = false;
+      BatchRun run;
       {
         std::lock_guard<std::mutex> lock(mutex_);
         if (stop) return;
@@ -167,15 +169,13 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
         }
         ++runs[b];
         if (repeat) ++repeated_;
-      }
-      BatchRun run;
-      if (several) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        double best = 0;
-        for (std::size_t e = 0; e < devices_.size(); ++e)
-          if (const double r = rate_of(e); r > 0) best = best > 0 ? std::min(best, r) : r;
-        const double mine = rate_of(d);
-        run.watched_ = mine <= 0 || mine > 1.5 * best;
+        if (several) {
+          double best = 0;
+          for (std::size_t e = 0; e < devices_.size(); ++e)
+            if (const double r = rate_of(e); r > 0) best = best > 0 ? std::min(best, r) : r;
+          const double mine = rate_of(d);
+          run.watched_ = mine <= 0 || mine > 1.5 * best;
+        }
       }
       run.batch = b;
       run.device = d;
@@ -192,7 +192,7 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
         return;
       }
       const double took = seconds(t0, Clock::now());
-      if (std::getenv("BSDFMIX_POOL_LOG"))
+      if (log)
         std::fprintf(stderr, "pool %s batch %zu/%zu dev %zu [%s] cost %.3g took %.4f s%s%s\n", routine.c_str(), b, n, d,
                      devices_[d].info().name.c_str(), cost[b], took, repeat ? " (repeat)" : "", run.won_ ? "" : " (lost)");
       if (several && cost[b] > 0) {

@@ -111,17 +111,15 @@ class EmEngine {
   std::size_t queue_count() const { return pool_->queue_count(); }
   const std::vector<Device>& devices() const { return devices_; }
   bool uses_fp64(std::size_t device) const;
-  // The kernel shape of the fitting routines on device d (device/shapes.hpp choose_shape).
-  KernelShape shape(std::size_t d) const;
+  // The kernel shape of the fitting routines on device d (device/shapes.hpp choose_shape,
+  // once per engine: a tuned entry is read from its file when the engine is made).
+  KernelShape shape(std::size_t d) const { return shapes_.at(d); }
   const EmTiming& last_timing() const { return timing_; }
   // Runs the layout meant for GPUs (one cell per work-item, 64 work-items per
   // work-group, local-memory reductions) on every device, CPUs included.
-  void set_gpu_layout(bool on) { gpu_layout_ = on; }
+  void set_gpu_layout(bool on);
   // Runs `shape` on every device instead of its table or tuned entry (`bsdfmix tune`).
-  void set_shape(const KernelShape& shape) {
-    forced_shape_ = shape;
-    has_forced_shape_ = true;
-  }
+  void set_shape(const KernelShape& shape) { shapes_.assign(devices_.size(), shape); }
 
  private:
   // The batch budget in effect: batch_budget_, lowered so that no buffer of a batch passes
@@ -140,9 +138,7 @@ class EmEngine {
   std::shared_ptr<BatchPool> pool_;
   EmPrecision precision_;
   std::uint64_t batch_budget_ = std::uint64_t(1) << 25;
-  bool gpu_layout_ = false;
-  KernelShape forced_shape_;
-  bool has_forced_shape_ = false;
+  std::vector<KernelShape> shapes_;  // per device
   EmTiming timing_;
 };
 

@@ -112,6 +112,7 @@ EmEngine::EmEngine(std::vector<Device> devices, int queues_per_device, EmPrecisi
   if (queues_per_device < 1)
     throw ConfigError("EM engine: queues per device must be at least 1, not " + std::to_string(queues_per_device));
   pool_ = std::make_shared<BatchPool>(devices_, queues_per_device);
+  set_gpu_layout(false);
   if (precision_ == EmPrecision::Fp64)
     for (const auto& d : devices_)
       if (!d.info().fp64)
@@ -130,9 +131,9 @@ std::uint64_t EmEngine::device_limit() const {
   return limit;
 }
 
-KernelShape EmEngine::shape(std::size_t d) const {
-  if (has_forced_shape_) return forced_shape_;
-  return choose_shape(devices_.at(d).info(), gpu_layout_).shape;
+void EmEngine::set_gpu_layout(bool on) {
+  shapes_.clear();
+  for (const auto& d : devices_) shapes_.push_back(choose_shape(d.info(), on).shape);
 }
 
 bool EmEngine::uses_fp64(std::size_t device) const {
@@ -161,21 +162,17 @@ void EmEngine::calibrate() {
   std::vector<double> rate(devices_.size());
   for (std::size_t d = 0; d < devices_.size(); ++d) {
     EmEngine one({devices_[d]}, 1, precision_);
-    one.gpu_layout_ = gpu_layout_;
-    one.forced_shape_ = forced_shape_;
-    one.has_forced_shape_ = has_forced_shape_;
+    one.set_shape(shapes_[d]);
     one.fit(set, {task});  // builds the program (kept by the device for the real work)
     const auto t0 = std::chrono::steady_clock::now();
     one.fit(set, {task});
     rate[d] = seconds_since(t0) / cost;
   }
+  // Where one device is that much slower, every device starts with its rate (the slow one's
+  // ratio to the others is what keeps it from real batches); else all are measured on them.
   const double fastest = *std::min_element(rate.begin(), rate.end());
-  for (std::size_t d = 0; d < devices_.size(); ++d)
-    if (rate[d] > kSlowDevice * fastest) pool_->seed_rate("em", d, rate[d]);
-  // a slow device seeded alone carries its ratio to the others through the fastest's rate
-  if (std::any_of(rate.begin(), rate.end(), [&](double r) { return r > kSlowDevice * fastest; }))
-    for (std::size_t d = 0; d < devices_.size(); ++d)
-      if (rate[d] <= kSlowDevice * fastest) pool_->seed_rate("em", d, rate[d]);
+  if (*std::max_element(rate.begin(), rate.end()) > kSlowDevice * fastest)
+    for (std::size_t d = 0; d < devices_.size(); ++d) pool_->seed_rate("em", d, rate[d]);
 }
 
 std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTask>& tasks,

@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "device/program.hpp"
+#include "device/routine.hpp"
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
@@ -16,10 +17,9 @@ std::string domain_define(Domain d) {
          " -DPDF_LANES=" + std::to_string(QueryMixture::kLanes);
 }
 
+// device/routine.hpp's upload, an empty vector as 16 zeros (a kernel's absent input).
 cl::Buffer upload(const Device& device, const std::vector<float>& v) {
-  std::vector<float> data = v.empty() ? std::vector<float>(16, 0.f) : v;
-  return cl::Buffer(device.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, data.size() * sizeof(float),
-                    data.data());
+  return bsdfmix::upload(device, "sampling input", v.empty() ? std::vector<float>(16, 0.f) : v);
 }
 
 constexpr std::size_t kLocal = 64;

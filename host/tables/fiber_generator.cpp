@@ -16,6 +16,7 @@
 #include "core/format.hpp"
 #include "core/progress.hpp"
 #include "device/program.hpp"
+#include "device/routine.hpp"
 #include "io/pfm.hpp"
 #include "tables/fiber_presets.hpp"
 
@@ -199,18 +200,11 @@ FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberMode
     cl::Program program = build_program(device, "fiber");
     d.queue = device.make_queue();
     const cl::Context& ctx = device.context();
-    auto upload = [&](const std::vector<cl_float>& v) {
-      return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, v.size() * sizeof(cl_float),
-                        const_cast<cl_float*>(v.data()));
-    };
-    const auto th_o = to_float(meta.theta_o), ph_o = to_float(meta.phi_o), th_i = to_float(meta.theta_i),
-               ph_i = to_float(meta.phi_i);
-    d.theta_o = upload(th_o);
-    d.phi_o = upload(ph_o);
-    d.theta_i = upload(th_i);
-    d.phi_i = upload(ph_i);
-    d.h_rule = cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rule.size() * sizeof(cl_float2),
-                          rule.data());
+    d.theta_o = upload(device, "theta_o", to_float(meta.theta_o));
+    d.phi_o = upload(device, "phi_o", to_float(meta.phi_o));
+    d.theta_i = upload(device, "theta_i", to_float(meta.theta_i));
+    d.phi_i = upload(device, "phi_i", to_float(meta.phi_i));
+    d.h_rule = upload(device, "h_rule", rule);
     d.nbar = cl::Buffer(ctx, CL_MEM_READ_WRITE,
                         d.max_batch * kFiberChannels * kFiberLobes * meta.phi_i.size() * sizeof(cl_float));
     d.m = cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.theta_i.size() * sizeof(cl_float));
