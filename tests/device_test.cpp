@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "device/device.hpp"
 #include "device/program.hpp"
+#include "device/shapes.hpp"
 #include "device/selftest.hpp"
 
 using namespace bsdfmix;
@@ -99,4 +100,28 @@ TEST_CASE("bad launches are rejected before enqueueing", "[device]") {
                     Catch::Contains("exceeds the maximum work-group size"));
   CHECK_NOTHROW(launch(q, k, "axpy", cl::NDRange(1024), cl::NDRange(64)));
   q.finish();
+}
+
+TEST_CASE("kernel shapes: the table by type, a tuned entry by name and driver, errors with file and line", "[device]") {
+  DeviceInfo cpu = select_devices("0").front().info();
+  cpu.type = "cpu";
+  unsetenv("BSDFMIX_SHAPES");
+  CHECK(choose_shape(cpu).shape == make_shape(16, 1));
+  CHECK(choose_shape(cpu, true).shape == make_shape(1, 64));
+  DeviceInfo small = cpu;
+  small.type = "gpu";
+  small.max_work_group = 48;  // the work-group is halved until it fits
+  CHECK(choose_shape(small).shape == make_shape(1, 32));
+
+  const fs::path file = fs::temp_directory_path() / "bsdfmix_shapes_test.tsv";
+  std::ofstream(file) << "# tuned\nother device\t1.0\t1\t128\n" << shape_entry(cpu, make_shape(8, 1), "measured") << "\n";
+  setenv("BSDFMIX_SHAPES", file.c_str(), 1);
+  const ShapeChoice tuned = choose_shape(cpu);
+  CHECK(tuned.shape == make_shape(8, 1));
+  CHECK_THAT(tuned.source, Catch::Contains(file.string() + ":3"));
+  std::ofstream(file) << cpu.name << "\t" << cpu.driver << "\t3\t1\n";
+  CHECK_THROWS_WITH(choose_shape(cpu), Catch::Contains(file.string() + ":1: kernel shape: vec 3"));
+  std::ofstream(file) << cpu.name << "\t" << cpu.driver << "\t16\n";
+  CHECK_THROWS_WITH(choose_shape(cpu), Catch::Contains(file.string() + ":1: expected"));
+  unsetenv("BSDFMIX_SHAPES");
 }

@@ -93,7 +93,12 @@ ShapeChoice choose_shape(const DeviceInfo& info, bool gpu_layout) {
       } catch (const std::exception&) {
         throw ConfigError(std::string(path) + ":" + std::to_string(number) + ": vec and wg must be integers");
       }
-      return {fit_device(make_shape(vec, wg), info), "tuned: " + std::string(path) + ":" + std::to_string(number)};
+      const std::string where = std::string(path) + ":" + std::to_string(number);
+      try {
+        return {fit_device(make_shape(vec, wg), info), "tuned: " + where};
+      } catch (const ConfigError& e) {
+        throw ConfigError(where + ": " + e.what());
+      }
     }
   }
   if (gpu_layout) return {fit_device(make_shape(1, 64), info), "gpu layout forced"};
