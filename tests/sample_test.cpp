@@ -182,6 +182,68 @@ TEST_CASE("chi-square: hemisphere, four-slice blend without symmetry", "[sample]
   check_chi2(hemisphere_set(), 0.7, 0.3, "hemisphere 4-way blend");
 }
 
+// The same sets, interpolated between slices by moving the components (displacement).
+mix::MixtureSet displaced(mix::MixtureSet set) {
+  set.interpolation = mix::Interpolation::Displace;
+  set.prepare();
+  return set;
+}
+
+TEST_CASE("chi-square: displacement interpolation between slices, both domains", "[sample]") {
+  check_chi2(displaced(fiber_set()), -0.25, 1.3, "fiber displaced");
+  check_chi2(displaced(fiber_set()), 0.45, -2.0, "fiber displaced, broad cut lobe");
+  check_chi2(displaced(hemisphere_set()), 0.7, 0.3, "hemisphere displaced, 4 slices");
+  // random omega_o (fixed stream): the interpolated mixture is still what is sampled
+  for (int i = 0; i < 3; ++i) {
+    double u[4];
+    mix::uniforms(kSeed, 0x76696577u, std::uint64_t(i), u);
+    check_chi2(displaced(fiber_set()), -0.6 + 1.2 * u[0], -kPi + 2 * kPi * u[1], "fiber displaced, random omega_o");
+  }
+}
+
+TEST_CASE("a lobe that moves between two slices is interpolated as one lobe at its place", "[sample]") {
+  // A mirror-like lobe at theta_i = theta_o in two slices 0.2 rad apart, with a broad
+  // second component; halfway, the lobe sits at 0.3 as one peak.
+  mix::MixtureSet set;
+  set.domain = mix::Domain::Hemisphere;
+  set.azimuthal = true;
+  set.grid_theta_o = {0.2, 0.4};
+  set.grid_phi_o = {0.0};
+  for (double to : set.grid_theta_o) {
+    mix::SliceMixture s;
+    s.theta_o = to;
+    s.scale = 1;
+    s.components = {gaussian(0.2, 0.7, 0.5, 0.3, 0.8, 0.0), gaussian(0.8, to, kPi - 0.01, 0.02, 0.04, 0.1)};
+    set.slices.push_back(s);
+  }
+  const mix::MixtureSet blend = [&] { auto b = set; b.prepare(); return b; }();
+  const mix::MixtureSet moved = displaced(set);
+  // the pdf along theta at the lobe's phi, halfway between the slices
+  auto peaks = [](const mix::MixtureSet& m) {
+    std::vector<double> at;
+    double prev = 0, cur = m.pdf_param(0.3, 0.0, 0.0, kPi - 0.01);
+    for (int i = 1; i <= 600; ++i) {
+      const double next = m.pdf_param(0.3, 0.0, 0.001 * (i + 1), kPi - 0.01);
+      if (cur > prev && cur >= next && cur > 1.0) at.push_back(0.001 * i);
+      prev = cur;
+      cur = next;
+    }
+    return at;
+  };
+  const auto one = peaks(moved), two = peaks(blend);
+  REQUIRE(one.size() == 1);
+  CHECK(std::abs(one[0] - 0.3) < 0.002);
+  CHECK(two.size() == 2);  // the blend splits it at the slices' places
+  // the moved lobe keeps its width and mass: its peak is the slices' peak height
+  CHECK(moved.pdf_param(0.3, 0.0, 0.3, kPi - 0.01) ==
+        Approx(blend.pdf_param(0.2, 0.0, 0.2, kPi - 0.01)).epsilon(1e-3));
+  // at the slices themselves both interpolations are the slice
+  for (double t : {0.05, 0.2, 0.35, 0.6})
+    CHECK(moved.pdf_param(0.2, 0.0, t, 3.0) == Approx(blend.pdf_param(0.2, 0.0, t, 3.0)).epsilon(1e-12));
+  // the plan matches each lobe with itself: two flows
+  CHECK(mix::transport_plan(moved.slices[0], moved.slices[1]).size() == 2);
+}
+
 TEST_CASE("the pdf's mass is the normal mass inside the theta range (analytic)", "[sample]") {
   const auto set = fiber_set();
   // grid slice 2: one component, theta marginal N(-1.3, 0.35^2) cut at -pi/2

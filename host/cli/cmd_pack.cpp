@@ -1,5 +1,6 @@
 // `bsdfmix pack MIXTURE -o OUT --storage S`: the same mixtures in another storage (ragged,
-// float32 rgb_scale): the bytes a user ships.
+// float32 rgb_scale): the bytes a user ships; --interpolation sets how slices are
+// interpolated.
 #include <cstdio>
 
 #include "cli/commands.hpp"
@@ -9,18 +10,22 @@
 namespace bsdfmix::cli {
 
 void add_pack(CLI::App& app, Common& common) {
-  static std::string mixture, output, storage = "ragged_f32";
+  static std::string mixture, output, storage = "ragged_f32", interpolation;
   auto* sub = app.add_subcommand(
       "pack", "write a mixture file's mixtures again in another storage: padded or ragged component arrays, "
               "rgb_scale as float64 or float32 (docs/formats.md, \"Storage\")");
   sub->add_option("mixture", mixture, "mixture file (HDF5)")->required()->check(CLI::ExistingFile);
   sub->add_option("-o,--output", output, "the packed mixture file")->required();
   sub->add_option("--storage", storage, "padded, ragged, padded_f32 or ragged_f32 (default ragged_f32)");
+  sub->add_option("--interpolation", interpolation,
+                  "between fitted slices: blend (mix the two slices' mixtures) or displace (move matched "
+                  "components); default: as the file has it (docs/formats.md, \"Interpolation between slices\")");
   add_common_options(*sub, common);
   sub->callback([] {
     MixtureFile m = read_mixture_file(mixture);
     const std::uint64_t before = m.payload_bytes();
     m.storage = parse_storage(storage, "--storage");
+    if (!interpolation.empty()) m.interpolation = parse_interpolation(interpolation, "--interpolation");
     prepare_output(output);
     write_mixture_file(output, m);
     std::printf("pack %s -> %s (%s): payload %llu -> %llu bytes\n", mixture.c_str(), output.c_str(),

@@ -122,7 +122,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     Problem p0 = make_problem(table, set, theta_o, phi_o, default_lighting(table.meta().domain, 1.0),
                               spec.mis.uniform_fraction);
     const TailDiagnostic td = tail_diagnostic(p0);
-    const auto& b = p0.query.blend;
+    const auto b = set.blend(theta_o, phi_o);
     int main = 0;  // the slice with the largest blend weight
     for (int k = 1; k < b.count; ++k)
       if (b.weight[k] > b.weight[main]) main = k;

@@ -106,6 +106,7 @@ MixtureFile MixtureFile::header_only() const {
   h.azimuthal = azimuthal;
   h.table_source = table_source;
   h.fit_settings = fit_settings;
+  h.interpolation = interpolation;
   h.table_theta_o = table_theta_o;
   h.table_phi_o = table_phi_o;
   return h;
@@ -211,6 +212,18 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_string_attr(id, "symmetry", m.azimuthal ? "azimuthal" : "none", path);
   h5::write_string_attr(id, "table_source", m.table_source, path);
   h5::write_string_attr(id, "fit_settings", m.fit_settings, path);
+  if (m.interpolation != mix::Interpolation::Blend)
+    h5::write_string_attr(id, "interpolation", interpolation_name(m.interpolation), path);
+}
+
+const char* interpolation_name(mix::Interpolation i) {
+  return i == mix::Interpolation::Displace ? "displace" : "blend";
+}
+
+mix::Interpolation parse_interpolation(const std::string& name, const std::string& where) {
+  if (name == "blend") return mix::Interpolation::Blend;
+  if (name == "displace") return mix::Interpolation::Displace;
+  throw InputError(where + ": unknown interpolation '" + name + "' (blend or displace)");
 }
 
 void write_mixture_file(const std::string& path, const MixtureFile& m) {
@@ -328,6 +341,8 @@ MixtureFile read_mixture_file(const std::string& path) {
   m.azimuthal = sym == "azimuthal";
   m.table_source = h5::read_string_attr(id, "table_source", where);
   if (h5::has_attr(id, "fit_settings")) m.fit_settings = h5::read_string_attr(id, "fit_settings", where);
+  if (h5::has_attr(id, "interpolation"))
+    m.interpolation = parse_interpolation(h5::read_string_attr(id, "interpolation", where), where + " attribute");
   m.theta_o = h5::read_doubles(id, "theta_o", where);
   m.phi_o = h5::read_doubles(id, "phi_o", where);
   m.k = h5::read_ints(id, "k", where);
@@ -454,6 +469,7 @@ mix::MixtureSet to_mixture_set(const MixtureFile& m) {
   set.grid_theta_o = m.table_theta_o;
   set.grid_phi_o = m.table_phi_o;
   for (std::size_t s = 0; s < m.slices(); ++s) set.slices.push_back(stored_slice(m, s));
+  set.interpolation = m.interpolation;
   set.prepare();
   return set;
 }

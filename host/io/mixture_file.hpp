@@ -39,6 +39,9 @@ struct MixtureFile {
   std::string table_source = "{}";   // the table's `source` attribute
   std::string fit_settings = "{}";   // JSON: the fit settings that made the file
   std::vector<double> table_theta_o, table_phi_o;  // the table's omega_o axes (for interpolation)
+  // Between fitted slices: blend (absent attribute) or displace (docs/formats.md,
+  // "Interpolation between slices").
+  mix::Interpolation interpolation = mix::Interpolation::Blend;
 
   std::vector<double> theta_o, phi_o, scale, loglik, l1_rel;  // [S]
   std::vector<std::int32_t> k;                                // [S]
@@ -85,6 +88,10 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
 
 // Writes the file under a temporary name and renames it into place.
 void write_mixture_file(const std::string& path, const MixtureFile& m);
+
+// "blend" or "displace"; parse throws InputError naming `where`.
+const char* interpolation_name(mix::Interpolation i);
+mix::Interpolation parse_interpolation(const std::string& name, const std::string& where);
 
 // Reads and validates a mixture file; throws InputError naming file, dataset and slice.
 MixtureFile read_mixture_file(const std::string& path);

@@ -41,7 +41,22 @@ static int block_images(double sigma_c) {
   return images;
 }
 
+mix::MixtureSet serving_set(const mix::MixtureSet& set, double theta_o, double phi_o) {
+  mix::MixtureSet one;
+  one.domain = set.domain;
+  one.azimuthal = set.azimuthal;
+  one.grid_theta_o = {theta_o};
+  one.grid_phi_o = {set.azimuthal ? 0.0 : phi_o};
+  one.slices = {set.at(theta_o, set.azimuthal ? 0.0 : phi_o)};
+  one.slices[0].theta_o = theta_o;
+  one.slices[0].phi_o = one.grid_phi_o[0];
+  one.prepare();
+  return one;
+}
+
 QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit) {
+  if (set.interpolation == mix::Interpolation::Displace)
+    return make_query(serving_set(set, theta_o, phi_o), theta_o, phi_o, f_unit);
   QueryMixture qm;
   qm.domain = set.domain;
   qm.blend = set.blend(theta_o, phi_o);
@@ -231,9 +246,13 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
     throw ConfigError("converge: the MIS fractions must lie in [0, 1) and the product's add up to at most 1");
   Problem p;
   p.set = &set;
+  if (set.interpolation == mix::Interpolation::Displace) {
+    p.serving = std::make_shared<const mix::MixtureSet>(serving_set(set, theta_o, phi_o));
+    p.set = p.serving.get();
+  }
   p.theta_o = theta_o;
   p.phi_o = phi_o;
-  p.query = make_query(set, theta_o, phi_o);
+  p.query = make_query(*p.set, theta_o, phi_o);
   p.table = blended_slice(table, set, theta_o, phi_o);
   p.cdf = build_cdf(p.table);
   p.light = light;
@@ -241,7 +260,7 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
   p.light_sampler = make_light_sampler(p.light);
   p.mis = mis;
   if (light_mixture) {
-    p.product = set.product_with(theta_o, phi_o, *light_mixture, mis.product, nullptr, &p.product_kept);
+    p.product = p.set->product_with(theta_o, phi_o, *light_mixture, mis.product, nullptr, &p.product_kept);
     p.product_query = make_query(p.product, p.table.domain);
     p.has_product = true;
   }

@@ -330,6 +330,110 @@ inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceM
 }
 
 
+// How a MixtureSet serves an omega_o between two fitted slices (docs/formats.md,
+// "Interpolation between slices"):
+//  - Blend mixes the two slices' mixtures with the linear weights of thesis eq. 3.7: a
+//    lobe that moves with omega_o becomes two half-lobes at the two slices' places;
+//  - Displace moves the components instead (displacement interpolation, Bonneel et al.
+//    2011): the two slices' weights are matched by a transport plan over the squared
+//    2-Wasserstein distance of their components, and each matched pair (i, j) of mass m
+//    becomes one component of weight m whose mean and covariance go linearly from i's to
+//    j's. A lobe that moves between the slices is one lobe in between.
+// Either way the result is one mixture, and pdf() is the exact density of what sample()
+// draws.
+enum class Interpolation { Blend, Displace };
+
+// One matched pair of a transport plan: component i of the lower slice, j of the upper,
+// and the mass carried from i to j.
+struct Flow {
+  int i = 0, j = 0;
+  double mass = 0;
+};
+
+// The squared 2-Wasserstein distance of two 2D normals, phi measured the short way:
+// |mu_x - mu_y|^2 + tr Sx + tr Sy - 2 tr (Sx^1/2 Sy Sx^1/2)^1/2; for 2 x 2 matrices
+// tr M^1/2 = sqrt(tr M + 2 sqrt(det M)), and Sx^1/2 Sy Sx^1/2 has the trace and
+// determinant of Sx Sy.
+inline double w2_squared(const Gaussian& x, const Gaussian& y) {
+  const double dt = y.mu_t - x.mu_t, dp = wrap_phi(y.mu_p - x.mu_p);
+  const double tr_xy = x.s_tt * y.s_tt + 2 * x.s_tp * y.s_tp + x.s_pp * y.s_pp;
+  const double det = std::max(x.s_tt * x.s_pp - x.s_tp * x.s_tp, 0.0) * std::max(y.s_tt * y.s_pp - y.s_tp * y.s_tp, 0.0);
+  const double cross = std::sqrt(std::max(tr_xy + 2 * std::sqrt(det), 0.0));
+  return dt * dt + dp * dp + std::max(x.s_tt + x.s_pp + y.s_tt + y.s_pp - 2 * cross, 0.0);
+}
+
+// A transport plan between the normalized weights of a and b (prepared mixtures): the
+// cheapest pairs by w2_squared first, each carrying as much mass as both ends have left
+// (a greedy plan: every mass is moved, in at most |a| + |b| - 1 pairs).
+inline std::vector<Flow> transport_plan(const SliceMixture& a, const SliceMixture& b) {
+  const std::size_t na = a.components.size(), nb = b.components.size();
+  struct Pair {
+    double cost;
+    int i, j;
+  };
+  std::vector<Pair> pairs;
+  pairs.reserve(na * nb);
+  for (std::size_t i = 0; i < na; ++i)
+    for (std::size_t j = 0; j < nb; ++j) pairs.push_back({w2_squared(a.components[i], b.components[j]), int(i), int(j)});
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+    return x.cost < y.cost || (x.cost == y.cost && (x.i < y.i || (x.i == y.i && x.j < y.j)));
+  });
+  std::vector<double> left_a(na), left_b(nb);
+  for (std::size_t i = 0; i < na; ++i) left_a[i] = a.components[i].weight;
+  for (std::size_t j = 0; j < nb; ++j) left_b[j] = b.components[j].weight;
+  std::vector<Flow> plan;
+  for (const Pair& p : pairs) {
+    const double m = std::min(left_a[std::size_t(p.i)], left_b[std::size_t(p.j)]);
+    if (!(m > 0)) continue;
+    plan.push_back({p.i, p.j, m});
+    left_a[std::size_t(p.i)] -= m;
+    left_b[std::size_t(p.j)] -= m;
+  }
+  return plan;
+}
+
+// The mixture a fraction t of the way from a to b along `plan` (transport_plan(a, b)),
+// in the slices' own phi frame: components as described at Interpolation, scale linear
+// in t, colour amplitudes shared by each pair in proportion to the mass it carries.
+inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, const std::vector<Flow>& plan, double t) {
+  auto between = [t](const Gaussian& x, const Gaussian& y, double share_x, double share_y) {
+    Gaussian g;
+    g.mu_t = (1 - t) * x.mu_t + t * y.mu_t;
+    g.mu_p = wrap_phi(x.mu_p + t * wrap_phi(y.mu_p - x.mu_p));
+    g.s_tt = (1 - t) * x.s_tt + t * y.s_tt;
+    g.s_tp = (1 - t) * x.s_tp + t * y.s_tp;
+    g.s_pp = (1 - t) * x.s_pp + t * y.s_pp;
+    for (int c = 0; c < 3; ++c) g.rgb[c] = (1 - t) * share_x * x.rgb[c] + t * share_y * y.rgb[c];
+    return g;
+  };
+  SliceMixture out;
+  out.theta_o = (1 - t) * a.theta_o + t * b.theta_o;
+  out.phi_o = a.phi_o + t * wrap_phi(b.phi_o - a.phi_o);
+  out.scale = (1 - t) * a.scale + t * b.scale;
+  out.has_rgb = a.has_rgb && b.has_rgb;
+  const bool copies = out.has_rgb && (!a.colour.empty() || !b.colour.empty());
+  // A component's kCopies colour Gaussians: its copies, or (a slice without copies) copy_of
+  // the component with a quarter of its amplitudes each.
+  auto copy = [](const SliceMixture& s, int k, int m) {
+    if (!s.colour.empty()) return s.colour[std::size_t(k * kCopies + m)];
+    const Gaussian& g = s.components[std::size_t(k)];
+    const double rgb[3] = {g.rgb[0] / kCopies, g.rgb[1] / kCopies, g.rgb[2] / kCopies};
+    return copy_of(g, m, rgb);
+  };
+  for (const Flow& f : plan) {
+    const Gaussian& x = a.components[std::size_t(f.i)];
+    const Gaussian& y = b.components[std::size_t(f.j)];
+    const double sx = x.weight > 0 ? f.mass / x.weight : 0, sy = y.weight > 0 ? f.mass / y.weight : 0;
+    Gaussian g = between(x, y, sx, sy);
+    g.weight = f.mass;
+    out.components.push_back(g);
+    if (copies)
+      for (int m = 0; m < kCopies; ++m) out.colour.push_back(between(copy(a, f.i, m), copy(b, f.j, m), sx, sy));
+  }
+  out.prepare();
+  return out;
+}
+
 // Counter-based random numbers: Philox4x32-10 (Salmon et al. 2011, the Random123
 // generator), so that sample i of a stream is the same on every device and for any
 // batching. bsdfmix's kernels (kernels/sample.cl) use the same function and the same
@@ -378,8 +482,10 @@ class MixtureSet {
   std::vector<double> grid_theta_o, grid_phi_o;  // the table's omega_o axes (cell centers)
   std::vector<SliceMixture> slices;              // fitted slices
   std::vector<int> slice_of;  // [grid_theta_o x grid_phi_o] -> index into slices, -1 if not fitted
+  Interpolation interpolation = Interpolation::Blend;  // between fitted slices along theta_o
 
-  // Prepares components and the grid lookup. Call once after filling the fields.
+  // Prepares components, the grid lookup and (Displace) the transport plans between
+  // neighbouring fitted slices. Call once after filling the fields.
   void prepare() {
     for (auto& s : slices) s.prepare();
     const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
@@ -388,6 +494,17 @@ class MixtureSet {
       const std::size_t t = nearest(grid_theta_o, slices[s].theta_o);
       const std::size_t p = azimuthal ? 0 : nearest(grid_phi_o, slices[s].phi_o);
       slice_of[t * np + p] = static_cast<int>(s);
+    }
+    plan_up_.assign(slices.size(), {});
+    if (interpolation != Interpolation::Displace) return;
+    for (std::size_t p = 0; p < np; ++p) {
+      int below = -1;
+      for (std::size_t t = 0; t < grid_theta_o.size(); ++t) {
+        const int s = slice_of[t * np + p];
+        if (s < 0) continue;
+        if (below >= 0) plan_up_[std::size_t(below)] = transport_plan(slices[std::size_t(below)], slices[std::size_t(s)]);
+        below = s;
+      }
     }
   }
 
@@ -403,16 +520,56 @@ class MixtureSet {
     double rotate = 0;  // phi_o to add to the sampled phi (azimuthal symmetry)
   };
 
-  Blend blend(double theta_o, double phi_o) const {
-    Blend b;
+  // One phi_o column's share of omega_o: weight w, the fitted slices below (lo) and above
+  // (hi) it along theta_o and the fraction f of the way from lo to hi; hi < 0 when one
+  // slice serves alone.
+  struct Column {
+    double w = 0;
+    int lo = -1, hi = -1;
+    double f = 0;
+  };
+
+  // The columns serving omega_o (up to 2; 1 with azimuthal symmetry), their weights
+  // normalized, and the phi_o to add to sampled phi (azimuthal symmetry).
+  int columns(double theta_o, double phi_o, Column out[2], double& rotate) const {
     const Bracket t = bracket(grid_theta_o, theta_o, false);
     Bracket p;
-    if (azimuthal) b.rotate = phi_o;
+    rotate = 0;
+    if (azimuthal) rotate = phi_o;
     else p = bracket(grid_phi_o, wrap_phi(phi_o), true);
     const std::size_t np = azimuthal ? 1 : grid_phi_o.size(), nt = grid_theta_o.size();
     const std::size_t ps[2] = {p.i0, p.i1};
     const double wp[2] = {1 - p.f, p.f};
     const double u = double(t.i0) + t.f;  // the position on the theta_o grid
+    int n = 0;
+    for (int j = 0; j < (azimuthal ? 1 : 2); ++j) {
+      const double w = azimuthal ? 1.0 : wp[j];
+      if (w <= 0) continue;
+      const std::size_t pj = ps[j];
+      // The nearest fitted slices at or below u and at or above it.
+      long lo = long(t.i0), hi = long(t.f > 0 ? t.i1 : t.i0);
+      while (lo >= 0 && slice_of[std::size_t(lo) * np + pj] < 0) --lo;
+      while (hi < long(nt) && slice_of[std::size_t(hi) * np + pj] < 0) ++hi;
+      const int s_lo = lo >= 0 ? slice_of[std::size_t(lo) * np + pj] : -1;
+      const int s_hi = hi < long(nt) ? slice_of[std::size_t(hi) * np + pj] : -1;
+      Column c;
+      c.w = w;
+      if (s_lo >= 0 && s_hi >= 0 && hi > lo) {
+        c.lo = s_lo;
+        c.hi = s_hi;
+        c.f = (u - double(lo)) / double(hi - lo);
+      } else {
+        c.lo = s_lo >= 0 ? s_lo : s_hi;
+      }
+      if (c.lo >= 0) out[n++] = c;
+    }
+    return n;
+  }
+
+  Blend blend(double theta_o, double phi_o) const {
+    Blend b;
+    Column c[2];
+    const int n = columns(theta_o, phi_o, c, b.rotate);
     double total = 0;
     auto add = [&](int s, double w) {
       if (w <= 0 || s < 0) return;
@@ -425,22 +582,12 @@ class MixtureSet {
       b.weight[k] += w;
       total += w;
     };
-    for (int j = 0; j < (azimuthal ? 1 : 2); ++j) {
-      const double w = azimuthal ? 1.0 : wp[j];
-      if (w <= 0) continue;
-      const std::size_t pj = ps[j];
-      // The nearest fitted slices at or below u and at or above it.
-      long lo = long(t.i0), hi = long(t.f > 0 ? t.i1 : t.i0);
-      while (lo >= 0 && slice_of[std::size_t(lo) * np + pj] < 0) --lo;
-      while (hi < long(nt) && slice_of[std::size_t(hi) * np + pj] < 0) ++hi;
-      const int s_lo = lo >= 0 ? slice_of[std::size_t(lo) * np + pj] : -1;
-      const int s_hi = hi < long(nt) ? slice_of[std::size_t(hi) * np + pj] : -1;
-      if (s_lo >= 0 && s_hi >= 0 && hi > lo) {
-        const double f = (u - double(lo)) / double(hi - lo);
-        add(s_lo, w * (1 - f));
-        add(s_hi, w * f);
+    for (int j = 0; j < n; ++j) {
+      if (c[j].hi >= 0) {
+        add(c[j].lo, c[j].w * (1 - c[j].f));
+        add(c[j].hi, c[j].w * c[j].f);
       } else {
-        add(s_lo >= 0 ? s_lo : s_hi, w);
+        add(c[j].lo, c[j].w);
       }
     }
     if (b.count == 0) throw std::out_of_range("bsdfmix::mix::MixtureSet: no fitted slice near this omega_o");
@@ -448,9 +595,37 @@ class MixtureSet {
     return b;
   }
 
+  // The mixture that serves omega_o, in the world phi frame (its means rotated by phi_o
+  // under azimuthal symmetry): blended() with Interpolation::Blend; with Displace, each
+  // column's two slices displaced() the fraction f of the way, the columns then mixed by
+  // their weights. pdf_omega, eval_f, eval_rgb and sample of the set are this mixture's;
+  // a renderer that queries one omega_o many times builds it once.
+  SliceMixture at(double theta_o, double phi_o) const {
+    if (interpolation != Interpolation::Displace) return blended(theta_o, phi_o);
+    Column c[2];
+    double rotate = 0;
+    const int n = columns(theta_o, phi_o, c, rotate);
+    if (n == 0) throw std::out_of_range("bsdfmix::mix::MixtureSet: no fitted slice near this omega_o");
+    SliceMixture pieces[2];
+    const SliceMixture* piece[2] = {nullptr, nullptr};
+    for (int j = 0; j < n; ++j) {
+      if (c[j].hi >= 0 && c[j].f > 0 && c[j].f < 1) {
+        pieces[j] = displaced(slices[std::size_t(c[j].lo)], slices[std::size_t(c[j].hi)], plan_up_[std::size_t(c[j].lo)],
+                              c[j].f);
+        piece[j] = &pieces[j];
+      } else {
+        piece[j] = &slices[std::size_t(c[j].hi >= 0 && c[j].f >= 1 ? c[j].hi : c[j].lo)];
+      }
+    }
+    const double total = c[0].w + (n > 1 ? c[1].w : 0.0);
+    const double w[2] = {c[0].w / total, n > 1 ? c[1].w / total : 0.0};
+    return mixed(piece, w, n, rotate, theta_o, phi_o);
+  }
+
   // Density over (theta, phi) of what sample() returns for omega_o.
   double pdf_param(double theta_o, double phi_o, double theta, double phi) const {
     if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
+    if (interpolation == Interpolation::Displace) return at(theta_o, phi_o).pdf_param(theta, wrap_phi(phi));
     const Blend b = blend(theta_o, phi_o);
     double p = 0;
     for (int k = 0; k < b.count; ++k) p += b.weight[k] * slices[b.slice[k]].pdf_param(theta, wrap_phi(phi - b.rotate));
@@ -468,8 +643,12 @@ class MixtureSet {
     if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
     const double j = jacobian(domain, theta);
     if (!(j > 0)) return 0;
-    const Blend b = blend(theta_o, phi_o);
     double f = 0;
+    if (interpolation == Interpolation::Displace) {
+      f = at(theta_o, phi_o).eval_param(theta, wrap_phi(phi)) / j;
+      return domain == Domain::Hemisphere ? f / std::cos(theta) : f;
+    }
+    const Blend b = blend(theta_o, phi_o);
     for (int k = 0; k < b.count; ++k) {
       const SliceMixture& s = slices[b.slice[k]];
       f += b.weight[k] * s.scale * s.pdf_param(theta, wrap_phi(phi - b.rotate));
@@ -486,6 +665,11 @@ class MixtureSet {
     if (theta < theta_lo(domain) || theta > theta_hi(domain)) return;
     const double j = jacobian(domain, theta);
     if (!(j > 0)) return;
+    if (interpolation == Interpolation::Displace) {
+      at(theta_o, phi_o).eval_rgb_param(theta, wrap_phi(phi), rgb);
+      for (int q = 0; q < 3; ++q) rgb[q] /= domain == Domain::Hemisphere ? j * std::cos(theta) : j;
+      return;
+    }
     const Blend b = blend(theta_o, phi_o);
     for (int k = 0; k < b.count; ++k) {
       const SliceMixture& s = slices[b.slice[k]];
@@ -505,9 +689,10 @@ class MixtureSet {
     }
   }
 
-  // A sample for omega_o from four uniforms in [0, 1): u0 picks the slice, u1 the
+  // A sample for omega_o from four uniforms in [0, 1): u0 picks the slice (Blend), u1 the
   // component, (u2, u3) the point.
   Sample sample(double theta_o, double phi_o, double u0, double u1, double u2, double u3) const {
+    if (interpolation == Interpolation::Displace) return at(theta_o, phi_o).sample(domain, u1, u2, u3);
     const Blend b = blend(theta_o, phi_o);
     int k = 0;
     double acc = b.weight[0];
@@ -533,32 +718,9 @@ class MixtureSet {
   // Gaussians (its copies, or its components).
   SliceMixture blended(double theta_o, double phi_o) const {
     const Blend b = blend(theta_o, phi_o);
-    SliceMixture out;
-    out.theta_o = theta_o;
-    out.phi_o = phi_o;
-    out.has_rgb = true;
-    bool copies = false;
-    for (int k = 0; k < b.count; ++k) copies = copies || !slices[b.slice[k]].colour.empty();
-    for (int k = 0; k < b.count; ++k) {
-      const SliceMixture& s = slices[b.slice[k]];
-      out.scale += b.weight[k] * s.scale;
-      out.has_rgb = out.has_rgb && s.has_rgb;
-      for (Gaussian g : s.components) {
-        g.weight *= b.weight[k];
-        for (double& c : g.rgb) c *= b.weight[k];
-        g.mu_p = wrap_phi(g.mu_p + b.rotate);
-        out.components.push_back(g);
-      }
-      if (copies)
-        for (Gaussian g : s.colour.empty() ? s.components : s.colour) {
-          for (double& c : g.rgb) c *= b.weight[k];
-          g.mu_p = wrap_phi(g.mu_p + b.rotate);
-          out.colour.push_back(g);
-        }
-    }
-    if (!out.has_rgb) out.colour.clear();
-    out.prepare();
-    return out;
+    const SliceMixture* piece[4];
+    for (int k = 0; k < b.count; ++k) piece[k] = &slices[std::size_t(b.slice[k])];
+    return mixed(piece, b.weight, b.count, b.rotate, theta_o, phi_o);
   }
 
   // Product sampling of omega_o: the blended mixture (fitted to f J) times a mixture of the
@@ -579,6 +741,42 @@ class MixtureSet {
   }
 
  private:
+  std::vector<std::vector<Flow>> plan_up_;  // per slice: the plan to the next fitted slice above
+
+  // The mixture of n pieces with weights w, means rotated by `rotate`: every component of
+  // every piece, weighted by its piece's weight; scale the weighted scale; with rgb when
+  // every piece has it, colour copies when one of them has them (the others' components
+  // stand for their colour).
+  static SliceMixture mixed(const SliceMixture* const* piece, const double* w, int n, double rotate, double theta_o,
+                            double phi_o) {
+    SliceMixture out;
+    out.theta_o = theta_o;
+    out.phi_o = phi_o;
+    out.has_rgb = true;
+    bool copies = false;
+    for (int k = 0; k < n; ++k) copies = copies || !piece[k]->colour.empty();
+    for (int k = 0; k < n; ++k) {
+      const SliceMixture& s = *piece[k];
+      out.scale += w[k] * s.scale;
+      out.has_rgb = out.has_rgb && s.has_rgb;
+      for (Gaussian g : s.components) {
+        g.weight *= w[k];
+        for (double& c : g.rgb) c *= w[k];
+        g.mu_p = wrap_phi(g.mu_p + rotate);
+        out.components.push_back(g);
+      }
+      if (copies)
+        for (Gaussian g : s.colour.empty() ? s.components : s.colour) {
+          for (double& c : g.rgb) c *= w[k];
+          g.mu_p = wrap_phi(g.mu_p + rotate);
+          out.colour.push_back(g);
+        }
+    }
+    if (!out.has_rgb) out.colour.clear();
+    out.prepare();
+    return out;
+  }
+
   static std::size_t nearest(const std::vector<double>& axis, double x) {
     std::size_t best = 0;
     for (std::size_t i = 1; i < axis.size(); ++i)
