@@ -92,7 +92,7 @@ COLS = [
     ("cost is_tab", "cost_is", lambda x: x <= 2), ("cost mis_tab", "cost_mis", lambda x: x <= 2),
     ("cost is_gmm", "cost_isgmm", lambda x: x <= 2), ("mis/cdf var", "mis_cdf", None),
     ("is fewer N", "is_fewer", None), ("is less time", "is_time", None),
-    ("is max f/pdf", "is_max_weight", None), ("is missed", "is_missed", None),
+    ("is max f/pdf", "is_max_weight", None), ("is unsampled", "is_missed", None),
 ]
 
 

@@ -148,9 +148,9 @@ def reading(dirs):
         "- **Against the table CDF:** its error is %s `mis_light_cdf`'s on %d of the %d rows%s." % (
             span([r["vs_cdf"] for r in ok]), len(ok), len(rows),
             "" if not bad else "; above it: " + ", ".join("%s (%.2fx)" % (where(r), r["vs_cdf"]) for r in bad)),
-        "- **Product sampling with the lighting** (`mis_product`): %s `mis_light_cdf`'s relative MSE at equal time "
-        "%s, a vertex %s dearer (%s against %s ns)." % (
-            span(prod), "; `mis_light_cdf` is better on every row" if min(prod) > 1 else "", span(vertex),
+        "- **Product sampling with the lighting** (`mis_product`): %s `mis_light_cdf`'s relative MSE at equal time"
+        "%s. A `mis_product` vertex is %s dearer (%s against %s ns)." % (
+            span(prod), " (`mis_light_cdf` is better on every row)" if min(prod) > 1 else "", span(vertex),
             span([r["ns_product"] for r in rows if r["ns_product"]], ""), span([r["ns_cdf"] for r in rows if r["ns_cdf"]], "")),
     ]
     guided = [r for r in rows if r["guided_vs_cdf"] is not None]
