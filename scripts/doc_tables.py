@@ -27,7 +27,7 @@ The tables (NAME: CSV):
   render_reading       the same renders' reading under that table, by scripts/render_tables.py
   render_room          bench/results/render/<fiber>_room/ (docs/render.md, "Measured"), by scripts/room_tables.py
   render_room_reading  the room renders' reading under that table, by scripts/room_tables.py
-  failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
+  failure_map, stability  bench/results/failure_map.csv (docs/guide_estimators.md, docs/stability.md
                        "Measured"), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
   amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
