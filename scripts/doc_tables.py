@@ -23,11 +23,11 @@ The tables (NAME: CSV):
   tails                bench/results/tails.csv (docs/fitting.md, the same section)
   parameterization     bench/results/parameterization.csv (docs/fitting.md, "The pole and the border")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
-  render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_targets.py
-  render_reading       the same renders' reading under that table, by scripts/render_targets.py
-  render_room          bench/results/render/<fiber>_room/ (docs/render.md, "Measured"), by scripts/guide_targets.py
-  render_room_reading  the room renders' reading under that table, by scripts/guide_targets.py
-  failure_map, stability  bench/results/failure_map.csv (README.md "Where the methods fail", docs/stability.md
+  render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_tables.py
+  render_reading       the same renders' reading under that table, by scripts/render_tables.py
+  render_room          bench/results/render/<fiber>_room/ (docs/render.md, "Measured"), by scripts/room_tables.py
+  render_room_reading  the room renders' reading under that table, by scripts/room_tables.py
+  failure_map, stability  bench/results/failure_map.csv (docs/guide_estimators.md, docs/stability.md
                        "Measured"), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
   amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
@@ -37,11 +37,12 @@ The tables (NAME: CSV):
   theta_border         bench/results/theta_border.csv (docs/fitting.md, "The theta border")
   em_results           the newest bench/results/em_k{50,16}_<machine>.csv (bench/README.md, "Results"), by
                        scripts/em_tables.py
-  readme_measured      the README's "Measured" table, row by row from its CSVs (scripts/readme_measured.py)
+  readme_measured      the README's results table, row by row from its CSVs (scripts/readme_measured.py)
+  estimator_choice     docs/guide_estimators.md's decision table, by scripts/guide_tables.py
   converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
-                       by scripts/converge_targets.py
+                       by scripts/converge_tables.py
   converge_light       bench/results/converge_light/*_convergence*.csv (docs/sampling.md, "Measured: the sky
-                       and the sky map"), by scripts/light_targets.py
+                       and the sky map"), by scripts/light_tables.py
   fiber_quadrature     bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h"), by
                        scripts/input_tables.py
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
@@ -60,7 +61,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join(ROOT, "bench", "results")
-DOCS = ["README.md", os.path.join("bench", "README.md")] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
+DOCS = ["README.md", "CHANGELOG.md", os.path.join("bench", "README.md")] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
@@ -74,8 +75,8 @@ def rgb_stand_in():
              "iris": "cc_iris_purple_gem", "silk": "silk (fiber)",
              "cotton": "cotton (fiber)", "polyester": "polyester (fiber, dyed red)", "wool": "wool (fiber)"}
     out = ["| table | luminance L1 median | RGB error median | RGB error less the negative part, median | ratio "
-           "(target <= 1.2) | largest energy error, Y / R / G / B (target 0.5%) | largest difference, reported - "
-           "recomputed l1_rel (target 0.2 points) |", "|---|---|---|---|---|---|---|"]
+           "to the luminance L1 | largest energy error, Y / R / G / B | largest difference, reported - "
+           "recomputed l1_rel |", "|---|---|---|---|---|---|---|"]
     by = {r["table"]: r for r in rows("rgb_stand_in.csv")}
     for key, label in names.items():
         if key not in by:
@@ -89,7 +90,7 @@ def rgb_stand_in():
                 r["noise_channels"], 3 * int(r["slices"]))
         out.append("| %s | %s | %s | %s | %s | %s | %.0e points |" % (
             label, pct(r["l1_median"]), pct(r["rgb_median"]), pct(r["rgb_less_negative_median"]),
-            ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio, e, float(r["l1_diff_points"])))
+            "%.3fx" % ratio, e, float(r["l1_diff_points"])))
     return out
 
 
@@ -98,7 +99,7 @@ def rgb_copies():
              "iris": "cc_iris_purple_gem", "silk": "silk (fiber)", "cotton": "cotton (fiber)",
              "polyester": "polyester (fiber, dyed red)", "wool": "wool (fiber)"}
     out = ["| table | slices with copies | RGB error less the negative part, median: without / with copies | "
-           "ratio to the luminance L1 median: without / with (target <= 1.2) | luminance L1 median: without / with | "
+           "ratio to the luminance L1 median: without / with | luminance L1 median: without / with | "
            "fit seconds: without / with |", "|---|---|---|---|---|---|"]
     with_ = {r["table"]: r for r in rows("rgb_stand_in.csv")}
     without = {r["table"]: r for r in rows("rgb_stand_in_no_copies.csv")}
@@ -109,7 +110,7 @@ def rgb_copies():
         ratio = float(b["ratio"])
         out.append("| %s | %s of %s | %s / %s | %.3fx / %s | %s / %s | %.1f / %.1f |" % (
             label, b["copied_slices"], b["slices"], pct(a["rgb_less_negative_median"]),
-            pct(b["rgb_less_negative_median"]), float(a["ratio"]), ("**%.3fx**" if ratio > 1.2 else "%.3fx") % ratio,
+            pct(b["rgb_less_negative_median"]), float(a["ratio"]), "%.3fx" % ratio,
             pct(a["l1_median"]), pct(b["l1_median"]), float(a["fit_seconds"]), float(b["fit_seconds"])))
     return out
 
@@ -210,8 +211,8 @@ def render_measured():
     for folder, label in (("satin_skymap", "satin_rosaline"), ("paper_skymap", "paper_white"),
                           ("sunflower_skymap", "cg_sunflower"), ("iris_skymap", "cc_iris_purple_gem"),
                           ("polyester_sky_small", "polyester cloth (sky)"),
-                          ("satin_skymap_target2", "satin_rosaline, error target 2%"),
-                          ("polyester_sky_small_target2", "polyester cloth (sky), error target 2%")):
+                          ("satin_skymap_target2", "satin_rosaline, fitted to 2% L1"),
+                          ("polyester_sky_small_target2", "polyester cloth (sky), fitted to 2% L1")):
         with open(os.path.join(RESULTS, "render", folder, "render.json")) as f:
             j = json.load(f)
         means = [j["stand_in_mean_difference"]] + list(j["stand_in_channel_mean_difference"])
@@ -229,7 +230,7 @@ def rgb_refine():
               "third": "a third (1/3, 5)", "l1x2": "the L1 part doubled (0.5, 2.5)",
               "l1x3": "the L1 part tripled (2/3, 5/3)"}
     out = ["| variant (refine_rgb, refine_kl) | table | luminance L1 median / p90 | RGB error less the negative part, "
-           "median | ratio (target <= 1.2) | mean K | chi-square: mean, median / p90 ratio to the luminance alone |",
+           "median | ratio to the luminance L1 | mean K | chi-square: mean, median / p90 ratio to the luminance alone |",
            "|---|---|---|---|---|---|---|"]
     for r in rows("rgb_refine.csv"):
         ratio = float(r["ratio"])
@@ -286,14 +287,14 @@ def scale_traffic():
 
 
 def render_reading():
-    import render_targets
-    return render_targets.reading([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
+    import render_tables
+    return render_tables.reading([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
                                    for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
 def render_cloth():
-    import render_targets
-    return render_targets.markdown([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
+    import render_tables
+    return render_tables.markdown([os.path.join(RESULTS, "render", "%s_%s" % (f, s))
                                     for s in ("sky", "skymap") for f in ("silk", "cotton", "wool", "polyester")])
 
 
@@ -302,13 +303,13 @@ def room_dirs():
 
 
 def render_room():
-    import guide_targets
-    return guide_targets.markdown(room_dirs())
+    import room_tables
+    return room_tables.markdown(room_dirs())
 
 
 def render_room_reading():
-    import guide_targets
-    return guide_targets.reading(room_dirs())
+    import room_tables
+    return room_tables.reading(room_dirs())
 
 
 def readme_measured():
@@ -449,6 +450,11 @@ def em_builds():
     return out
 
 
+def estimator_choice():
+    import guide_tables
+    return guide_tables.choice()
+
+
 def failure_map():
     import failure_tables
     return failure_tables.readme()
@@ -460,14 +466,14 @@ def stability():
 
 
 def converge():
-    import converge_targets
-    return converge_targets.markdown([os.path.join(RESULTS, "converge", "%s_convergence.csv" % m)
+    import converge_tables
+    return converge_tables.markdown([os.path.join(RESULTS, "converge", "%s_convergence.csv" % m)
                                       for m in ("polyester", "cotton", "satin")])
 
 
 def converge_light():
-    import light_targets
-    return light_targets.markdown([os.path.join(RESULTS, "converge_light", "%s_convergence.csv" % m)
+    import light_tables
+    return light_tables.markdown([os.path.join(RESULTS, "converge_light", "%s_convergence.csv" % m)
                                    for m in ("polyester", "cotton", "satin", "paper")])
 
 
@@ -502,7 +508,7 @@ TABLES = {"sampling_peers": sampling_peers, "rgb_stand_in": rgb_stand_in, "rgb_c
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "render_room": render_room, "render_room_reading": render_room_reading,
           "converge": converge, "converge_light": converge_light,
-          "readme_measured": readme_measured, "failure_map": failure_map, "stability": stability,
+          "readme_measured": readme_measured, "estimator_choice": estimator_choice, "failure_map": failure_map, "stability": stability,
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
           "em_results": em_results, "converge_refine": converge_refine,
           "theta_border": theta_border,

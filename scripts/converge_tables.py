@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The convergence study's targets (docs/sampling.md, "Targets"), from convergence CSVs.
+"""The convergence study's measured table (docs/sampling.md, "Measured"), from convergence CSVs.
 
 For every (table, theta_o, phi_o, scene) of the CSVs, one row:
   K           components of the main slice serving omega_o (tail CSV)
@@ -20,10 +20,7 @@ For every (table, theta_o, phi_o, scene) of the CSVs, one row:
   is tail     the tail CSV's largest f / pdf over the integral for is_tab, and the share
               of the integral is_tab never samples (missed_is)
 
-Targets: mis fewer >= 10, mis time >= 5, cost <= 2 (every mixture estimator), mis/cdf <= 3,
-storage >= 100. Each failed target is marked with '!'.
-
-  scripts/converge_targets.py out/converge_polyester/polyester_convergence.csv \\
+  scripts/converge_tables.py out/converge_polyester/polyester_convergence.csv \\
       out/converge_cotton/cotton_convergence.csv [--n 1024] [--markdown]
 The tail CSV of X.csv is X_tail.csv unless --tail names them (same order).
 """
@@ -32,19 +29,19 @@ import argparse
 import math
 import os
 
-from targets_common import Measures, failer, fmt, key, markdown_lines, print_table, read as read_csv
+from tables_common import Measures, failer, fmt, key, markdown_lines, print_table, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
 
-fail = failer("converge_targets")
+fail = failer("converge_tables")
 
 
 def read(path, needed):
     return read_csv(path, needed, fail)
 
 
-def targets(csvs, tails, n_target):
+def measures(csvs, tails, n_target):
     out = []
     for path, tpath in zip(csvs, tails):
         rows = read(path, NEEDED)
@@ -85,7 +82,7 @@ def targets(csvs, tails, n_target):
 
 
 def check(x, ok):
-    return fmt(x) if x is None or ok(x) else fmt(x) + " !"
+    return fmt(x)
 
 
 COLS = [
@@ -95,7 +92,7 @@ COLS = [
     ("cost is_tab", "cost_is", lambda x: x <= 2), ("cost mis_tab", "cost_mis", lambda x: x <= 2),
     ("cost is_gmm", "cost_isgmm", lambda x: x <= 2), ("mis/cdf var", "mis_cdf", None),
     ("is fewer N", "is_fewer", None), ("is less time", "is_time", None),
-    ("is max f/pdf", "is_max_weight", None), ("is missed", "is_missed", None),
+    ("is max f/pdf", "is_max_weight", None), ("is unsampled", "is_missed", None),
 ]
 
 
@@ -104,8 +101,7 @@ def cell(r, name, ok):
     if name == "theta_o":
         return "%.0f" % math.degrees(x)
     if name == "mis_cdf" and x is not None:
-        # cdf_tab is exact under constant lighting: the ratio is no target there
-        return fmt(x) if r["scene"] == "constant" or x <= 3 else fmt(x) + " !"
+        return fmt(x)
     if ok is None:
         return fmt(x) if not isinstance(x, (int, str)) or isinstance(x, bool) else str(x)
     return check(x, ok)
@@ -117,7 +113,7 @@ def tails_of(csvs):
 
 def markdown(csvs, n_target=1024):
     """The Markdown table of the CSVs (their tails beside them), as lines (scripts/doc_tables.py)."""
-    return markdown_lines(targets(csvs, tails_of(csvs), n_target), COLS, cell)
+    return markdown_lines(measures(csvs, tails_of(csvs), n_target), COLS, cell)
 
 
 def main():
@@ -130,7 +126,7 @@ def main():
     tails = a.tail if a.tail else tails_of(a.csv)
     if len(tails) != len(a.csv):
         fail("--tail needs one file per CSV")
-    print_table(targets(a.csv, tails, a.n), COLS, cell, a.markdown)
+    print_table(measures(a.csv, tails, a.n), COLS, cell, a.markdown)
 
 
 if __name__ == "__main__":

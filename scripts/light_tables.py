@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Targets of sampling with the lighting (docs/sampling.md, "Sampling with the lighting").
+"""The measured table of sampling with the lighting (docs/sampling.md, "Sampling with the lighting").
 
 For every (table, theta_o, phi_o, scene) of the convergence CSVs, one row:
   K, K light, K prod   the BSDF mixture's components (tail CSV), the lighting mixture's and
@@ -19,10 +19,7 @@ For every (table, theta_o, phi_o, scene) of the convergence CSVs, one row:
                        points) at us_tab's N = 1024 error the time mis_product saves over
                        mis_light_cdf pays for it
 
-Targets: mis_product fewer N >= 20, vs baseline >= 2.5, cost <= 3, max f/pdf <= 10.
-Each failed target is marked with '!'.
-
-  scripts/light_targets.py out/converge_light_polyester/polyester_convergence.csv ... [--n 1024] [--markdown]
+  scripts/light_tables.py out/converge_light_polyester/polyester_convergence.csv ... [--n 1024] [--markdown]
 The tail CSVs of X.csv are X_tail.csv and X_light_tail.csv.
 """
 
@@ -30,19 +27,19 @@ import argparse
 import math
 import os
 
-from targets_common import Measures, failer, fmt, key, markdown_lines, print_table, read as read_csv
+from tables_common import Measures, failer, fmt, key, markdown_lines, print_table, read as read_csv
 
 NEEDED = ["table", "theta_o", "phi_o", "scene", "estimator", "samples", "rel_rmse", "ns_per_sample"]
 
 
-fail = failer("light_targets")
+fail = failer("light_tables")
 
 
 def read(path, needed):
     return read_csv(path, needed, fail)
 
 
-def targets(csvs, n_target):
+def measures(csvs, n_target):
     out = []
     for path in csvs:
         stem = os.path.splitext(path)[0]
@@ -106,14 +103,12 @@ def cell(r, name, ok):
     x = r[name]
     if name == "theta_o":
         return "%.0f" % math.degrees(x)
-    if ok is None or x is None:
-        return fmt(x)
-    return fmt(x) if ok(x) else fmt(x) + " !"
+    return fmt(x)
 
 
 def markdown(csvs, n_target=1024):
     """The Markdown table of the CSVs, as lines (scripts/doc_tables.py)."""
-    return markdown_lines(targets(csvs, n_target), COLS, cell)
+    return markdown_lines(measures(csvs, n_target), COLS, cell)
 
 
 def main():
@@ -122,7 +117,7 @@ def main():
     ap.add_argument("--n", type=int, default=1024, help="us_tab's sample count to match (1024)")
     ap.add_argument("--markdown", action="store_true", help="a Markdown table (default: CSV)")
     a = ap.parse_args()
-    rows = targets(a.csv, a.n)
+    rows = measures(a.csv, a.n)
     if not rows:
         fail("no (direction, scene) with both us_tab and mis_product in " + ", ".join(a.csv))
     print_table(rows, COLS, cell, a.markdown)

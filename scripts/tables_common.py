@@ -1,4 +1,4 @@
-"""What scripts/converge_targets.py and scripts/light_targets.py share: reading the
+"""What scripts/converge_tables.py and scripts/light_tables.py share: reading the
 study's CSVs, the (table, theta_o, phi_o) key, the number format, the error line."""
 
 import csv
