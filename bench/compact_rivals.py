@@ -19,9 +19,10 @@ error, less its negative share, over every table slice):
 
 Per row: bytes; median and p90 luminance L1 and RGB error over every table slice (compare's
 measures, bench/compact_metrics.py), and for the mixture the median RGB error of the slices it
-fitted and of those it blends between them; the largest energy error; the evaluation cost in ns (a
-vectorised numpy evaluation of f in R, G, B at random (theta_o, theta_i, phi_i), best of 3, every
-representation timed in the same run); the relative variance per sample of importance sampling
+fitted and of those it blends between them; the largest energy error; the evaluation cost in ns (f
+in R, G, B at random (theta_o, theta_i, phi_i), best of 3, every representation timed in the same
+run: the rivals by a vectorised numpy evaluation, the mixture by the header's `eval_rgb` through the
+Python module, one point at a time, as a renderer calls it); the relative variance per sample of importance sampling
 the luminance integral under constant light (median and p90 over the slices) where the
 representation samples (and the largest share of the integral it never samples), and the same
 with 10% of the samples uniform in solid angle (the project's `mis_tab`); the
@@ -171,26 +172,9 @@ def sh_points(fit, coef, l_max, q):
 
 
 def mixture_points(mix, table, q):
+    """The mixture's f in R, G, B at the query points: the header's eval_rgb through the module."""
     to, ti, pi = q
-    u = np.clip((to - mix.grid[0]) / (mix.grid[1] - mix.grid[0]), 0, len(mix.grid) - 1)
-    order = sorted(mix.at)
-    slice_at = {a: s for s, a in enumerate(mix.at)}
-    out = np.zeros((len(to), 3))
-    weights = np.zeros((len(to), len(mix.slices)))
-    idx = np.searchsorted(order, u, side="right") - 1  # the fitted slice at or below
-    lo = np.array(order)[np.maximum(idx, 0)]
-    hi = np.array(order)[np.minimum(idx + 1, len(order) - 1)]
-    f = np.where(hi > lo, (u - lo) / np.where(hi > lo, hi - lo, 1), 0.0)
-    f = np.where(idx < 0, 1.0, f)
-    rows = np.arange(len(to))
-    np.add.at(weights, (rows, [slice_at[x] for x in lo]), 1 - f)
-    np.add.at(weights, (rows, [slice_at[x] for x in hi]), f)
-    for s in range(len(mix.slices)):
-        m = weights[:, s] > 0
-        if m.any():
-            _, c = mix.slice_param(s, ti[m], pi[m])
-            out[m] += weights[m, s][:, None] * c
-    return out / table.jacobian(ti)[:, None]
+    return mixture_eval.at_points(mix, to, ti, pi)
 
 
 def best_time(fn, runs=3):

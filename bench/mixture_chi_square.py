@@ -23,43 +23,34 @@ import sys
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
+import bsdfmix_import  # noqa: E402
 
-def slice_probabilities(mix, s, tt, pp, area):
-    """The mixture's probability of each cell: its density at the cell center (every phi
-    image within 6 standard deviations) times the cell area."""
-    out = np.zeros_like(tt)
-    for j in range(int(mix["k"][s])):
-        a, b, c = (float(x) for x in mix["covariances"][s, j])
-        mt, mp = (float(x) for x in mix["means"][s, j])
-        det = a * c - b * b
-        images = int((6 * np.sqrt(c) + np.pi) // (2 * np.pi))
-        x = tt - mt
-        for m in range(-images, images + 1):
-            y = (pp - mp + np.pi) % (2 * np.pi) - np.pi + 2 * np.pi * m
-            out += float(mix["weights"][s, j]) * np.exp(-0.5 * (c * x * x - 2 * b * x * y + a * y * y) / det) / (
-                2 * np.pi * np.sqrt(det))
-    return out * area
+bsdfmix = bsdfmix_import.load()
 
 
 def chi_squares(table_path, mixture_paths):
     """Per mixture file, over the table's non-zero slices: the chi-square divergence of each
-    slice from the mixture (10% uniform mixed in) and the file's l1_rel of that slice."""
+    slice from the mixture (10% uniform mixed in) and the file's l1_rel of that slice. The
+    mixture's probability of a cell is its density at the cell center (the header's
+    pdf_param, through the Python module) times the cell area."""
     t = h5py.File(table_path, "r")["table"]
     theta, phi = t["theta_i"][:], t["phi_i"][:]
     area = (theta[1] - theta[0]) * (phi[1] - phi[0])
     tt, pp = np.meshgrid(theta, phi, indexing="ij")
     jac = np.cos(tt) * np.sin(tt) if t.attrs["domain"] == "hemisphere" else np.cos(tt)
-    mixes = [h5py.File(f, "r")["mixture"] for f in mixture_paths]
+    mixes = [bsdfmix.load_mixture(f) for f in mixture_paths]
+    l1_rel = [bsdfmix.mixture_info(f)["l1_rel"] for f in mixture_paths]
     chi, l1 = [[] for _ in mixes], [[] for _ in mixes]
-    for s in range(mixes[0]["k"].shape[0]):
+    for s in range(len(mixes[0].slices)):
         w = t["values"][s, 0] * jac * area
         if not w.sum() > 0:
             continue
         w = w / w.sum()
         for i, mix in enumerate(mixes):
-            q = 0.9 * slice_probabilities(mix, s, tt, pp, area) + 0.1 / w.size
+            q = 0.9 * mix.slices[s].pdf_param(tt, pp) * area + 0.1 / w.size
             chi[i].append(float((w * w / q).sum() - 1))
-            l1[i].append(float(mix["l1_rel"][s]))
+            l1[i].append(float(l1_rel[i][s]))
     return np.array(chi), l1
 
 

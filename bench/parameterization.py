@@ -89,6 +89,12 @@ def quadratic(u, mean, cov):
     return (c * d[:, 0] ** 2 - 2 * b * d[:, 0] * d[:, 1] + a * d[:, 1] ** 2) / (a * c - b * b)
 
 
+# Not the header's evaluator, and not meant to be: this study's own EM fits and scores plain
+# (non-periodic) Gaussians and Student-t components in its three maps, the disk and half-vector
+# maps among them, none of which is a slice mixture of include/bsdfmix/mixture.hpp (periodic in
+# phi over (theta, phi)); scoring the native map with the header's phi images would judge it by
+# another model than the one its EM fitted. The project's own fits (`project` rows) are scored
+# by bsdfmix itself (the fit report's l1_rel).
 def density(q, cov, nu=None):
     """A component's density from its quadratic form q: a Gaussian, or with nu a bivariate
     Student-t of nu degrees of freedom (scale matrix cov)."""

@@ -44,6 +44,12 @@ import h5py
 import numpy as np
 from machine import cpu_model  # noqa: E402  (bench/machine.py)
 
+# The project's one evaluator of mixture files that does not go through the header: every
+# other script and study evaluates mixtures with the Python module bsdfmix, which is
+# include/bsdfmix/mixture.hpp. This check recomputes the l1_rel, RGB error and energy that the
+# fit reports (computed there with the header's density) from the files alone, so it must not
+# share the header's code: a fault in the header would otherwise agree with itself. It follows
+# the header by hand (docs/formats.md, "Slice mixtures" and "Colour copies").
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RGL = {
     "satin": "satin_rosaline_rgb.bsdf",

@@ -29,6 +29,11 @@ from matplotlib import colors  # noqa: E402
 
 import h5py  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bsdfmix_import  # noqa: E402
+
+bsdfmix = bsdfmix_import.load()  # the mixtures are evaluated by the header, through the module
+
 
 def fail(msg):
     print("plot_fit: error: " + msg, file=sys.stderr)
@@ -48,23 +53,6 @@ def save(fig, out, name):
         fig.savefig(os.path.join(out, name + "." + ext), dpi=130, bbox_inches="tight")
     plt.close(fig)
     print(os.path.join(out, name + ".png"))
-
-
-def mixture_density(theta, phi, w, mean, cov):
-    """Param-space density of one slice mixture on a grid, summed over phi images."""
-    dens = np.zeros(np.broadcast(theta, phi).shape)
-    for j in range(len(w)):
-        stt, stp, spp = cov[j]
-        det = stt * spp - stp * stp
-        itt, itp, ipp = spp / det, -stp / det, stt / det
-        norm = 1.0 / (2 * math.pi * math.sqrt(det))
-        images = int(math.ceil((9 * math.sqrt(spp) + math.pi) / (2 * math.pi)))
-        dt = theta - mean[j][0]
-        for m in range(-images, images + 1):
-            dp = phi + 2 * math.pi * m - mean[j][1]
-            q = itt * dt * dt + 2 * itp * dt * dp + ipp * dp * dp
-            dens += w[j] * norm * np.exp(-0.5 * q)
-    return dens
 
 
 def chart_speed_accuracy(timing, out):
@@ -115,23 +103,19 @@ def chart_slices(table_path, mixture_path, out, count):
     with h5py.File(table_path, "r") as tf, h5py.File(mixture_path, "r") as mf:
         t, m = tf["table"], mf["mixture"]
         theta_i, phi_i = t["theta_i"][...], t["phi_i"][...]
-        hemi = t.attrs["domain"] in ("hemisphere", b"hemisphere")
         th_o, ph_o = t["theta_o"][...], t["phi_o"][...]
         mt, mp, ks = m["theta_o"][...], m["phi_o"][...], m["k"][...]
         picks = np.unique(np.linspace(0, len(mt) - 1, count).round().astype(int))
         fig, axes = plt.subplots(len(picks), 3, figsize=(11, 2.8 * len(picks)), squeeze=False, layout="constrained")
         T, P = np.meshgrid(theta_i, phi_i, indexing="ij")
-        jac = np.cos(T) if not hemi else np.sin(T) * np.cos(T)
+        mixture = bsdfmix.load_mixture(mixture_path)
         extent = [math.degrees(phi_i[0]), math.degrees(phi_i[-1]), math.degrees(theta_i[-1]), math.degrees(theta_i[0])]
         for row, s in enumerate(picks):
             it = int(np.argmin(np.abs(th_o - mt[s])))
             ip = int(np.argmin(np.abs(ph_o - mp[s])))
             f = t["values"][it, ip]
             k = ks[s]
-            w, mean, cov = m["weights"][s][:k], m["means"][s][:k], m["covariances"][s][:k]
-            p = mixture_density(T, P, w, mean, cov)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                g = np.where(jac > 0, m["scale"][s] * p / jac, 0.0)
+            g = mixture.eval_f(mt[s], mp[s], T, P)  # the fitted slice's own stand-in for f
             vmax = max(f.max(), 1e-30)
             norm = colors.LogNorm(vmin=vmax * 1e-4, vmax=vmax)
             for col, (img, title) in enumerate(

@@ -2,7 +2,7 @@
 """Checks the maths of bench/compact_rivals.py's representations on small synthetic tables:
 the harmonics are orthonormal, a least squares fit recovers an expansion exactly, the smaller
 table at the full grid is the table, averages keep a slice's integral, CDF probabilities sum to
-1, the per-slice measures are compare's, and the numpy mixture evaluation integrates to its
+1, the per-slice measures are compare's, and the mixture evaluation (the module) integrates to its
 weights and agrees with its colour copies. Run by ctest (compact_rivals_test)."""
 import json
 import math
@@ -94,17 +94,21 @@ def main():
         pr = rival_sh.cdf_probabilities(fit, c, 4)
         check(np.abs(pr.sum(axis=(1, 2)) - 1).max() < 1e-9, domain + ": SH CDF probabilities sum to 1")
 
-    # the numpy mixture: a Gaussian's density integrates to 1 over the plane (phi images included)
+    # the mixture, through the module: a Gaussian's density integrates to 1 over the plane (phi images included)
     th = np.linspace(-3, 3, 601)
     ph = np.linspace(-math.pi, math.pi, 720, endpoint=False) + math.pi / 720
     T, P = np.meshgrid(th, ph, indexing="ij")
-    d = mixture_eval.density(T, P, 0.1, 3.0, 0.05, 0.01, 0.3)
-    check(abs(d.sum() * (th[1] - th[0]) * (ph[1] - ph[0]) - 1) < 1e-3, "mixture density integrates to 1")
+    area = (th[1] - th[0]) * (ph[1] - ph[0])
+    one = mixture_eval.bsdfmix.SliceMixture([1.0], [[0.1, 3.0]], [[0.05, 0.01, 0.3]])
+    check(abs(one.pdf_param(T, P).sum() * area - 1) < 1e-3, "mixture density integrates to 1")
     # four copies of equal amplitude have the component's mean and covariance
-    cs = [mixture_eval.copy_of(0.2, 0.5, 0.04, 0.01, 0.09, m) for m in range(4)]
-    mean = np.mean([[c[0], c[1]] for c in cs], axis=0)
-    cov_tt = np.mean([c[2] + (c[0] - 0.2) ** 2 for c in cs])
-    check(abs(mean[0] - 0.2) < 1e-12 and abs(mean[1] - 0.5) < 1e-12 and abs(cov_tt - 0.04) < 1e-12, "colour copies' moments")
+    cp = mixture_eval.bsdfmix.SliceMixture([1.0], [[0.2, 0.5]], [[0.04, 0.01, 0.09]], rgb=[[4.0, 4.0, 4.0]],
+                                           copies=np.ones((1, 4, 3)))
+    d = cp.eval_rgb_param(T, P)[..., 0] * area / 4
+    mean_t, mean_p = (d * T).sum(), (d * P).sum()
+    cov_tt = (d * (T - 0.2) ** 2).sum()
+    check(abs(d.sum() - 1) < 1e-6 and abs(mean_t - 0.2) < 1e-6 and abs(mean_p - 0.5) < 1e-6 and abs(cov_tt - 0.04) < 1e-5,
+          "colour copies' moments")
     check(cm.quantile([3, 1, 2, 4], 0.5) == 2 and cm.quantile(list(range(10)), 0.9) == 8, "compare's quantiles")
     if FAILED:
         sys.exit("%d check(s) failed" % len(FAILED))

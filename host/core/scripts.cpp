@@ -29,6 +29,9 @@ void run_script(const std::string& script, const std::vector<std::string>& args)
     throw Error("chart script " + path + " not found (set BSDFMIX_SCRIPTS to the scripts directory)");
   const char* py = std::getenv("BSDFMIX_PYTHON");
   std::string cmd = quote(py && *py ? py : "/usr/bin/python3") + " " + quote(path);
+  // The scripts that evaluate mixtures import the Python module bsdfmix: this build's.
+  const char* module = std::getenv("BSDFMIX_MODULE_DIR");
+  if (!(module && *module)) cmd = "BSDFMIX_MODULE_DIR=" + quote(BSDFMIX_MODULE_DIR) + " " + cmd;
   for (const auto& a : args) cmd += " " + quote(a);
   cmd += " >/dev/null";
   const int status = std::system(cmd.c_str());

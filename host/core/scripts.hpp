@@ -10,7 +10,8 @@ namespace bsdfmix {
 std::string scripts_dir();
 
 // Runs `/usr/bin/python3 <scripts_dir>/<script> args...`; throws Error naming the
-// script when it cannot run or exits non-zero. $BSDFMIX_PYTHON overrides the interpreter.
+// script when it cannot run or exits non-zero. $BSDFMIX_PYTHON overrides the interpreter;
+// $BSDFMIX_MODULE_DIR, the folder of the Python module bsdfmix, is this build's unless set.
 void run_script(const std::string& script, const std::vector<std::string>& args);
 
 }  // namespace bsdfmix
