@@ -191,9 +191,9 @@ TEST_CASE("the quickstart renders the default estimators and writes its summary 
   std::stringstream ss;
   ss << in.rdbuf();
   const Config c = parse_config(ss.str(), "configs/quickstart.yaml");
-  fs::current_path(cwd);
   REQUIRE(c.render);
-  const render::RenderSettings s = render::render_settings(c);
+  const render::RenderSettings s = render::render_settings(c);  // configs name paths relative to the root
+  fs::current_path(cwd);
   CHECK(s.summary_figure == "quickstart.png");
   CHECK(s.stand_in);  // the summary's table, stand-in and difference
   CHECK(std::none_of(s.estimators.begin(), s.estimators.end(), render::is_guided));
