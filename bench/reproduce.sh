@@ -30,6 +30,7 @@ provenance=$results/provenance.csv
 studies=(
   "rgb_stand_in:8:quick:the chromatic stand-in on the RGL materials and fiber presets, with and without colour copies (rgb_stand_in.csv, rgb_stand_in_no_copies.csv)"
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
+  "quickstart:2:quick:the quickstart from a clean out/quickstart/ and its summary figure (docs/images/quickstart.png)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
   "compact_rivals:30:no:the stand-in against a smaller table and spherical harmonics at 2 to 32 KiB, per slice on the fiber presets and the RGL materials, and in the image (compact_rivals.csv, compact_rivals_image.csv, docs/images/compact_rivals.png)"
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
@@ -97,6 +98,7 @@ outputs() {
   case $1 in
     rgb_stand_in) echo "$results/rgb_stand_in.csv $results/rgb_stand_in_no_copies.csv" ;;
     rgb_refine) echo "$results/rgb_refine.csv" ;;
+    quickstart) echo "docs/images/quickstart.png" ;;
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
     compact_rivals) echo "$results/compact_rivals.csv $results/compact_rivals.txt $results/compact_rivals_image.csv $results/compact_rivals_image.txt docs/images/compact_rivals.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
@@ -149,6 +151,10 @@ run_study() {
       for f in out/bench_rgb/*.h5; do case $f in *_mixture.h5) ;; *) ln -sf "$PWD/$f" out/bench_rgb_no_copies/ ;; esac; done
       $py bench/rgb_stand_in.py --set 'rgb_copies=~' --work out/bench_rgb_no_copies --csv $results/rgb_stand_in_no_copies.csv ;;
     rgb_refine) $py bench/rgb_refine.py ;;
+    quickstart)  # as a first run makes it: every stage, the reference included, from scratch
+      rm -rf out/quickstart
+      $bin run configs/quickstart.yaml
+      cp out/quickstart/render/quickstart.png docs/images/quickstart.png ;;
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
     compact_rivals)  # the per-slice study writes the 8 KiB representations the image study renders
       rm -rf out/compact_rivals

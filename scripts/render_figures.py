@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The figures of a `bsdfmix render` run (docs/render.md), from its render.csv and render.json.
 
-  scripts/render_figures.py --dir out/render_polyester [-o out/render_polyester/figures]
+  scripts/render_figures.py --dir out/render_polyester [-o out/render_polyester/figures] [--summary PATH]
 
 Reads D/render.csv (columns scene, fiber, estimator, mode, spp, seconds, rays_per_second,
 rel_mse, image; `image` an EXR path relative to D, read through the PFM of the same stem
@@ -25,6 +25,14 @@ PNG at 150 dpi:
                        per estimator, the equal-time budget dashed
   OUT/stand_in.png     with `table` and `stand_in` rows: the two renders and their relative
                        difference |s - t| / (t + 0.1 mean(t)), with the memory of each f
+  PATH (--summary; default OUT/summary.png)
+                       the run in one figure: the table's and the stand-in's renders with
+                       their memory (the stand-in against the table and the full 4D table),
+                       their difference against the table image's own noise, and every
+                       estimator's rel MSE against time (the `progress` rows, the equal-time
+                       images as stars); its titles name the estimator with the least error
+                       at equal time and by how much it leads the next and the last, and the
+                       best estimator on the other side (with the mixtures / the table alone)
 
 Prints each file written. Missing files, columns or keys: `render_figures: error: ...`, exit 1.
 """
@@ -380,19 +388,34 @@ def error_vs_time(rows, meta, out):
     save(fig, os.path.join(out, "error_vs_time.png"))
 
 
-def stand_in(rows, images, meta, exposure, out):
+def stand_in_pair(rows, images):
+    """The stand-in row and image and the table row and image it is compared with (the same
+    estimator), or None when the render has no stand-in."""
     st = [r for r in rows if r["mode"] == "stand_in"]
     tb = [r for r in rows if r["mode"] == "table"]
     if not st or not tb:
-        return
+        return None
     s_row = st[0]
     t_row = next((r for r in tb if r["estimator"] == s_row["estimator"]), tb[0])
     s, t = images[s_row["image"]], images[t_row["image"]]
     if s.shape != t.shape:
         fail("%s is %dx%d but %s is %dx%d" % (s_row["image"], s.shape[1], s.shape[0],
                                              t_row["image"], t.shape[1], t.shape[0]))
+    return s_row, s, t_row, t
+
+
+def relative_difference(s, t):
+    """Per pixel |s - t| / (t + 0.1 mean t), averaged over the channels."""
     diff = np.abs(s - t) / (np.abs(t) + 0.1 * abs(float(np.mean(t))))
-    diff = np.where(s == t, 0.0, diff).mean(axis=2)
+    return np.where(s == t, 0.0, diff).mean(axis=2)
+
+
+def stand_in(rows, images, meta, exposure, out):
+    pair = stand_in_pair(rows, images)
+    if pair is None:
+        return
+    s_row, s, t_row, t = pair
+    diff = relative_difference(s, t)
     mean_diff = float(np.mean(diff))
     h, w = t.shape[:2]
     pw, ph = panel_size(w, h)
@@ -433,12 +456,153 @@ def stand_in(rows, images, meta, exposure, out):
     save(fig, os.path.join(out, "stand_in.png"))
 
 
+# What each estimator draws a fiber's next direction from (docs/render.md, "Estimators"),
+# and the ones that sample with the mixtures.
+KIND = {"uniform": "uniform", "mis_tab": "mixture", "cdf_tab": "table CDF",
+        "mis_light_cdf": "table CDF + light samples", "mis_light_gmm": "mixture + light samples",
+        "mis_product": "mixture x lighting + light samples", "guided": "learnt radiance + light samples",
+        "guided_product": "learnt radiance x mixture + light samples"}
+WITH_MIXTURE = {"mis_tab", "mis_light_gmm", "mis_product", "guided", "guided_product"}
+
+
+def fmt_ratio(x):
+    if not (x > 0 and math.isfinite(x)):
+        return "?"
+    return "{:,.0f}x".format(x) if x >= 10 else "%.2gx" % x
+
+
+def equal_time_ranking(rows):
+    """[(estimator, rel MSE)] of the equal_time rows, the least error first."""
+    eq = {}
+    for r in rows:
+        if r["mode"] == "equal_time" and r["rel_mse"] is not None and r["estimator"] not in eq:
+            eq[r["estimator"]] = r["rel_mse"]
+    return sorted(eq.items(), key=lambda x: x[1])
+
+
+def equal_time_verdict(ranking, budget):
+    """Which estimator has the least error at equal time and by how much: two or three lines."""
+    if not ranking:
+        return "error against time (no equal-time rows)"
+    best, m = ranking[0]
+    lines = ["At equal time (%.3g s) %s has the least error, relative MSE %.3g" % (budget, best, m)]
+    if len(ranking) > 1:
+        below = ["%s less than %s (next)" % (fmt_ratio(ranking[1][1] / m), ranking[1][0])]
+        if len(ranking) > 2:
+            below.append("%s less than %s (last)" % (fmt_ratio(ranking[-1][1] / m), ranking[-1][0]))
+        lines.append(", ".join(below))
+        mixture = best in WITH_MIXTURE
+        other = next(((e, x) for e, x in ranking[1:] if (e in WITH_MIXTURE) != mixture), None)
+        if other is not None:
+            lines.append("the best %s, %s: %s %s's error" % (
+                "with the table alone" if mixture else "with the mixtures", other[0], fmt_ratio(other[1] / m), best))
+    return "\n".join(lines)
+
+
+def summary(rows, images, ref, meta, exposure, path):
+    """One figure for a first look: the cloth with the table and with the mixtures, their
+    memory and difference, and every estimator's error against time with the one that
+    wins at equal time."""
+    pair = stand_in_pair(rows, images)
+    prog = [r for r in rows if r["mode"] == "progress"]
+    budget = float(meta["equal_time_seconds"])
+    h, w = ref.shape[:2]
+    fig = plt.figure(figsize=(10.0, 8.0))
+    gs = fig.add_gridspec(1, 3, left=0.03, right=0.89, top=0.86, bottom=0.5, wspace=0.14)
+    gs_plot = fig.add_gridspec(1, 1, left=0.08, right=0.62, top=0.38, bottom=0.07)
+    tb_bytes, mix_bytes = int(meta["table_bytes"]), int(meta["mixture_bytes"])
+    full = int(meta["full_table_bytes"])
+    vs_table = tb_bytes / mix_bytes if mix_bytes > 0 else float("nan")
+    vs_full = full / mix_bytes if mix_bytes > 0 else float("nan")
+    head = "%s, %s, %d x %d" % (meta["fiber"], meta["scene"], w, h)
+    if pair is not None:
+        s_row, s, t_row, t = pair
+        diff = relative_difference(s, t)
+        axes = [fig.add_subplot(gs[0, i]) for i in range(3)]
+        for ax in axes:
+            ax.set_xticks([])
+            ax.set_yticks([])
+        spp = "%s spp, %s" % (fmt_spp(t_row["spp"]), t_row["estimator"])
+        axes[0].imshow(tone_map(t, exposure), interpolation="nearest")
+        axes[0].set_title("rendered with the table\n%s (full 4D table: %s)\n%s"
+                          % (fmt_bytes(tb_bytes), fmt_bytes(full), spp), fontsize=8.5)
+        slices = "" if meta["slices_needed"] == meta["slices_total"] else \
+            " (%s of %s slices)" % (meta["slices_needed"], meta["slices_total"])
+        axes[1].imshow(tone_map(s, exposure), interpolation="nearest")
+        axes[1].set_title("rendered with the mixtures (stand-in)\n%s%s: %s less than the table,\n%s less than the full 4D table"
+                          % (fmt_bytes(mix_bytes), slices, fmt_ratio(vs_table), fmt_ratio(vs_full)), fontsize=8.5)
+        norm = mcolors.Normalize(*DIFF_RANGE)
+        with np.errstate(divide="ignore"):
+            im = axes[2].imshow(np.log10(np.maximum(diff, 1e-30)), cmap="magma", norm=norm, interpolation="nearest")
+        if "stand_in_difference_4x4" in meta and "table_noise_4x4" in meta:
+            d4, n4 = 100 * float(meta["stand_in_difference_4x4"]), 100 * float(meta["table_noise_4x4"])
+            axes[2].set_title("their difference: %.2g %% (4 x 4 blocks)\nthe table image's own noise: %.2g %%\n"
+                              "(against the reference)" % (d4, n4), fontsize=8.5)
+            verdict = "within the table image's own noise" if d4 <= n4 else "%.2g %% from the table image" % d4
+        else:
+            axes[2].set_title("their difference\nmean %.3g" % float(np.mean(diff)), fontsize=8.5)
+            verdict = "mean difference %.3g" % float(np.mean(diff))
+        cb = fig.colorbar(im, cax=axes[2].inset_axes([1.04, 0.0, 0.05, 1.0]))
+        cb.set_label("log10 |s - t| / (t + 0.1 mean t)", fontsize=7)
+        cb.ax.tick_params(labelsize=7)
+        sup = "%s: the mixtures render the same cloth in %s less memory than the table, %s" % (
+            head, fmt_ratio(vs_table), verdict)
+    else:
+        ax = fig.add_subplot(gs[0, 1])
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.imshow(tone_map(ref, exposure), interpolation="nearest")
+        ax.set_title("the reference\n(no stand-in render: render.stand_in is false)", fontsize=8.5)
+        sup = "%s: the estimators against the reference" % head
+
+    ax = fig.add_subplot(gs_plot[0, 0])
+    markers = "osD^v<>ph*"
+    ests = estimators_in_order(rows, {"progress", "equal_time"})
+    eq = {r["estimator"]: r for r in rows if r["mode"] == "equal_time"}
+    for i, est in enumerate(ests):
+        pts = sorted((r["seconds"], r["rel_mse"]) for r in prog
+                     if r["estimator"] == est and r["seconds"] is not None and r["rel_mse"] is not None
+                     and r["seconds"] > 0 and r["rel_mse"] > 0)
+        label = "%s: %s" % (est, KIND[est]) if est in KIND and KIND[est] != est else est
+        color = None
+        if pts:
+            x, y = zip(*pts)
+            (line,) = ax.plot(x, y, marker=markers[i % len(markers)], ms=3.5, lw=1.3, label=label)
+            color, label = line.get_color(), None
+        e = eq.get(est)
+        if e is not None and e["seconds"] and e["rel_mse"]:
+            ax.plot([e["seconds"]], [e["rel_mse"]], marker="*", ms=11, ls="none", color=color,
+                    markeredgecolor="black", markeredgewidth=0.6, label=label)
+    if budget > 0:
+        ax.axvline(budget, color="0.3", ls="--", lw=1)
+        ax.plot([], [], marker="*", ms=9, ls="none", color="0.7", markeredgecolor="black", markeredgewidth=0.6,
+                label="equal time: each estimator's image\nafter %.3g s (dashed line)" % budget)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("render time [s]")
+    ax.set_ylabel("relative MSE against the reference")
+    ax.grid(True, which="major", alpha=0.3)
+    ax.grid(True, which="minor", alpha=0.1)
+    ax.legend(fontsize=7.5, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+              title="next direction at a fiber", title_fontsize=7.5)
+    ax.set_title(equal_time_verdict(equal_time_ranking(rows), budget), fontsize=9, loc="left")
+    fig.suptitle(sup, fontsize=10.5, y=0.985, va="top", wrap=True)
+    d = os.path.dirname(path)
+    if d:
+        try:
+            os.makedirs(d, exist_ok=True)
+        except OSError as e:
+            fail("cannot create %s: %s" % (d, e.strerror or e))
+    save(fig, path)
+
+
 # ---------------------------------------------------------------------------- main
 
 def main():
     ap = argparse.ArgumentParser(description="Figures of a `bsdfmix render` run.")
     ap.add_argument("--dir", required=True, help="the render's output directory (render.csv, render.json)")
     ap.add_argument("-o", "--out", help="where the figures go (default DIR/figures)")
+    ap.add_argument("--summary", help="the one-figure summary's path (default OUT/summary.png)")
     args = ap.parse_args()
     d = args.dir
     out = args.out or os.path.join(d, "figures")
@@ -482,6 +646,7 @@ def main():
     figure_sheet(rows, images, ref, ref_row, meta, exposure, out)
     error_vs_time(rows, meta, out)
     stand_in(rows, images, meta, exposure, out)
+    summary(rows, images, ref, meta, exposure, args.summary or os.path.join(out, "summary.png"))
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 // Configs: defaults merged under the user's, and every kind of config error.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -181,4 +182,20 @@ TEST_CASE("the shipped configs parse", "[config]") {
   CHECK(scenes >= 4);
   CHECK(renders >= 9);
   CHECK(configs >= 20);
+}
+
+TEST_CASE("the quickstart renders the default estimators and writes its summary as quickstart.png", "[config]") {
+  const fs::path cwd = fs::current_path();
+  fs::current_path(BSDFMIX_SOURCE_DIR);
+  std::ifstream in("configs/quickstart.yaml");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const Config c = parse_config(ss.str(), "configs/quickstart.yaml");
+  REQUIRE(c.render);
+  const render::RenderSettings s = render::render_settings(c);  // configs name paths relative to the root
+  fs::current_path(cwd);
+  CHECK(s.summary_figure == "quickstart.png");
+  CHECK(s.stand_in);  // the summary's table, stand-in and difference
+  CHECK(std::none_of(s.estimators.begin(), s.estimators.end(), render::is_guided));
+  CHECK(s.estimators.size() == 6);
 }

@@ -1,7 +1,8 @@
 // `bsdfmix render` end to end on a tiny scene: the outputs (render.csv with its exact
 // header, render.json, the images), a reference killed by SIGKILL after its first
-// checkpoint resumes to the same image an uninterrupted run makes, and a second render of
-// the same output directory is refused while the first holds it.
+// checkpoint resumes to the same image an uninterrupted run makes, a second render of the
+// same output directory is refused while the first holds it, and the figure script writes
+// the figures and the summary figure where the config names it.
 // labels: render cli
 #include <catch2/catch.hpp>
 
@@ -35,8 +36,9 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
-// A config: a small silk table, K <= 4, a 16 x 16 render whose reference takes 256 passes.
-std::string config(const std::string& name) {
+// A config: a small silk table, K <= 4, a 16 x 16 render whose reference takes 256 passes;
+// `render_extra`: more keys of the render section, indented.
+std::string config(const std::string& name, bool stand_in = false, const std::string& render_extra = "") {
   const fs::path d = temp_dir();
   const std::string out = (d / name).string();
   const std::string cfg = (d / (name + ".yaml")).string();
@@ -46,8 +48,10 @@ std::string config(const std::string& name) {
     << "fit: {output: " << (d / (name + "_mixture.h5")).string() << ", report: " << (d / (name + "_fit.csv")).string()
     << ", search_report: " << (d / (name + "_search.csv")).string() << ", k_max: 4, restarts: 1, final_restarts: 1}\n"
     << "render:\n  output: " << out << "\n  width: 16\n  height: 16\n  spp: 4\n  reference_spp: 256\n"
-    << "  reference_estimator: mis_light_gmm\n  estimators: [uniform, mis_light_gmm]\n  stand_in: false\n"
-    << "  scene: " << BSDFMIX_SOURCE_DIR << "/configs/scenes/sky.yaml\n  threads: 1\n  prepass: 8\n";
+    << "  reference_estimator: mis_light_gmm\n  estimators: [uniform, mis_light_gmm]\n  stand_in: "
+    << (stand_in ? "true\n  stand_in_spp: 4\n" : "false\n") << "  scene: " << BSDFMIX_SOURCE_DIR
+    << "/configs/scenes/sky.yaml\n  threads: 1\n  prepass: 8\n"
+    << render_extra;
   return cfg;
 }
 
@@ -140,4 +144,23 @@ TEST_CASE("bsdfmix run fits every slice and renders from that file", "[render][c
   CHECK(text.find("slices needed, from " + (d / "run_mixture.h5").string()) != std::string::npos);
   CHECK(fs::exists(out / "render.csv"));
   CHECK(fs::exists(out / "render.json"));
+}
+
+TEST_CASE("bsdfmix render writes its figures and the summary where the config names it", "[render][cli]") {
+  // The figure script after the render: the figures, and the one-figure summary (the
+  // quickstart's out/quickstart/render/quickstart.png) at render.summary_figure.
+  const std::string cfg = config("figures", true, "  summary_figure: story.png\n");
+  const fs::path out = temp_dir() / "figures";
+  fs::remove_all(out);
+  const std::string log = (temp_dir() / "figures.log").string();
+  REQUIRE(std::system((std::string(BSDFMIX_BINARY) + " render " + cfg + " > /dev/null 2> " + log).c_str()) == 0);
+  INFO(slurp(log));
+  for (const char* f : {"story.png", "figures/figure_sheet.png", "figures/error_vs_time.png", "figures/stand_in.png",
+                        "reference.png", "stand_in.png"})
+    CHECK(fs::exists(out / f));
+  CHECK_FALSE(fs::exists(out / "figures" / "summary.png"));
+  CHECK(slurp(log).find("the summary " + (out / "story.png").string()) != std::string::npos);
+  const std::string png = slurp(out / "story.png");
+  CHECK(png.size() > 10000);
+  CHECK(png.rfind("\x89PNG", 0) == 0);
 }

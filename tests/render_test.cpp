@@ -733,6 +733,19 @@ TEST_CASE("a guided render is reproducible for a seed, whatever the thread count
   }
 }
 
+TEST_CASE("the default estimators leave out the experimental guided ones, which stay selectable by name",
+          "[render][guide]") {
+  const std::string table = small_table("silk");
+  using E = PathEstimator;
+  const Config plain = parse_config("table: " + table + "\nrender:\n  seed: 1\n", "plain.yaml");
+  const RenderSettings d = parse_render(*plain.render);
+  CHECK(d.estimators == std::vector<E>{E::Uniform, E::MisTab, E::CdfTab, E::MisLightCdf, E::MisLightGmm, E::MisProduct});
+  CHECK(d.summary_figure == "figures/summary.png");
+  const Config named =
+      parse_config("table: " + table + "\nrender:\n  estimators: [mis_light_cdf, guided, guided_product]\n", "named.yaml");
+  CHECK(parse_render(*named.render).estimators == std::vector<E>{E::MisLightCdf, E::Guided, E::GuidedProduct});
+}
+
 TEST_CASE("bad render configs are rejected with one line naming the key", "[render]") {
   const std::string table = small_table("silk");
   auto error = [&](const std::string& body) {

@@ -99,7 +99,11 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   facts.fibers = scene.cloth().fibers.size();
   facts.segments = scene.cloth().segments();
   write_render_report(csv, json, s, facts, comparisons);
-  if (figures) run_script("render_figures.py", {"--dir", s.output});
+  if (figures) {
+    const std::string summary = (fs::path(s.output) / s.summary_figure).string();
+    run_script("render_figures.py", {"--dir", s.output, "--summary", summary});
+    log_line("render: figures in " + (fs::path(s.output) / "figures").string() + ", the summary " + summary);
+  }
 }
 
 }  // namespace render

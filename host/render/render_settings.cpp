@@ -61,6 +61,8 @@ RenderSettings parse_render(const RenderSection& section) {
   RenderSettings r;
   r.file = section.file;
   r.output = n.str("output");
+  r.summary_figure = n.str("summary_figure");
+  if (r.summary_figure.empty()) n.fail("summary_figure", "expected a file name (relative to output)");
   r.width = int(n.integer("width", 1, 16384));
   r.height = int(n.integer("height", 1, 16384));
   r.spp = int(n.integer("spp", 1, 1 << 20));

@@ -31,6 +31,7 @@ struct Camera {
 struct RenderSettings {
   std::string file;  // the config
   std::string output;
+  std::string summary_figure = "figures/summary.png";  // the figure script's summary, relative to output
   int width = 256, height = 256, spp = 64, reference_spp = 1024, stand_in_spp = 256;
   double seconds = 0;
   PathEstimator reference_estimator = PathEstimator::MisLightGmm, stand_in_estimator = PathEstimator::MisLightGmm;
