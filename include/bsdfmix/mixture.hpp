@@ -334,11 +334,12 @@ inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceM
 // "Interpolation between slices"):
 //  - Blend mixes the two slices' mixtures with the linear weights of thesis eq. 3.7: a
 //    lobe that moves with omega_o becomes two half-lobes at the two slices' places;
-//  - Displace moves the components instead (displacement interpolation, Bonneel et al.
-//    2011): the two slices' weights are matched by a transport plan over the squared
-//    2-Wasserstein distance of their components, and each matched pair (i, j) of mass m
-//    becomes one component of weight m whose mean and covariance go linearly from i's to
-//    j's. A lobe that moves between the slices is one lobe in between.
+//  - Displace moves the lobes instead (displacement interpolation, Bonneel et al. 2011):
+//    the components that can be one lobe in both slices (compact and alike: same_lobe)
+//    are matched by a transport plan over the squared 2-Wasserstein distance, and each
+//    matched pair (i, j) of mass m becomes one component of weight m whose mean and
+//    covariance go linearly from i's to j's; the unmatched mass is blended. A lobe that
+//    moves between the slices is one lobe in between.
 // Either way the result is one mixture, and pdf() is the exact density of what sample()
 // draws.
 enum class Interpolation { Blend, Displace };
@@ -362,9 +363,24 @@ inline double w2_squared(const Gaussian& x, const Gaussian& y) {
   return dt * dt + dp * dp + std::max(x.s_tt + x.s_pp + y.s_tt + y.s_pp - 2 * cross, 0.0);
 }
 
-// A transport plan between the normalized weights of a and b (prepared mixtures): the
-// cheapest pairs by w2_squared first, each carrying as much mass as both ends have left
-// (a greedy plan: every mass is moved, in at most |a| + |b| - 1 pairs).
+// Whether two components can be one lobe that moved: both compact (no standard deviation
+// above kMovingSigma: broader components, bands across phi above all, are cut differently
+// by each slice's fit and are blended instead), their means at most `reach` apart, and
+// alike in shape (the covariance part of w2_squared at most half the smaller trace).
+constexpr double kMovingSigma = 0.35;
+
+inline bool same_lobe(const Gaussian& x, const Gaussian& y, double reach) {
+  if (x.sigma_max() > kMovingSigma || y.sigma_max() > kMovingSigma) return false;
+  const double dt = y.mu_t - x.mu_t, dp = wrap_phi(y.mu_p - x.mu_p);
+  if (dt * dt + dp * dp > reach * reach) return false;
+  const double shape = w2_squared(x, y) - dt * dt - dp * dp;
+  return shape <= 0.5 * std::min(x.s_tt + x.s_pp, y.s_tt + y.s_pp);
+}
+
+// A partial transport plan between the normalized weights of a and b (prepared
+// mixtures): over the pairs that can be one lobe (same_lobe), the cheapest by w2_squared
+// first, each carrying as much mass as both ends have left (a greedy plan). Mass left
+// unmatched stays where it is: displaced() blends it.
 inline std::vector<Flow> transport_plan(const SliceMixture& a, const SliceMixture& b) {
   const std::size_t na = a.components.size(), nb = b.components.size();
   struct Pair {
@@ -373,8 +389,12 @@ inline std::vector<Flow> transport_plan(const SliceMixture& a, const SliceMixtur
   };
   std::vector<Pair> pairs;
   pairs.reserve(na * nb);
+  // A reflected lobe moves by about the change of omega_o: twice that, at least 0.05 rad.
+  const double reach = std::max(2 * (std::abs(b.theta_o - a.theta_o) + std::abs(wrap_phi(b.phi_o - a.phi_o))), 0.05);
   for (std::size_t i = 0; i < na; ++i)
-    for (std::size_t j = 0; j < nb; ++j) pairs.push_back({w2_squared(a.components[i], b.components[j]), int(i), int(j)});
+    for (std::size_t j = 0; j < nb; ++j)
+      if (same_lobe(a.components[i], b.components[j], reach))
+        pairs.push_back({w2_squared(a.components[i], b.components[j]), int(i), int(j)});
   std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
     return x.cost < y.cost || (x.cost == y.cost && (x.i < y.i || (x.i == y.i && x.j < y.j)));
   });
@@ -420,6 +440,31 @@ inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, cons
     const double rgb[3] = {g.rgb[0] / kCopies, g.rgb[1] / kCopies, g.rgb[2] / kCopies};
     return copy_of(g, m, rgb);
   };
+  // Unmatched mass: a's share fades out as (1 - t), b's fades in as t, in place.
+  std::vector<double> left_a(a.components.size()), left_b(b.components.size());
+  for (std::size_t i = 0; i < left_a.size(); ++i) left_a[i] = a.components[i].weight;
+  for (std::size_t j = 0; j < left_b.size(); ++j) left_b[j] = b.components[j].weight;
+  for (const Flow& f : plan) {
+    left_a[std::size_t(f.i)] -= f.mass;
+    left_b[std::size_t(f.j)] -= f.mass;
+  }
+  auto stay = [&](const SliceMixture& s, std::size_t k, double left, double share) {
+    const Gaussian& x = s.components[k];
+    if (!(left > 1e-12 * x.weight) || !(share > 0)) return;
+    Gaussian g = x;
+    const double r = x.weight > 0 ? left / x.weight : 0;
+    g.weight = share * left;
+    for (double& c : g.rgb) c *= share * r;
+    out.components.push_back(g);
+    if (copies)
+      for (int m = 0; m < kCopies; ++m) {
+        Gaussian c = copy(s, int(k), m);
+        for (double& v : c.rgb) v *= share * r;
+        out.colour.push_back(c);
+      }
+  };
+  for (std::size_t i = 0; i < left_a.size(); ++i) stay(a, i, left_a[i], 1 - t);
+  for (std::size_t j = 0; j < left_b.size(); ++j) stay(b, j, left_b[j], t);
   for (const Flow& f : plan) {
     const Gaussian& x = a.components[std::size_t(f.i)];
     const Gaussian& y = b.components[std::size_t(f.j)];
