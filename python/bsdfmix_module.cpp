@@ -330,6 +330,13 @@ PYBIND11_MODULE(bsdfmix, m) {
           "(theta, phi, pdf_omega, valid)")
       .def("blended", &mix::MixtureSet::blended, py::arg("theta_o"), py::arg("phi_o"),
            "the blended mixture of omega_o as one SliceMixture in the world phi frame")
+      .def("at", &mix::MixtureSet::at, py::arg("theta_o"), py::arg("phi_o"),
+           "the mixture serving omega_o (blended or displaced, as the file says) as one SliceMixture in the "
+           "world phi frame: what pdf_omega, eval_f and sample use")
+      .def_property_readonly("interpolation",
+                             [](const mix::MixtureSet& s) {
+                               return s.interpolation == mix::Interpolation::Displace ? "displace" : "blend";
+                             })
       .def(
           "product_with",
           [](const mix::MixtureSet& s, double theta_o, double phi_o, const mix::SliceMixture& lighting, double keep,

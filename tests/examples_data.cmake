@@ -6,7 +6,9 @@
 #   slices 2 and 3 are blended between them and 0 and 5 clamped to them; padded storage;
 # - mixture_ragged.h5: the same packed ragged with float32 colour (pack's default);
 # - compare.csv, compare_ragged.csv: `bsdfmix compare` of each against the table;
-# - samples.csv: `bsdfmix sample --cpu` of mixture.h5 at theta_o 0.3, phi_o 1.1, seed 7.
+# - samples.csv: `bsdfmix sample --cpu` of mixture.h5 at theta_o 0.3, phi_o 1.1, seed 7;
+# - mixture_displace.h5 (padded, interpolation displace), its compare_displace.csv and
+#   samples_displace.csv as above.
 foreach(v BSDFMIX OUT)
   if(NOT DEFINED ${v})
     message(FATAL_ERROR "examples_data.cmake: -D${v}=... is required")
@@ -44,4 +46,8 @@ run(${BSDFMIX} pack -q ${OUT}/mixture.h5 -o ${OUT}/mixture_ragged.h5)
 run(${BSDFMIX} compare -q ${OUT}/mixture.h5 ${OUT}/table.h5 --csv ${OUT}/compare.csv)
 run(${BSDFMIX} compare -q ${OUT}/mixture_ragged.h5 ${OUT}/table.h5 --csv ${OUT}/compare_ragged.csv)
 run(${BSDFMIX} sample -q --cpu ${OUT}/mixture.h5 --theta-o 0.3 --phi-o 1.1 -n 2000 --seed 7 -o ${OUT}/samples.csv)
+run(${BSDFMIX} pack -q ${OUT}/mixture.h5 --storage padded --interpolation displace -o ${OUT}/mixture_displace.h5)
+run(${BSDFMIX} compare -q ${OUT}/mixture_displace.h5 ${OUT}/table.h5 --csv ${OUT}/compare_displace.csv)
+run(${BSDFMIX} sample -q --cpu ${OUT}/mixture_displace.h5 --theta-o 0.3 --phi-o 1.1 -n 2000 --seed 7
+    -o ${OUT}/samples_displace.csv)
 message(STATUS "examples_data: table, mixtures, compare and sample CSVs in ${OUT}")

@@ -6,6 +6,7 @@ Run by ctest (python_module_test) on the fixture examples_data (tests/examples_d
 - every figure of `bsdfmix compare` (l1_rel, energy, per channel) from the module's eval_f,
   eval_rgb, Table and integrand_weights, on the padded and the ragged float32 file;
 - the blend, the blended mixture and the product against the set's own pdf;
+- a file interpolated by displacement: its samples and figures as above, and at() as its pdf;
 - tables read as h5py reads them; errors raised as Python exceptions.
 """
 import csv
@@ -24,7 +25,8 @@ import bsdfmix_import  # noqa: E402
 
 bsdfmix = bsdfmix_import.load()
 DATA = pathlib.Path(os.environ.get("BSDFMIX_EXAMPLES_DATA", ROOT / "build" / "tests" / "examples"))
-FILES = [("mixture.h5", "compare.csv"), ("mixture_ragged.h5", "compare_ragged.csv")]
+FILES = [("mixture.h5", "compare.csv"), ("mixture_ragged.h5", "compare_ragged.csv"),
+         ("mixture_displace.h5", "compare_displace.csv")]
 
 
 def rows(path):
@@ -37,10 +39,11 @@ def table():
     return bsdfmix.Table(str(DATA / "table.h5"))
 
 
-def test_samples_match_the_cli():
-    m = bsdfmix.load_mixture(str(DATA / "mixture.h5"))
+@pytest.mark.parametrize("mixture,samples", [("mixture.h5", "samples.csv"), ("mixture_displace.h5", "samples_displace.csv")])
+def test_samples_match_the_cli(mixture, samples):
+    m = bsdfmix.load_mixture(str(DATA / mixture))
     theta, phi, pdf, valid = m.sample_counter(0.3, 1.1, 2000, seed=7)
-    ref = rows(DATA / "samples.csv")
+    ref = rows(DATA / samples)
     assert len(ref) == 2000
     r_theta = np.array([float(r["theta"]) for r in ref])
     r_phi = np.array([float(r["phi"]) for r in ref])
@@ -127,6 +130,21 @@ def test_slices_and_blend():
                                rtol=1e-12, atol=1e-300)
     # its luminance stand-in has one scale, the blended one: eval_f's to the slices' difference
     np.testing.assert_allclose(b.eval_param(th, ph) / jac, m.eval_f(0.1, 0.2, th, ph), rtol=1e-3)
+
+
+def test_displacement():
+    blend = bsdfmix.load_mixture(str(DATA / "mixture.h5"))
+    moved = bsdfmix.load_mixture(str(DATA / "mixture_displace.h5"))
+    assert blend.interpolation == "blend" and moved.interpolation == "displace"
+    th, ph = np.meshgrid(np.linspace(-1.5, 1.5, 17), np.linspace(-3.1, 3.1, 19), indexing="ij")
+    grid = moved.grid_theta_o
+    # at a fitted slice both are the slice; between them at() is the set's pdf and stand-in
+    np.testing.assert_allclose(moved.pdf_param(grid[1], 0.4, th, ph), blend.pdf_param(grid[1], 0.4, th, ph), rtol=1e-12)
+    a = moved.at(grid[2], 0.4)
+    np.testing.assert_allclose(a.pdf_param(th, ph), moved.pdf_param(grid[2], 0.4, th, ph), rtol=1e-12, atol=1e-300)
+    jac = bsdfmix.jacobian("fiber", th)
+    np.testing.assert_allclose(a.eval_param(th, ph) / jac, moved.eval_f(grid[2], 0.4, th, ph), rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(blend.at(grid[2], 0.4).pdf_param(th, ph), blend.blended(grid[2], 0.4).pdf_param(th, ph))
 
 
 def test_product_with_lighting():

@@ -97,6 +97,9 @@ mix::MixtureSet load_mixture(const std::string& path) {
   mix::MixtureSet set;
   set.domain = read_string_attr(g.id, "domain") == "hemisphere" ? mix::Domain::Hemisphere : mix::Domain::Fiber;
   set.azimuthal = read_string_attr(g.id, "symmetry") == "azimuthal";
+  // optional: how omega_o between fitted slices is served (absent: blend)
+  if (H5Aexists(g.id, "interpolation") > 0 && read_string_attr(g.id, "interpolation") == "displace")
+    set.interpolation = mix::Interpolation::Displace;
 
   const std::vector<double> theta_o = read_doubles(g.id, "theta_o"), phi_o = read_doubles(g.id, "phi_o");
   const std::vector<double> scale = read_doubles(g.id, "scale");

@@ -768,13 +768,13 @@ class MixtureSet {
     return mixed(piece, b.weight, b.count, b.rotate, theta_o, phi_o);
   }
 
-  // Product sampling of omega_o: the blended mixture (fitted to f J) times a mixture of the
+  // Product sampling of omega_o: the mixture serving it (at(), fitted to f J) times a mixture of the
   // lighting over the same (theta, phi) frame (fitted to L alone), so the result follows
   // f L J, the integrand over (theta, phi). Sample it with SliceMixture::sample, weight by
   // its pdf_omega. See product() for the pruning and the outputs.
   SliceMixture product_with(double theta_o, double phi_o, const SliceMixture& lighting, const ProductOptions& o = {},
                             double* mass = nullptr, double* kept = nullptr) const {
-    return product(blended(theta_o, phi_o), 0.0, lighting, o, mass, kept);
+    return product(at(theta_o, phi_o), 0.0, lighting, o, mass, kept);
   }
 
   // Sample `index` of a reproducible stream: sample() fed with uniforms(seed, stream, index).
