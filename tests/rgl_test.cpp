@@ -21,6 +21,7 @@
 #include "tables/rgl_brdf.hpp"
 #include "tables/rgl_file.hpp"
 #include "tables/rgl_import.hpp"
+#include "tables/rgl_lobe.hpp"
 
 using namespace bsdfmix;
 using Catch::Matchers::Contains;
@@ -679,4 +680,50 @@ TEST_CASE("the file's own sampler passes a chi-square against its pdf, valid sha
       CHECK(r.p > 1e-3);
     }
   }
+}
+
+TEST_CASE("the narrowest lobe: its widths are where f cos falls to half, and the grid resolves it", "[rgl]") {
+  const RglBrdf brdf(rgl_path("satin_rosaline_rgb"));
+  const std::vector<RglLobe> lobes = rgl_lobes(brdf, 3);
+  REQUIRE(lobes.size() == 3);
+  for (const RglLobe& l : lobes) {
+    INFO("theta_o " << l.theta_o << ": peak " << l.peak << " at (" << l.theta_i << ", " << l.phi_i << "), widths "
+                    << l.fwhm_theta << " x " << l.fwhm_phi);
+    REQUIRE(l.peak > 0);
+    // a glossy lobe about the mirror direction (phi_i = pi: the view is at phi_o = 0)
+    CHECK(std::abs(std::abs(l.phi_i) - kPi) < 0.05);
+    CHECK(l.fwhm_theta > 0);
+    CHECK(l.fwhm_phi > 0);
+    CHECK(l.fwhm_theta < 2 * kLobeReach);
+    // no direction on a fine ring around the peak beats it
+    for (int k = 0; k < 16; ++k) {
+      const double a = 2 * kPi * k / 16, r = 0.002;
+      const double t = l.theta_i + r * std::cos(a), p = l.phi_i + r * std::sin(a) / std::sin(l.theta_i);
+      CHECK(brdf.eval(l.theta_o, 0.0, t, p).y * std::cos(t) <= l.peak * 1.001);
+    }
+    // the theta width is the length of the line through the peak where f cos is at least
+    // half the peak (the lobe is one interval on it)
+    const double dt = 0.0005;
+    double above = 0;
+    for (double t = l.theta_i - kLobeReach; t <= l.theta_i + kLobeReach; t += dt)
+      if (t > 0 && t < kPi / 2 && brdf.eval(l.theta_o, 0.0, t, l.phi_i).y * std::cos(t) >= 0.5 * l.peak) above += dt;
+    CHECK(above == Approx(l.fwhm_theta).margin(3 * dt + 0.02 * l.fwhm_theta));
+  }
+  // the rule: 3 cells across every lobe, slices half a width apart, floors and caps kept
+  RglLobe one;
+  one.peak = 1;
+  one.theta_o = one.theta_i = 1.2;
+  one.fwhm_theta = kPi / 180;  // 1 degree
+  one.fwhm_phi = 0.9 * kPi / 180;
+  const RglGrid g = rgl_resolving_grid({one}, 90, 90, 180);
+  CHECK(g.n_theta_i == 270);
+  CHECK(g.n_theta_o == 180);
+  CHECK(g.n_phi_i == std::size_t(std::ceil(3 * 360 / 0.9 * std::sin(1.2))));
+  CHECK(g.narrowest.fwhm_phi == one.fwhm_phi);
+  const RglGrid floors = rgl_resolving_grid({one}, 400, 400, 1500, 720, 1440);
+  CHECK(floors.n_theta_i == 400);
+  CHECK(floors.n_theta_o == 400);
+  CHECK(floors.n_phi_i == 1500);
+  one.fwhm_phi = 1e-4;
+  CHECK(rgl_resolving_grid({one}, 90, 90, 180, 720, 1440).n_phi_i == 1440);
 }

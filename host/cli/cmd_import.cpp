@@ -19,6 +19,9 @@ void add_import(CLI::App& app, Common& common) {
       ->check(CLI::PositiveNumber);
   rgl->add_option("--phi-i", opt.n_phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()
       ->check(CLI::PositiveNumber);
+  rgl->add_flag("--resolve", opt.resolve,
+                "raise the three resolutions until the file's narrowest lobe spans 3 cells (docs/rgl.md, \"Resolving "
+                "sharp lobes\"); the resolutions given are the least");
   rgl->add_option("--threads", opt.threads, "worker threads (0: all cores)")->capture_default_str();
   static std::string negative = "keep";
   rgl->add_option("--negative", negative,

@@ -28,6 +28,7 @@ struct ImportSection {  // tabulate an RGL BRDF into `table`
   int theta_o = 0, theta_i = 0, phi_i = 0;
   bool force = false;
   std::string negative = "keep";  // keep or clip (tables/rgl_import.hpp RglNegative)
+  bool resolve = false;           // raise the grid to resolve the narrowest lobe (tables/rgl_lobe.hpp)
 };
 
 // How the sweep searches each slice's Gaussian count (docs/fitting.md), the `search`

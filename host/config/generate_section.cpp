@@ -31,6 +31,7 @@ ImportSection parse_import(const ConfigNode& n) {
   s.theta_i = static_cast<int>(n.integer("theta_i", 2, 100000));
   s.phi_i = static_cast<int>(n.integer("phi_i", 2, 100000));
   s.force = n.boolean("force");
+  s.resolve = n.boolean("resolve");
   s.negative = n.str("negative");
   if (s.negative != "keep" && s.negative != "clip")
     n.fail("negative", "'" + s.negative + "' is not a choice (expected keep or clip)");

@@ -30,6 +30,7 @@ void stage_table(const Config& config, const std::string& device_selector) {
     opt.n_theta_o = std::size_t(s.theta_o);
     opt.n_theta_i = std::size_t(s.theta_i);
     opt.n_phi_i = std::size_t(s.phi_i);
+    opt.resolve = s.resolve;
     parse_rgl_negative(s.negative, opt.negative);
     import_rgl_table(opt, config.table);
   } else if (present) {

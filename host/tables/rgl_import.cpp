@@ -9,9 +9,11 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/progress.hpp"
 #include "io/table.hpp"
 #include "tables/rgl_brdf.hpp"
+#include "tables/rgl_lobe.hpp"
 
 namespace bsdfmix {
 
@@ -30,10 +32,24 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
                      std::to_string(opt.n_theta_o) + ", theta_i " + std::to_string(opt.n_theta_i) + ", phi_i " +
                      std::to_string(opt.n_phi_i) + ")");
   const RglBrdf brdf(opt.file);
-
-  TableMeta meta = make_grid(Domain::Hemisphere, opt.n_theta_o, 1, opt.n_theta_i, opt.n_phi_i, true);
-  meta.rgb = true;
   const std::string name = std::filesystem::path(opt.file).filename().string();
+  std::size_t n_theta_o = opt.n_theta_o, n_theta_i = opt.n_theta_i, n_phi_i = opt.n_phi_i;
+  if (opt.resolve) {
+    constexpr double kToDegrees = 57.29577951308232;
+    const RglGrid g = rgl_resolving_grid(rgl_lobes(brdf), n_theta_o, n_theta_i, n_phi_i);
+    n_theta_o = g.n_theta_o;
+    n_theta_i = g.n_theta_i;
+    n_phi_i = g.n_phi_i;
+    const double cells = double(n_theta_o) * double(n_theta_i) * double(n_phi_i);
+    log_line(name + ": narrowest lobe " + format_number(g.narrowest.fwhm_theta * kToDegrees, "%.2f") + " x " +
+             format_number(g.narrowest.fwhm_phi * kToDegrees, "%.2f") + " degrees (half-maximum width along theta_i, and along phi_i "
+             "on its arc) at theta_o " + format_number(g.narrowest.theta_o * kToDegrees, "%.1f") + " degrees: grid " +
+             std::to_string(n_theta_o) + " x " + std::to_string(n_theta_i) + " x " + std::to_string(n_phi_i) +
+             " (theta_o x theta_i x phi_i), " + format_number(cells * 16 / 1048576.0, "%.1f") + " MiB of float32 luminance and rgb");
+  }
+
+  TableMeta meta = make_grid(Domain::Hemisphere, n_theta_o, 1, n_theta_i, n_phi_i, true);
+  meta.rgb = true;
   if (brdf.rounding_zeros())
     log_line(name + ": " + std::to_string(brdf.rounding_zeros()) +
              " value(s) of its non-negative fields within float rounding below zero, read as 0");

@@ -20,6 +20,9 @@ struct RglImportOptions {
   std::size_t n_theta_o = 90, n_theta_i = 90, n_phi_i = 180;
   unsigned threads = 0;  // 0: std::thread::hardware_concurrency()
   RglNegative negative = RglNegative::Keep;
+  // Raise the three resolutions (never lower them) until the file's narrowest lobe is
+  // resolved (tables/rgl_lobe.hpp, rgl_resolving_grid).
+  bool resolve = false;
 };
 
 // Writes the table (atomically) to out_path: `values` the luminance of f, `rgb` beside
