@@ -67,7 +67,7 @@ K_MAX = {2048: (4, 8), 4096: (4, 16), 8192: (4, 8, 16), 16384: (16,), 32768: (16
 GUESS = {4: 200, 8: 350, 16: 450}
 L_MAX = {"fiber": 48, "hemisphere": 64}  # the largest degree fitted (the 32 KiB budgets need less)
 COLUMNS = ["material", "domain", "representation", "budget", "bytes", "bytes_eval", "config", "median_l1", "p90_l1",
-           "median_rgb", "p90_rgb", "median_rgb_fitted", "median_rgb_between", "max_energy", "eval_ns", "relvar_median",
+           "median_rgb", "p90_rgb", "median_rgb_fitted", "median_rgb_between", "max_energy", "eval_ns", "eval_method", "relvar_median",
            "relvar_p90", "missed_max", "relvar_uniform10_median", "relvar_uniform10_p90", "slices", "phi_asymmetry",
            "fit_seconds", "cpu", "cores", "command"]
 
@@ -382,6 +382,7 @@ def main():
                 for row in out:
                     if row["material"] == mat and row["budget"] == b and row["representation"] == rep:
                         row["eval_ns"] = ns
+                        row["eval_method"] = "header (module)" if rep == "mixture" else "numpy"
             print("  %5d B: %s" % (b, ", ".join("%s %.2f%% (%d B)" % (r["representation"], 100 * r["median_rgb"], r["bytes"])
                                                for r in out if r["material"] == mat and r["budget"] == b)), flush=True)
         print("  %s in %.0f s" % (mat, time.time() - t_mat), flush=True)

@@ -97,6 +97,11 @@ def cost():
                        for m in sampled)
         missed = max((float(by[m]["missed_max"]) for m in sampled), default=None)
         out.append("| %s | %s | %s | %s |" % (LABEL[k], ns, rv or "cannot sample", "" if missed is None else "%.2g" % missed))
+    if any(not r.get("eval_method") for r in rows if r["representation"] == "mixture"):
+        out.append("")
+        out.append("The mixture's eval ns in bench/results/compact_rivals.csv come from a numpy evaluation of the "
+                   "mixture; the study now times the header's `eval_rgb` through the Python module (stale until "
+                   "`bench/reproduce.sh compact_rivals` runs again).")
     return out
 
 
