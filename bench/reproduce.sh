@@ -61,6 +61,8 @@ studies=(
   "fiber_generate:1:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
   "rgl_negative:1:no:the RGL files' negative channels kept signed and clipped, the luminance compared (rgl_negative.csv)"
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
+  "interpolation:6:no:blend against displace between slices, every other slice of the sampling_peers fits left out (interpolation.csv; runs sampling_peers first when out/sampling_peers/ lacks its fits)"
+  "rgl_resolve:40:no:each RGL file at the default grid and at the grid that resolves its narrowest lobe, as a sampler against the file's own (rgl_resolve.csv)"
   "sampling_peers:10:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f (sampling_peers.csv)"
   "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
@@ -130,6 +132,8 @@ outputs() {
     rgl_albedo) echo "$results/rgl_albedo.csv" ;;
     rgl_negative) echo "$results/rgl_negative.csv" ;;
     sampling_peers) echo "$results/sampling_peers.csv" ;;
+    interpolation) echo "$results/interpolation.csv" ;;
+    rgl_resolve) echo "$results/rgl_resolve.csv" ;;
     fiber_generate) echo "$results/fiber_generate.csv" ;;
   esac
 }
@@ -337,6 +341,10 @@ run_study() {
       done
       { head -n 1 $w/$m.csv; for f in data/rgl/*_rgb.bsdf; do tail -n +2 $w/$(basename "$f" _rgb.bsdf).csv; done; } \
         > $results/sampling_peers.csv ;;
+    interpolation)
+      ls out/sampling_peers/*_mixture.h5 > /dev/null 2>&1 || run_study sampling_peers
+      $py bench/interpolation.py --csv $results/interpolation.csv ;;
+    rgl_resolve) $py bench/rgl_resolve.py --csv $results/rgl_resolve.csv ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)
       local r=build/bench/bsdfmix_bench_render_rays

@@ -68,6 +68,7 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from readme_measured import pct, rows  # noqa: E402  (the one reader and percent format of the tables)
 import input_tables  # noqa: E402
 import compact_tables  # noqa: E402
+import lobe_tables  # noqa: E402
 
 
 def rgb_stand_in():
@@ -522,7 +523,8 @@ TABLES = {"sampling_peers": sampling_peers, "rgb_stand_in": rgb_stand_in, "rgb_c
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity,
           "compact_rivals": compact_tables.at_8k, "compact_rivals_budgets": compact_tables.budgets,
-          "compact_rivals_cost": compact_tables.cost, "compact_rivals_image": compact_tables.image}
+          "compact_rivals_cost": compact_tables.cost, "compact_rivals_image": compact_tables.image,
+          "interpolation": lobe_tables.interpolation, "rgl_resolve": lobe_tables.rgl_resolve}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
