@@ -33,13 +33,16 @@ def interpolation():
 
 
 def rgl_resolve():
-    out = ["| material | narrowest lobe, degrees (theta x across), at view | grid | table MiB | mixture bytes | mixture / file's sampler, median (largest) | table CDF / file's |",
-           "|---|---|---|---|---|---|---|"]
+    label = {"default": "default", "resolved": "resolved", "resolved_t2": "resolved, fit to 2 % L1"}
+    out = ["| material | narrowest lobe, degrees (theta x across), at view | grid | table MiB | fit L1, median | mixture bytes | mixture / file's sampler, median (largest) | table CDF / file's |",
+           "|---|---|---|---|---|---|---|---|"]
     for r in rows("rgl_resolve.csv"):
         measured = r["is_mixture_over_rgl_median"] != ""
-        out.append("| %s | %s x %s at %s | %s: %s x %s x %s | %s | %s | %s | %s |" % (
-            r["material"], r["lobe_fwhm_theta_deg"], r["lobe_fwhm_across_deg"], r["lobe_at_theta_o_deg"], r["grid"],
-            r["theta_o"], r["theta_i"], r["phi_i"], r["table_mib"], r["mixture_bytes"] or "-",
+        l1 = r.get("fit_l1_median", "")
+        out.append("| %s | %s x %s at %s | %s: %s x %s x %s | %s | %s | %s | %s | %s |" % (
+            r["material"], r["lobe_fwhm_theta_deg"], r["lobe_fwhm_across_deg"], r["lobe_at_theta_o_deg"],
+            label.get(r["grid"], r["grid"]), r["theta_o"], r["theta_i"], r["phi_i"], r["table_mib"],
+            "%.1f%%" % (100 * float(l1)) if l1 else "-", r["mixture_bytes"] or "-",
             "%s (%s)" % (r["is_mixture_over_rgl_median"], r["is_mixture_over_rgl_max"]) if measured else "not imported",
             "%s (%s)" % (r["cdf_table_over_rgl_median"], r["cdf_table_over_rgl_max"]) if measured else "-"))
     return out

@@ -63,6 +63,10 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
       c.theta_o = m.theta_o[t];
       c.phi_o = m.phi_o[p];
       c.fitted = fitted.count({c.theta_o, c.phi_o}) > 0;
+      // a set that displaces is served by a one-slice set per omega_o (the same mixture)
+      const mix::MixtureSet view =
+          set.interpolation == mix::Interpolation::Displace ? set.serving(c.theta_o, c.phi_o) : mix::MixtureSet{};
+      const mix::MixtureSet& serve = set.interpolation == mix::Interpolation::Displace ? view : set;
       const std::vector<float> f = reader.read_slice(t, p);
       const std::vector<float> rgb = m.rgb ? reader.read_slice_rgb(t, p) : std::vector<float>{};
       double d = 0, tot = 0, est = 0, drgb[3] = {0, 0, 0}, trgb[3] = {0, 0, 0}, ergb[3] = {0, 0, 0}, dneg = 0;
@@ -72,13 +76,13 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
           const std::size_t k = i * np + j;
           // the table's phi axis is the mixture's (phi_i - phi_o under symmetry, with phi_o 0)
           const double phi = m.phi_i[j];
-          const double fhat = set.eval_f(c.theta_o, c.phi_o, m.theta_i[i], phi);
+          const double fhat = serve.eval_f(c.theta_o, c.phi_o, m.theta_i[i], phi);
           d += g[k] * std::abs(fhat - double(f[k]));
           tot += g[k] * std::abs(double(f[k]));
           est += g[k] * fhat;
           if (!m.rgb) continue;
           double ch[3];
-          set.eval_rgb(c.theta_o, c.phi_o, m.theta_i[i], phi, ch);
+          serve.eval_rgb(c.theta_o, c.phi_o, m.theta_i[i], phi, ch);
           for (int q = 0; q < 3; ++q) {
             const double tv = rgb[3 * k + std::size_t(q)], e = g[k] * std::abs(ch[q] - tv);
             drgb[q] += e;

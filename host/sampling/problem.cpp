@@ -41,22 +41,9 @@ static int block_images(double sigma_c) {
   return images;
 }
 
-mix::MixtureSet serving_set(const mix::MixtureSet& set, double theta_o, double phi_o) {
-  mix::MixtureSet one;
-  one.domain = set.domain;
-  one.azimuthal = set.azimuthal;
-  one.grid_theta_o = {theta_o};
-  one.grid_phi_o = {set.azimuthal ? 0.0 : phi_o};
-  one.slices = {set.at(theta_o, set.azimuthal ? 0.0 : phi_o)};
-  one.slices[0].theta_o = theta_o;
-  one.slices[0].phi_o = one.grid_phi_o[0];
-  one.prepare();
-  return one;
-}
-
 QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit) {
   if (set.interpolation == mix::Interpolation::Displace)
-    return make_query(serving_set(set, theta_o, phi_o), theta_o, phi_o, f_unit);
+    return make_query(set.serving(theta_o, phi_o), theta_o, phi_o, f_unit);
   QueryMixture qm;
   qm.domain = set.domain;
   qm.blend = set.blend(theta_o, phi_o);
@@ -247,7 +234,7 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
   Problem p;
   p.set = &set;
   if (set.interpolation == mix::Interpolation::Displace) {
-    p.serving = std::make_shared<const mix::MixtureSet>(serving_set(set, theta_o, phi_o));
+    p.serving = std::make_shared<const mix::MixtureSet>(set.serving(theta_o, phi_o));
     p.set = p.serving.get();
   }
   p.theta_o = theta_o;

@@ -41,12 +41,6 @@ struct QueryMixture {
   std::size_t components() const { return comps.size() / 16; }
 };
 
-// The mixture serving omega_o as a set of one slice (MixtureSet::at, in the slice frame):
-// queried at omega_o it gives the same pdf, f and samples as `set`. The sampling drivers
-// use it for a set that interpolates by Interpolation::Displace, whose components differ
-// at every omega_o.
-mix::MixtureSet serving_set(const mix::MixtureSet& set, double theta_o, double phi_o);
-
 // f_unit divides the stand-in's values (component [9], scale x density) before they are
 // rounded to float: the estimator launches pass the power of two they scale f by.
 QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o, double f_unit = 1.0);
@@ -123,7 +117,7 @@ struct MisOptions {
 };
 
 struct Problem {
-  const mix::MixtureSet* set = nullptr;  // the set serving omega_o (serving_set when Displace)
+  const mix::MixtureSet* set = nullptr;  // the set serving omega_o (MixtureSet::serving when Displace)
   std::shared_ptr<const mix::MixtureSet> serving;  // owns it in that case
   double theta_o = 0, phi_o = 0;
   QueryMixture query;

@@ -768,6 +768,22 @@ class MixtureSet {
     return mixed(piece, b.weight, b.count, b.rotate, theta_o, phi_o);
   }
 
+  // The mixture serving omega_o as a set of one slice (at() in the slice frame): queried at
+  // omega_o it gives this set's pdf, f and samples, without building at() for each call.
+  // For many queries at one omega_o of a set that interpolates by Displace.
+  MixtureSet serving(double theta_o, double phi_o) const {
+    MixtureSet one;
+    one.domain = domain;
+    one.azimuthal = azimuthal;
+    one.grid_theta_o = {theta_o};
+    one.grid_phi_o = {azimuthal ? 0.0 : phi_o};
+    one.slices = {at(theta_o, azimuthal ? 0.0 : phi_o)};
+    one.slices[0].theta_o = theta_o;
+    one.slices[0].phi_o = one.grid_phi_o[0];
+    one.prepare();
+    return one;
+  }
+
   // Product sampling of omega_o: the mixture serving it (at(), fitted to f J) times a mixture of the
   // lighting over the same (theta, phi) frame (fitted to L alone), so the result follows
   // f L J, the integrand over (theta, phi). Sample it with SliceMixture::sample, weight by
