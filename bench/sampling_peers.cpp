@@ -252,6 +252,8 @@ void bench_sampling(const SamplingPeersOptions& o, const std::string& device, bo
     YAML::Node node;
     try {
       node = YAML::LoadFile(f);
+    } catch (const YAML::BadFile&) {
+      throw ConfigError(f + ": cannot read scene file");
     } catch (const YAML::Exception& e) {
       throw ConfigError(f + ": " + e.what());
     }
