@@ -12,7 +12,8 @@
 # study's last run, on the machine provenance.csv names for its files, not timed end to
 # end); the longest studies are render (about 150 minutes; RENDER_FIBERS="polyester" renders
 # one fiber's sky and sky-map configs alone), search_before_after, render_room, search_compare
-# and rgb_refine.
+# and rgb_refine. SAMPLING_PEERS_SAMPLES sets the samples per sampler of sampling_peers
+# (default 65536; the CSV's `samples` column says what a run used).
 # Run from the repository root after scripts/setup, whose build has the peers the em study
 # runs (BSDFMIX_BUILD_BENCH, on by default; a build-bench/ build is used when present).
 #
@@ -63,7 +64,7 @@ studies=(
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
   "interpolation:6:no:blend against displace between slices, every other slice of the sampling_peers fits left out (interpolation.csv; runs sampling_peers first when out/sampling_peers/ lacks its fits)"
   "rgl_resolve:40:no:each RGL file at the default grid and at the grid that resolves its narrowest lobe, as a sampler against the file's own (rgl_resolve.csv)"
-  "sampling_peers:10:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f (sampling_peers.csv)"
+  "sampling_peers:60:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f, under constant light and the sky (with light sampling, MIS and the product), and the fiber presets (sampling_peers.csv)"
   "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
 )
 
@@ -324,9 +325,12 @@ run_study() {
     rgl_negative) $py bench/rgl_negative.py --csv $results/rgl_negative.csv ;;
     rgl_albedo) BSDFMIX_MEASURE_CSV=$results/rgl_albedo.csv build/tests/rgl_test "[.measure]" ;;
     sampling_peers)
-      # each shipped material at the default grid and fit settings (as rgb_stand_in), then
-      # 20 random view elevations, 2^16 samples per sampler (docs/sampling.md)
-      local w=out/sampling_peers f m
+      # each shipped RGL material and each fiber preset (f the table) at the default grid and
+      # fit settings (as rgb_stand_in); 20 random view elevations, constant light and the sky,
+      # 2^16 samples per sampler (SAMPLING_PEERS_SAMPLES sets fewer; docs/sampling.md,
+      # "Against the file's own sampler")
+      local w=out/sampling_peers f m sky=configs/scenes/sky.yaml
+      local args="--directions 20 --samples ${SAMPLING_PEERS_SAMPLES:-65536} --seed 1 --scene $sky --light-cache $w/light_mixtures"
       mkdir -p $w
       for f in data/rgl/*_rgb.bsdf; do
         m=$(basename "$f" _rgb.bsdf)
@@ -336,11 +340,20 @@ run_study() {
             $w/$m.h5 $w/${m}_mixture.h5 $w/${m}_fit.csv $w/${m}_search.csv > $w/$m.yaml
           $bin fit -q $w/$m.yaml > /dev/null
         fi
-        $bin bench sampling --rgl "$f" --table $w/$m.h5 --mixture $w/${m}_mixture.h5 \
-          --directions 20 --samples 65536 --seed 1 --csv $w/$m.csv
+        $bin bench sampling --rgl "$f" --table $w/$m.h5 --mixture $w/${m}_mixture.h5 $args --csv $w/$m.csv
       done
-      { head -n 1 $w/$m.csv; for f in data/rgl/*_rgb.bsdf; do tail -n +2 $w/$(basename "$f" _rgb.bsdf).csv; done; } \
-        > $results/sampling_peers.csv ;;
+      for m in silk cotton polyester wool; do
+        [ -f $w/$m.h5 ] || $bin generate fiber -q --preset $m -o $w/$m.h5
+        if [ ! -f $w/${m}_mixture.h5 ]; then
+          printf 'table: %s\nfit:\n  output: %s\n  report: %s\n  search_report: %s\n' \
+            $w/$m.h5 $w/${m}_mixture.h5 $w/${m}_fit.csv $w/${m}_search.csv > $w/$m.yaml
+          $bin fit -q $w/$m.yaml > /dev/null
+        fi
+        $bin bench sampling --table $w/$m.h5 --mixture $w/${m}_mixture.h5 $args --csv $w/$m.csv
+      done
+      { head -n 1 $w/silk.csv
+        for f in data/rgl/*_rgb.bsdf; do tail -n +2 $w/$(basename "$f" _rgb.bsdf).csv; done
+        for m in silk cotton polyester wool; do tail -n +2 $w/$m.csv; done; } > $results/sampling_peers.csv ;;
     interpolation)
       ls out/sampling_peers/*_mixture.h5 > /dev/null 2>&1 || run_study sampling_peers
       $py bench/interpolation.py --csv $results/interpolation.csv ;;

@@ -48,7 +48,8 @@ The tables (NAME: CSV):
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
                        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
-  sampling_peers       bench/results/sampling_peers.csv (docs/sampling.md, "Against the file's own sampler")
+  sampling_peers, sampling_peers_sky, sampling_peers_fiber
+                       bench/results/sampling_peers.csv (docs/sampling.md, "Against the file's own sampler")
   compact_rivals, compact_rivals_budgets, compact_rivals_cost, compact_rivals_image
                        bench/results/compact_rivals{,_image}.csv (docs/fitting.md, "The stand-in against its
                        rivals"), by scripts/compact_tables.py
@@ -478,33 +479,106 @@ def converge_light():
                                    for m in ("polyester", "cotton", "satin", "paper")])
 
 
-def sampling_peers():
-    """Per material: each sampler's variance per sample over the RGL file's own sampler's,
-    median and largest over the views; the largest weights; the bytes each needs."""
+def _peers(lighting):
+    """sampling_peers.csv's rows under `lighting`: material -> view -> sampler -> row."""
     by = {}
     for r in rows("sampling_peers.csv"):
-        by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+        if r.get("lighting", "constant") == lighting:
+            by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+    return by
+
+
+def _median(x):
+    x = sorted(x)
+    return x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
+
+
+def _ratio_cell(views, s, ref):
+    """The variance per sample of sampler s over ref's, median over the views (largest)."""
+    x = [float(v[s]["relvar"]) / float(v[ref]["relvar"]) for v in views]
+    return "%.3g (%.3g)" % (_median(x), max(x))
+
+
+def sampling_peers():
+    """Per RGL material under constant light: each sampler's variance per sample over the
+    file's own sampler's, median and largest over the views; the largest weights; the bytes."""
+    by = {m: v for m, v in _peers("constant").items() if all("rgl" in x for x in v.values())}
     out = ["| material | file's own sampler: variance per sample, median (largest) | mixture alone / file's, median "
            "(largest) | mixture + 10% uniform / file's | table CDF / file's | uniform / file's | largest weight / I: "
            "file's, mixture + 10% uniform | bytes: mixture, file, table |", "|---|---|---|---|---|---|---|---|"]
     f = lambda x: "%.3g" % x
     for mat in sorted(by):
         views = list(by[mat].values())
-        rv = lambda v, s: float(v[s]["relvar"])
-        ratio = lambda s: sorted(rv(v, s) / rv(v, "rgl") for v in views)
-        med = lambda x: x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
-        cell = lambda x: "%s (%s)" % (f(med(x)), f(max(x)))
-        own = sorted(rv(v, "rgl") for v in views)
+        own = [float(v["rgl"]["relvar"]) for v in views]
         wmax = lambda s: max(float(v[s]["max_weight_over_integral"]) for v in views)
         b = views[0]
-        out.append("| %s | %s | %s | %s | %s | %s | %s, %s | %s, %s, %s |" % (
-            mat, cell(own), cell(ratio("is_mixture")), cell(ratio("mis_mixture")), cell(ratio("cdf_table")),
-            cell(ratio("uniform")), f(wmax("rgl")), f(wmax("mis_mixture")), b["is_mixture"]["bytes"], b["rgl"]["bytes"],
-            b["cdf_table"]["bytes"]))
+        out.append("| %s | %s (%s) | %s | %s | %s | %s | %s, %s | %s, %s, %s |" % (
+            mat, f(_median(own)), f(max(own)), _ratio_cell(views, "is_mixture", "rgl"),
+            _ratio_cell(views, "mis_mixture", "rgl"), _ratio_cell(views, "cdf_table", "rgl"),
+            _ratio_cell(views, "uniform", "rgl"), f(wmax("rgl")), f(wmax("mis_mixture")), b["is_mixture"]["bytes"],
+            b["rgl"]["bytes"], b["cdf_table"]["bytes"]))
     return out
 
 
-TABLES = {"sampling_peers": sampling_peers, "rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
+_SKY_SAMPLERS = [("mis_light_rgl", "`mis_light_rgl`: light 50 % + the file's warps"),
+                 ("rgl", "`is_rgl`: the file's warps alone"),
+                 ("light", "`light`: light sampling alone"),
+                 ("mis_light_cdf", "`mis_light_cdf`: light 50 % + table CDF"),
+                 ("mis_light_gmm", "`mis_light_gmm`: light 50 % + mixture 45 % + uniform 5 %"),
+                 ("product", "`product`: mixture x lighting mixture"),
+                 ("mis_product", "`mis_product`: product + light + uniform"),
+                 ("is_mixture", "`is_tab`: the mixture alone"),
+                 ("mis_mixture", "`mis_tab`: mixture + 10 % uniform"),
+                 ("cdf_table", "`cdf_tab`: the table CDF"),
+                 ("uniform", "uniform")]
+
+
+def sampling_peers_sky():
+    """Per RGL material under the sky: each sampler's variance per sample over mis_light_rgl's,
+    median (largest) over the views; mis_light_rgl's own variance per sample first."""
+    by = {m: v for m, v in _peers("sky").items() if all("mis_light_rgl" in x for x in v.values())}
+    mats = sorted(by)
+    out = ["| sampler | " + " | ".join(mats) + " |", "|---" * (len(mats) + 1) + "|"]
+    for s, label in _SKY_SAMPLERS:
+        if s == "mis_light_rgl":
+            cells = []
+            for m in mats:
+                x = [float(v[s]["relvar"]) for v in by[m].values()]
+                cells.append("%.3g (%.3g)" % (_median(x), max(x)))
+            out.append("| %s: variance per sample, median (largest) | %s |" % (label, " | ".join(cells)))
+        else:
+            out.append("| %s / `mis_light_rgl` | %s |" % (
+                label, " | ".join(_ratio_cell(list(by[m].values()), s, "mis_light_rgl") for m in mats)))
+    return out
+
+
+def sampling_peers_fiber():
+    """Per fiber preset (f the table): each sampler's variance per sample, median (largest)
+    over the views, under constant light and the sky; mis_tab over cdf_tab under the sky."""
+    const, sky = _peers("constant"), _peers("sky")
+    fibers = [m for m in ("silk", "cotton", "polyester", "wool") if m in const and m in sky]
+    out = ["| lighting | sampler | " + " | ".join(fibers) + " |", "|---|---" + "|---" * len(fibers) + "|"]
+    for lighting, by in (("constant", const), ("sky", sky)):
+        for s, label in _SKY_SAMPLERS:
+            if s not in next(iter(by[fibers[0]].values())):
+                continue
+            cells = []
+            for m in fibers:
+                x = [float(v[s]["relvar"]) for v in by[m].values()]
+                cells.append("%.3g (%.3g)" % (_median(x), max(x)))
+            out.append("| %s | %s | %s |" % (lighting, label, " | ".join(cells)))
+    out.append("| sky | `mis_tab` / `cdf_tab` | %s |" % " | ".join(
+        _ratio_cell(list(sky[m].values()), "mis_mixture", "cdf_table") for m in fibers))
+    out.append("| sky | `mis_product` / `cdf_tab` | %s |" % " | ".join(
+        _ratio_cell(list(sky[m].values()), "mis_product", "cdf_table") for m in fibers))
+    out.append("| | bytes: mixture, table | %s |" % " | ".join(
+        "%s, %s" % (next(iter(const[m].values()))["is_mixture"]["bytes"],
+                    next(iter(const[m].values()))["cdf_table"]["bytes"]) for m in fibers))
+    return out
+
+
+TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers_sky,
+          "sampling_peers_fiber": sampling_peers_fiber, "rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
           "render_cloth": render_cloth, "render_room": render_room, "render_room_reading": render_room_reading,

@@ -115,8 +115,10 @@ def constant():
 def peers():
     """Per material: the mixture's variance per sample over the RGL file's own sampler's, median over the views."""
     by = {}
-    for r in rows("sampling_peers.csv"):
-        by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+    for r in rows("sampling_peers.csv"):  # the RGL materials under constant light
+        if r.get("lighting", "constant") == "constant":
+            by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+    by = {m: v for m, v in by.items() if all("rgl" in x for x in v.values())}
     ratio = {}
     for mat, views in by.items():
         x = sorted(float(v["is_mixture"]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
