@@ -96,6 +96,8 @@ void TableBsdf::set_mixture(const mix::MixtureSet& set) {
   has_set_ = !set_.slices.empty();
   set_has_rgb_ = false;
   for (const auto& sl : set_.slices) set_has_rgb_ = set_has_rgb_ || sl.has_rgb;
+  factors_.assign(set_.slices.size(), ProductFactor{});
+  for (std::size_t k = 0; k < set_.slices.size(); ++k) factors_[k].assign(set_.slices[k]);
   fitted_.assign(meta_.theta_o.size(), -1);
   for (std::size_t k = 0; k < set_.slices.size(); ++k) {
     std::size_t best = 0;
@@ -205,8 +207,7 @@ double TableBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
   return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(meta_.domain, theta, phi);
 }
 
-mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& lighting,
-                                     const mix::ProductOptions& o) const {
+int TableBsdf::product_slice(double theta_o) const {
   if (!has_set_) throw InputError("render: product sampling needs the mixtures");
   // the nearer of the two slices around theta_o when it is fitted (half the pairs of the
   // blend; the product's pdf is its own, so this costs variance, never bias)
@@ -214,8 +215,16 @@ mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& li
   double w;
   bracket(theta_o, i0, i1, w);
   const std::size_t near = w < 0.5 ? i0 : i1;
-  const int k = fitted_[near] >= 0 ? fitted_[near] : nearest_fitted(theta_o);
-  return mix::product(set_.slices[std::size_t(k)], 0.0, lighting, o);
+  return fitted_[near] >= 0 ? fitted_[near] : nearest_fitted(theta_o);
+}
+
+mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& lighting,
+                                     const mix::ProductOptions& o) const {
+  return mix::product(set_.slices[std::size_t(product_slice(theta_o))], 0.0, lighting, o);
+}
+
+const ProductFactor& TableBsdf::product_factor(double theta_o) const {
+  return factors_[std::size_t(product_slice(theta_o))];
 }
 
 void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double& theta, double& phi,

@@ -20,6 +20,7 @@
 #include "core/color.hpp"
 #include "io/table.hpp"
 #include "render/cloth.hpp"
+#include "render/fast_product.hpp"
 #include "render/local_axes.hpp"
 #include "sampling/sampling.hpp"
 
@@ -63,6 +64,9 @@ class TableBsdf {
   // same (theta, phi) of the hit's frame: the header's product, pruned by `o`.
   // Throws std::invalid_argument when the two do not overlap.
   mix::SliceMixture product(double theta_o, const mix::SliceMixture& lighting, const mix::ProductOptions& o) const;
+  // The same slice's mixture as the renderer's per-vertex product reads it
+  // (render/fast_product.hpp).
+  const ProductFactor& product_factor(double theta_o) const;
 
  private:
   void bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const;
@@ -79,7 +83,9 @@ class TableBsdf {
   std::vector<double> cell_w_;    // per theta_i row: integral of J over a cell
   double th0_ = 0, dth_ = 0, ph0_ = 0, dph_ = 0, to0_ = 0, dto_ = 0;
   double uniform_pdf_ = 0;       // uniform sampling's density: 1 / (4 pi) or 1 / (2 pi)
+  int product_slice(double theta_o) const;
   mix::MixtureSet set_;
+  std::vector<ProductFactor> factors_;  // per slice of set_
   bool has_set_ = false;
   bool set_has_rgb_ = false;      // some slice of the mixtures has rgb amplitudes
   std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
