@@ -36,6 +36,8 @@ BsdfSampler sampler_of(PathEstimator e) {
     case PathEstimator::GuidedProduct: return BsdfSampler::Mixture;
     case PathEstimator::CdfTab:
     case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
+    case PathEstimator::IsRgl:
+    case PathEstimator::MisLightRgl: return BsdfSampler::Rgl;
   }
   return BsdfSampler::Uniform;
 }

@@ -4,7 +4,9 @@
 // slices, the nearest cell in (theta_i, phi)) or from the mixture stand-in (thesis eqs.
 // 3.8-3.11), and the directions drawn by the same samplers as the convergence study:
 // uniform, the mixture with a defensive uniform share (the header's MixtureSet::sample
-// and pdf_omega, exactly what the study's CPU reference calls), and the table CDF. Angles
+// and pdf_omega, exactly what the study's CPU reference calls), the table CDF, and for a
+// measured surface imported from an RGL file the file's own warps (tables/rgl_brdf.hpp,
+// as Mitsuba 3 and pbrt-v4 sample it; f stays the table's or the stand-in's). Angles
 // in the local frame of the hit, phi from the plane of omega_o (so phi_o = 0, and the
 // tables' phi = phi_i - phi_o is phi itself): for a fiber sin(theta) = dot(w, tangent),
 // L_o = integral L_i f d(omega); for a surface cos(theta) = dot(w, normal),
@@ -25,10 +27,12 @@
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
+
+class RglBrdf;
 namespace render {
 
 enum class FSource { Table, StandIn };
-enum class BsdfSampler { Uniform, Mixture, TableCdf };
+enum class BsdfSampler { Uniform, Mixture, TableCdf, Rgl };
 
 class TableBsdf {
  public:
@@ -36,6 +40,10 @@ class TableBsdf {
   // samplers, no stand-in) until set_mixture.
   explicit TableBsdf(const std::string& table_path);
   void set_mixture(const mix::MixtureSet& set);
+  // The RGL file the (hemisphere) table was imported from: BsdfSampler::Rgl samples the
+  // light direction with its warps. `rgl` must outlive this object; nullptr: none.
+  void set_rgl(const RglBrdf* rgl);
+  bool has_rgl() const { return rgl_ != nullptr; }
 
   const TableMeta& meta() const { return meta_; }
   std::size_t table_bytes() const { return f_.size() * sizeof(float); }
@@ -89,6 +97,7 @@ class TableBsdf {
   bool has_set_ = false;
   bool set_has_rgb_ = false;      // some slice of the mixtures has rgb amplitudes
   std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
+  const RglBrdf* rgl_ = nullptr;  // BsdfSampler::Rgl's warps
 };
 
 // Surface frame at a hit: normal n, and the plane of omega_o (phi = 0 along x).
