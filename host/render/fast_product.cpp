@@ -164,7 +164,7 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
   }
   double total = 0;
   for (float c : cand_) total += double(c);
-  if (!(total > 0)) return false;
+  if (!(total > 0) || !std::isfinite(total)) return false;  // no overlap, or a degenerate pair: light sampling alone
   // 3. The pairs kept: the heaviest, all but at most 1 - keep of the mass, found without
   // sorting. Each candidate falls into a bucket by its float exponent below the heaviest
   // (a factor 2 per bucket); whole buckets are dropped from the lightest up while what
