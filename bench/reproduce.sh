@@ -174,6 +174,10 @@ run_study() {
         $bin compare -q out/render_$m/${m}_mixture.h5 out/render_$m/${m}_table.h5 --csv $results/render/${m}_skymap/compare.csv
         cp out/render_$m/skymap/figures/stand_in.png docs/images/render_${m}_skymap_stand_in.png
       done
+      for m in satin iris; do  # the cost of a vertex per estimator, interleaved, one thread
+        $bin render --no-figures configs/render/${m}_skymap_vertex_cost.yaml
+        cp out/render_$m/skymap_vertex_cost/render.csv $results/render/${m}_skymap/vertex_cost.csv
+      done
       rm -f out/render_polyester/polyester_small_mixture.h5
       $bin render configs/render/polyester_sky_small.yaml
       cp out/render_polyester/sky_small/render.csv out/render_polyester/sky_small/render.json $results/render/polyester_sky_small/

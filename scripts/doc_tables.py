@@ -23,6 +23,8 @@ The tables (NAME: CSV):
   tails                bench/results/tails.csv (docs/fitting.md, the same section)
   parameterization     bench/results/parameterization.csv (docs/fitting.md, "The pole and the border")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
+  render_rgl           bench/results/render/<material>_skymap/render.csv (docs/render.md, "Measured
+                       materials"): the RGL file's own sampler against the mixtures and the table CDF
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_tables.py
   render_reading       the same renders' reading under that table, by scripts/render_tables.py
   render_room          bench/results/render/<fiber>_room/ (docs/render.md, "Measured"), by scripts/room_tables.py
@@ -222,6 +224,27 @@ def render_measured():
         out.append("| %s | %.0f KiB | %.2f%% / %.2f%% | %.2f%% | %s |" % (
             label, j["mixture_bytes"] / 1024, 100 * j["stand_in_difference"], 100 * j["stand_in_difference_4x4"],
             100 * j["table_noise_4x4"], " / ".join(cells)))
+    return out
+
+
+def render_rgl():
+    """The RGL spheres under the sky map: each estimator's relative MSE at equal samples and at
+    equal time (its samples per pixel), against mis_light_rgl's at equal time, and its ns per vertex."""
+    out = ["| material | estimator | rel MSE, equal samples | rel MSE, equal time (spp) | equal time / mis_light_rgl | "
+           "ns per vertex | ns per vertex / mis_light_cdf |", "|---|---|---|---|---|---|---|"]
+    for folder, label in (("satin_skymap", "satin_rosaline"), ("iris_skymap", "cc_iris_purple_gem"),
+                          ("paper_skymap", "paper_white"), ("sunflower_skymap", "cg_sunflower")):
+        rs = rows(os.path.join("render", folder, "render.csv"))
+        spp = {r["estimator"]: r for r in rs if r["mode"] == "equal_spp"}
+        tim = {r["estimator"]: r for r in rs if r["mode"] == "equal_time"}
+        if "mis_light_rgl" not in tim:
+            continue
+        base_t, base_ns = float(tim["mis_light_rgl"]["rel_mse"]), float(spp["mis_light_cdf"]["ns_per_vertex"])
+        for e in ("mis_light_rgl", "is_rgl", "mis_light_cdf", "mis_light_gmm", "mis_product"):
+            a, b = spp[e], tim[e]
+            out.append("| %s | `%s` | %.3g | %.3g (%s) | %.2fx | %.0f | %.2fx |" % (
+                label, e, float(a["rel_mse"]), float(b["rel_mse"]), b["spp"], float(b["rel_mse"]) / base_t,
+                float(a["ns_per_vertex"]), float(a["ns_per_vertex"]) / base_ns))
     return out
 
 
@@ -581,6 +604,7 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "sampling_peers_fiber": sampling_peers_fiber, "rgb_stand_in": rgb_stand_in, "rgb_copies": rgb_copies, "rgb_refine": rgb_refine, "catalog": catalog, "scale": scale,
           "scale_traffic": scale_traffic, "stand_in_smallest": stand_in_smallest,
           "search_before_after": search_before_after, "render_measured": render_measured,
+          "render_rgl": render_rgl,
           "render_cloth": render_cloth, "render_room": render_room, "render_room_reading": render_room_reading,
           "converge": converge, "converge_light": converge_light,
           "readme_measured": readme_measured, "estimator_choice": estimator_choice, "failure_map": failure_map, "stability": stability,

@@ -461,7 +461,8 @@ def stand_in(rows, images, meta, exposure, out):
 KIND = {"uniform": "uniform", "mis_tab": "mixture", "cdf_tab": "table CDF",
         "mis_light_cdf": "table CDF + light samples", "mis_light_gmm": "mixture + light samples",
         "mis_product": "mixture x lighting + light samples", "guided": "learnt radiance + light samples",
-        "guided_product": "learnt radiance x mixture + light samples"}
+        "guided_product": "learnt radiance x mixture + light samples", "is_rgl": "the RGL file's warps",
+        "mis_light_rgl": "the RGL file's warps + light samples"}
 WITH_MIXTURE = {"mis_tab", "mis_light_gmm", "mis_product", "guided", "guided_product"}
 
 

@@ -3,7 +3,9 @@
 // (at random fiber and surface frames), the product of a BSDF mixture with it, sampled and
 // taken to world directions as the renderer does, follows the density the renderer
 // evaluates (Pearson chi-square over equal-area world bins; a density 10 % off is caught),
-// broad components are left out, and the sky's fit over world directions finds its sun.
+// broad components are left out, the renderer's per-vertex product (render/fast_product.hpp)
+// samples its own density and agrees with the header's, and the sky's fit over world
+// directions finds its sun.
 // labels: render sample
 #include <catch2/catch.hpp>
 
@@ -17,6 +19,7 @@
 
 #include "config/config.hpp"
 #include "core/progress.hpp"
+#include "render/fast_product.hpp"
 #include "render/light_carry.hpp"
 #include "render/world_lighting.hpp"
 #include "scene/scene.hpp"
@@ -154,24 +157,91 @@ TEST_CASE("broad components are left out of the carried lighting", "[render][sam
   CHECK(compact[0].mu_t == Approx(0.6));
 }
 
-TEST_CASE("the carried product, sampled as the renderer does, follows its density in world directions",
-          "[render][sample]") {
-  const std::vector<mix::Gaussian> world = {gauss(0.8, 0.9, 0.6, 0.05, 0.07, 0.2), gauss(0.2, -0.3, -2.0, 0.2, 0.3, -0.3)};
+namespace {
+
+// Pearson chi-square of `n` samples of a product drawn as the renderer does (taken to world
+// directions), over 20 x 40 equal-area world bins, against its density, and against the
+// density 10 % off along z (which must be rejected).
+template <class Sampler, class Pdf>
+void check_world_samples(const char* what, std::uint32_t k, const LocalAxes& f, std::size_t components,
+                         const Sampler& sample, const Pdf& pdf_local) {
   const int nz = 20, np = 40;
   const std::size_t n = 200000;
+  const Domain d = f.domain;
+  auto pdf = [&](const Vec3& w) {
+    double th, ph;
+    local_angles(f, w, th, ph);
+    return pdf_local(th, ph);
+  };
+  std::vector<double> obs(std::size_t(nz * np + 1), 0.0), expct(obs.size(), 0.0), skew(obs.size(), 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    double v[4];
+    mix::uniforms(kSeed, 10 + k, i, v);
+    const mix::Sample s = sample(v);
+    if (!s.valid) {
+      obs.back() += 1;
+      continue;
+    }
+    const Vec3 w = local_direction(f, s.theta, s.phi);
+    const int a = std::clamp(int((w[2] + 1) / 2 * nz), 0, nz - 1);
+    const int b = std::clamp(int((std::atan2(w[1], w[0]) + kPi) / (2 * kPi) * np), 0, np - 1);
+    obs[std::size_t(a * np + b)] += 1;
+  }
+  // expected: the density over each equal-area bin (z uniform, phi uniform), 12 x 12 points;
+  // `skew`: the same with the density 10 % off along z, which the test must reject
+  double mass = 0, mass_skew = 0;
+  const double bin = 4 * kPi / double(nz * np);
+  for (int a = 0; a < nz; ++a)
+    for (int b = 0; b < np; ++b) {
+      double acc = 0, acc_skew = 0;
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) {
+          const double z = -1 + 2 * (a + (i + 0.5) / 12) / nz, ph = -kPi + 2 * kPi * (b + (j + 0.5) / 12) / np;
+          const double r = std::sqrt(std::max(0.0, 1 - z * z));
+          const double p = pdf({r * std::cos(ph), r * std::sin(ph), z});
+          acc += p;
+          acc_skew += p * (1 + 0.1 * z);
+        }
+      expct[std::size_t(a * np + b)] = acc / 144 * bin * double(n);
+      skew[std::size_t(a * np + b)] = acc_skew / 144 * bin * double(n);
+      mass += acc / 144 * bin;
+      mass_skew += acc_skew / 144 * bin;
+    }
+  expct.back() = std::max(0.0, 1 - mass) * double(n);
+  skew.back() = std::max(0.0, 1 - mass_skew) * double(n);
+  const test::ChiSquare c = test::pearson(obs, expct), cs = test::pearson(obs, skew);
+  std::printf("light_carry_test: %s, frame %u (%s, %zu components): chi2 %.1f, dof %d, p-value %.4f; 10%% off: p-value %.2g\n",
+              what, k, d == Domain::Fiber ? "fiber" : "surface", components, c.stat, c.dof, c.p, cs.p);
+  INFO(what << ", frame " << k << ": chi2 " << c.stat << " dof " << c.dof);
+  CHECK(c.p > 0.001);
+  CHECK(cs.p < 1e-6);
+}
+
+// The test BSDF mixture of frame k: a lobe at the specular cone or mirror and a broad one.
+mix::SliceMixture test_bsdf(std::uint32_t k, Domain d) {
+  double u[4];
+  mix::uniforms(kSeed, 9, k, u);
+  const double to = d == Domain::Fiber ? -1.2 + 2.4 * u[0] : 1.2 * u[0];
+  mix::SliceMixture bsdf;
+  bsdf.components = {gauss(0.6, d == Domain::Fiber ? -to : to, d == Domain::Fiber ? 0.0 : kPi - 0.01, 0.15, 0.8, 0.1),
+                     gauss(0.4, d == Domain::Fiber ? 0.0 : 0.7, 0.5, 0.7, 2.0, 0.0)};
+  bsdf.prepare();
+  return bsdf;
+}
+
+const std::vector<mix::Gaussian> kTestWorld = {gauss(0.8, 0.9, 0.6, 0.05, 0.07, 0.2),
+                                               gauss(0.2, -0.3, -2.0, 0.2, 0.3, -0.3)};
+
+}  // namespace
+
+TEST_CASE("the carried product, sampled as the renderer does, follows its density in world directions",
+          "[render][sample]") {
   int checked = 0;
   for (std::uint32_t k = 0; k < 8; ++k) {
     const Domain d = k < 6 ? Domain::Fiber : Domain::Hemisphere;
     const LocalAxes f = random_frame(100 + k, d);
-    // a BSDF mixture: a lobe at the specular cone or mirror and a broad one
-    double u[4];
-    mix::uniforms(kSeed, 9, k, u);
-    const double to = d == Domain::Fiber ? -1.2 + 2.4 * u[0] : 1.2 * u[0];
-    mix::SliceMixture bsdf;
-    bsdf.components = {gauss(0.6, d == Domain::Fiber ? -to : to, d == Domain::Fiber ? 0.0 : kPi - 0.01, 0.15, 0.8, 0.1),
-                       gauss(0.4, d == Domain::Fiber ? 0.0 : 0.7, 0.5, 0.7, 2.0, 0.0)};
-    bsdf.prepare();
-    const mix::SliceMixture carried = carry_lighting(world, f);
+    const mix::SliceMixture bsdf = test_bsdf(k, d);
+    const mix::SliceMixture carried = carry_lighting(kTestWorld, f);
     if (carried.components.empty()) continue;
     mix::SliceMixture prod;
     try {
@@ -179,55 +249,62 @@ TEST_CASE("the carried product, sampled as the renderer does, follows its densit
     } catch (const std::invalid_argument&) {
       continue;
     }
-    // the renderer's density of a world direction: the product's pdf_omega at its local angles
-    auto pdf = [&](const Vec3& w) {
-      double th, ph;
-      local_angles(f, w, th, ph);
-      return prod.pdf_omega(d, th, ph);
-    };
-    std::vector<double> obs(std::size_t(nz * np + 1), 0.0), expct(obs.size(), 0.0), skew(obs.size(), 0.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      double v[4];
-      mix::uniforms(kSeed, 10 + k, i, v);
-      const mix::Sample s = prod.sample(d, v[0], v[1], v[2]);
-      if (!s.valid) {
-        obs.back() += 1;
-        continue;
-      }
-      const Vec3 w = local_direction(f, s.theta, s.phi);
-      const int a = std::clamp(int((w[2] + 1) / 2 * nz), 0, nz - 1);
-      const int b = std::clamp(int((std::atan2(w[1], w[0]) + kPi) / (2 * kPi) * np), 0, np - 1);
-      obs[std::size_t(a * np + b)] += 1;
-    }
-    // expected: the density over each equal-area bin (z uniform, phi uniform), 12 x 12 points;
-    // `skew`: the same with the density 10 % off along z, which the test must reject
-    double mass = 0, mass_skew = 0;
-    const double bin = 4 * kPi / double(nz * np);
-    for (int a = 0; a < nz; ++a)
-      for (int b = 0; b < np; ++b) {
-        double acc = 0, acc_skew = 0;
-        for (int i = 0; i < 12; ++i)
-          for (int j = 0; j < 12; ++j) {
-            const double z = -1 + 2 * (a + (i + 0.5) / 12) / nz, ph = -kPi + 2 * kPi * (b + (j + 0.5) / 12) / np;
-            const double r = std::sqrt(std::max(0.0, 1 - z * z));
-            const double p = pdf({r * std::cos(ph), r * std::sin(ph), z});
-            acc += p;
-            acc_skew += p * (1 + 0.1 * z);
-          }
-        expct[std::size_t(a * np + b)] = acc / 144 * bin * double(n);
-        skew[std::size_t(a * np + b)] = acc_skew / 144 * bin * double(n);
-        mass += acc / 144 * bin;
-        mass_skew += acc_skew / 144 * bin;
-      }
-    expct.back() = std::max(0.0, 1 - mass) * double(n);
-    skew.back() = std::max(0.0, 1 - mass_skew) * double(n);
-    const test::ChiSquare c = test::pearson(obs, expct), cs = test::pearson(obs, skew);
-    std::printf("light_carry_test: frame %u (%s, %zu components): chi2 %.1f, dof %d, p-value %.4f; 10%% off: p-value %.2g\n",
-                k, d == Domain::Fiber ? "fiber" : "surface", prod.components.size(), c.stat, c.dof, c.p, cs.p);
-    INFO("frame " << k << ": chi2 " << c.stat << " dof " << c.dof);
-    CHECK(c.p > 0.001);
-    CHECK(cs.p < 1e-6);
+    check_world_samples(
+        "header product", k, f, prod.components.size(), [&](const double* v) { return prod.sample(d, v[0], v[1], v[2]); },
+        [&](double th, double ph) { return prod.pdf_omega(d, th, ph); });
     ++checked;
+  }
+  CHECK(checked >= 6);
+}
+
+TEST_CASE("the renderer's per-vertex product (float, reused buffers) samples its own density, the header's product",
+          "[render][sample]") {
+  // FastProduct, as mis_product builds it at every vertex: a chi-square of its samples
+  // against its pdf_omega, its density equal to that of its components as header
+  // Gaussians (the float parameters are what is sampled), and close to the header's
+  // product of the same two mixtures (the same pairs kept: the pruning bound drops only
+  // what the header drops too).
+  const CarrySource source(kTestWorld);
+  FastProduct fp;  // one object for every frame: its buffers are reused
+  int checked = 0;
+  for (std::uint32_t k = 0; k < 8; ++k) {
+    const Domain d = k < 6 ? Domain::Fiber : Domain::Hemisphere;
+    const LocalAxes f = random_frame(100 + k, d);
+    const mix::SliceMixture bsdf = test_bsdf(k, d);
+    ProductFactor factor;
+    factor.assign(bsdf);
+    const mix::ProductOptions o{0.99, 32};
+    if (!fp.build(factor, source, f, o)) continue;
+    const mix::SliceMixture own = fp.mixture();
+    const mix::SliceMixture header = mix::product(bsdf, 0.0, carry_lighting(kTestWorld, f), o);
+    double worst_own = 0, worst_header = 0;
+    for (std::uint32_t i = 0; i < 2000; ++i) {
+      double v[4];
+      mix::uniforms(kSeed, 50 + k, i, v);
+      const double th = d == Domain::Fiber ? -1.5 + 3.0 * v[0] : 1.5 * v[0], ph = -kPi + 2 * kPi * v[1];
+      const double p = fp.pdf_omega(d, th, ph), po = own.pdf_omega(d, th, ph), ph_ = header.pdf_omega(d, th, ph);
+      const double scale = 1e-3 * std::max(1.0, po);  // relative, and absolute where the density is small
+      worst_own = std::max(worst_own, std::abs(p - po) / std::max(po, scale));
+      worst_header = std::max(worst_header, std::abs(p - ph_) / std::max(ph_, scale));
+    }
+    std::printf("light_carry_test: per-vertex product, frame %u: %zu components (header %zu); density against its own "
+                "Gaussians within %.2g, against the header's product within %.2g\n",
+                k, fp.size(), header.components.size(), worst_own, worst_header);
+    CHECK(worst_own < 1e-4);
+    // the header sums images out to 9 sigma, this product weighs pairs at the nearest three;
+    // on a surface it also leaves out what is far below the horizon
+    if (d == Domain::Fiber) CHECK(worst_header < 0.02);
+    check_world_samples(
+        "per-vertex product", k, f, fp.size(), [&](const double* v) { return fp.sample(d, v[0], v[1], v[2]); },
+        [&](double th, double ph) { return fp.pdf_omega(d, th, ph); });
+    ++checked;
+    if (k % 3 == 0) {  // cut to two components: the selection, and still the density of what is sampled
+      REQUIRE(fp.build(factor, source, f, mix::ProductOptions{0.99, 2}));
+      CHECK(fp.size() <= 2);
+      check_world_samples(
+          "per-vertex product cut to 2", k, f, fp.size(), [&](const double* v) { return fp.sample(d, v[0], v[1], v[2]); },
+          [&](double th, double ph) { return fp.pdf_omega(d, th, ph); });
+    }
   }
   CHECK(checked >= 6);
 }

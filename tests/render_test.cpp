@@ -3,7 +3,8 @@
 // independent seeds agree), the table lookup against the fiber generator, the renderer's
 // samplers against the study's (the header's MixtureSet::sample and pdf_omega) and their
 // pdfs' mass, the stand-in render against the table render, reproducibility for a seed
-// whatever the thread count, and bad render configs rejected with one line.
+// whatever the thread count, bad render configs rejected with one line, and a measured
+// sphere sampled with its RGL file's warps (is_rgl, mis_light_rgl) against mis_light_cdf.
 // labels: render
 #include <catch2/catch.hpp>
 
@@ -19,8 +20,12 @@
 #include "device/device.hpp"
 #include "render/guide_training.hpp"
 #include "render/integrator.hpp"
+#include "render/render_run.hpp"
+#include "render/surface.hpp"
 #include "sweep/sweep.hpp"
 #include "tables/fiber_generator.hpp"
+#include "tables/rgl_brdf.hpp"
+#include "tables/rgl_import.hpp"
 
 using namespace bsdfmix;
 using namespace bsdfmix::render;
@@ -810,4 +815,133 @@ TEST_CASE("a measured channel's cells below zero reflect nothing", "[render][col
     }
   CHECK(zero == meta.cells_per_slice() / 2);  // the negative half, read as 0
   CHECK(positive == meta.cells_per_slice() / 2);
+}
+
+namespace {
+
+// satin_rosaline (data/rgl/) imported on a small grid (8 theta_o x 30 x 60 cells), kept in
+// the temp directory, and the file itself.
+std::string small_rgl_table(const std::string& rgl) {
+  const std::string path = (temp_dir() / "satin_rgl_small_table.h5").string();
+  if (!fs::exists(path)) {
+    RglImportOptions opt;
+    opt.file = rgl;
+    opt.n_theta_o = 8;
+    opt.n_theta_i = 30;
+    opt.n_phi_i = 60;
+    opt.threads = 2;
+    import_rgl_table(opt, path);
+  }
+  return path;
+}
+
+const std::string kSatin = std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/satin_rosaline_rgb.bsdf";
+
+}  // namespace
+
+TEST_CASE("the RGL sampler of a measured surface: its pdf is the warps' density where it samples", "[render][rgl]") {
+  const RglBrdf rgl(kSatin);
+  TableBsdf bsdf(small_rgl_table(kSatin));
+  bsdf.set_rgl(&rgl);
+  std::size_t valid = 0;
+  double worst = 0;
+  for (std::uint32_t i = 0; i < 4000; ++i) {
+    double u[4];
+    mix::uniforms(77, 1, i, u);
+    const double theta_o = 1.45 * u[0] + 0.02;
+    double th = 0, ph = 0, pdf = 0;
+    mix::uniforms(77, 2, i, u);
+    bsdf.sample(BsdfSampler::Rgl, theta_o, u, th, ph, pdf);
+    if (!(pdf > 0)) continue;
+    ++valid;
+    CHECK(th >= 0);
+    CHECK(th <= kPi / 2);
+    worst = std::max(worst, std::abs(bsdf.pdf(BsdfSampler::Rgl, theta_o, th, ph) / pdf - 1));
+  }
+  std::printf("render_test: RGL sampler: %zu of 4000 samples valid, pdf() within %.2g of the sampler's density\n", valid,
+              worst);
+  CHECK(valid > 3600);
+  CHECK(worst < 1e-6);
+  // a fiber table has no RGL file
+  TableBsdf fiber(small_table("silk"));
+  CHECK_THROWS_WITH(fiber.set_rgl(&rgl), Catch::Contains("measured surface"));
+}
+
+TEST_CASE("is_rgl and mis_light_rgl on a measured sphere agree with mis_light_cdf over seeds", "[render][rgl]") {
+  // f is the table's for every estimator: only the sampler differs, so the image means agree.
+  Progress::set_enabled(false);
+  const RglBrdf rgl(kSatin);
+  TableBsdf bsdf(small_rgl_table(kSatin));
+  bsdf.set_rgl(&rgl);
+  const SurfaceMesh sphere = make_sphere({0, 0, 0.29}, 0.35, 32, 64, "test sphere");
+  GroundPlane g;
+  g.enabled = true;
+  g.z = -0.06;
+  g.half = 4;
+  const Tracer tracer(Cloth{}, g, CurveType::FlatLinear, &sphere);
+  const Lighting lighting = sky();
+  const LightSampler light = make_light_sampler(lighting);
+  SceneView v;
+  v.tracer = &tracer;
+  v.bsdf = &bsdf;
+  v.lighting = &lighting;
+  v.light = &light;
+  v.camera.position = {0, -1.2, 0.75};
+  v.camera.look_at = {0, 0, 0.22};
+  v.camera.fov_deg = 36;
+  v.width = v.height = 8;
+  v.max_depth = 12;
+  v.threads = 2;
+  const int runs = 32, spp = 16;
+  const auto [m0, se0] = [&] {
+    std::vector<double> per_run;
+    for (int r = 0; r < runs; ++r) {
+      SceneView w = v;
+      w.seed = 3000 + std::uint64_t(r);
+      std::vector<double> sum;
+      render_passes(w, PathEstimator::MisLightCdf, FSource::Table, 0, spp, sum, nullptr);
+      per_run.push_back(image_mean(sum, spp));
+    }
+    double m = 0, var = 0;
+    for (double x : per_run) m += x / runs;
+    for (double x : per_run) var += (x - m) * (x - m) / (runs - 1);
+    return std::pair<double, double>{m, std::sqrt(var / runs)};
+  }();
+  for (const PathEstimator e : {PathEstimator::IsRgl, PathEstimator::MisLightRgl}) {
+    std::vector<double> per_run;
+    for (int r = 0; r < runs; ++r) {
+      SceneView w = v;
+      w.seed = 3000 + std::uint64_t(r);
+      std::vector<double> sum;
+      render_passes(w, e, FSource::Table, 0, spp, sum, nullptr);
+      per_run.push_back(image_mean(sum, spp));
+    }
+    double m = 0, var = 0;
+    for (double x : per_run) m += x / runs;
+    for (double x : per_run) var += (x - m) * (x - m) / (runs - 1);
+    const double se = std::sqrt(var / runs), z = (m - m0) / std::sqrt(se * se + se0 * se0);
+    std::printf("render_test: measured sphere %-13s: image mean %.5f +- %.5f (mis_light_cdf %.5f +- %.5f), z %.2f\n",
+                path_estimator_name(e), m, se, m0, se0, z);
+    CHECK(se < 0.03 * m0);  // the power to see a bias of a few percent
+    CHECK(std::abs(z) < 4.5);
+  }
+}
+
+TEST_CASE("is_rgl and mis_light_rgl are refused, in one line, where the table is not imported from an RGL file",
+          "[render][rgl]") {
+  const std::string table = small_table("silk");
+  const Config c = parse_config("table: " + table + "\nfit:\n  k_max: 4\nrender:\n  estimators: [mis_light_cdf, is_rgl]\n",
+                                "cloth.yaml");
+  CHECK(parse_render(*c.render).estimators == std::vector<PathEstimator>{PathEstimator::MisLightCdf, PathEstimator::IsRgl});
+  try {
+    render_settings(c);
+    FAIL("no error");
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    CHECK_THAT(m, Catch::Contains("cloth.yaml: render: estimator 'is_rgl'") && Catch::Contains("import.rgl"));
+    CHECK(m.find('\n') == std::string::npos);
+  }
+  const Config named = parse_config("table: " + table + "\nrender:\n  estimators: [mis_light_rgl, is_rgl]\n", "n.yaml");
+  CHECK(parse_render(*named.render).estimators ==
+        std::vector<PathEstimator>{PathEstimator::MisLightRgl, PathEstimator::IsRgl});
 }

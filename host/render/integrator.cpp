@@ -36,6 +36,8 @@ BsdfSampler sampler_of(PathEstimator e) {
     case PathEstimator::GuidedProduct: return BsdfSampler::Mixture;
     case PathEstimator::CdfTab:
     case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
+    case PathEstimator::IsRgl:
+    case PathEstimator::MisLightRgl: return BsdfSampler::Rgl;
   }
   return BsdfSampler::Uniform;
 }
@@ -49,15 +51,23 @@ struct LightPdf {
   const LightSampler* light = nullptr;
   bool product = false;
   double share = 0;
-  mix::SliceMixture prod;
+  const FastProduct* prod = nullptr;
   LocalAxes axes;
   double operator()(const Vec3& w) const {
     const double pl = light->pdf(w);
     if (!product) return pl;
     double th, ph;
     local_angles(axes, w, th, ph);
-    return share * prod.pdf_omega(axes.domain, th, ph) + (1 - share) * pl;
+    return share * prod->pdf_omega(axes.domain, th, ph) + (1 - share) * pl;
   }
+};
+
+// What a thread reuses from path to path: mis_product's two products (this vertex's and
+// the one before's, whose density the next vertex's escaped ray needs), and the lighting
+// ready to carry.
+struct PathScratch {
+  const CarrySource* carry = nullptr;
+  FastProduct prod[2];
 };
 
 // A vertex of a training path: where it is, the direction it continued in (the guide's
@@ -83,9 +93,11 @@ int thread_count(int asked) {
 // given, receives theta_o of every fiber vertex (the pre-pass); `train`, when given, the
 // path's training samples for the guide (guide/radiance_field.hpp).
 Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, const Rng& rng, std::uint64_t& rays,
-               std::uint64_t& vertices, std::vector<double>* theta_out, std::vector<guide::Sample>* train) {
+               std::uint64_t& vertices, std::vector<double>* theta_out, std::vector<guide::Sample>* train,
+               PathScratch& scratch) {
   const BsdfSampler fs = sampler_of(est);
-  const bool product = est == PathEstimator::MisProduct && v.world_light && !v.world_light->empty();
+  const bool product = est == PathEstimator::MisProduct && scratch.carry && !scratch.carry->empty();
+  FastProduct *cur = &scratch.prod[0], *prev = &scratch.prod[1];
   const bool nee = uses_light_sampling(est);
   const bool guided = is_guided(est) && v.guide;
   TrainVertex path[64];
@@ -206,18 +218,15 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
       if (product && (fiber || surface)) {
         // the lighting carried into the hit's frame, times the BSDF mixture at theta_o
         lp.axes = fiber ? frame.axes() : sframe.axes();
-        try {
-          lp.prod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(*v.world_light, lp.axes),
-                                    v.product);
-          lp.product = true;
-        } catch (const std::invalid_argument&) {
-          // no overlap: light sampling alone
-        }
+        // no overlap: light sampling alone
+        lp.product = cur->build(v.bsdf->product_factor(fiber ? frame.theta_o : sframe.theta_o), *scratch.carry, lp.axes,
+                                v.product);
+        lp.prod = cur;
       }
       Vec3 wl;
       bool drawn = true;
       if (lp.product && u[0] < lp.share) {
-        const mix::Sample m = lp.prod.sample(lp.axes.domain, u[0] / lp.share, u[1], u[2]);
+        const mix::Sample m = lp.prod->sample(lp.axes.domain, u[0] / lp.share, u[1], u[2]);
         drawn = m.valid;
         if (drawn) wl = local_direction(lp.axes, m.theta, m.phi);
       } else {
@@ -288,7 +297,10 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     }
     prev_pdf = pdf;
     prev_nee = nee;
-    if (nee) std::swap(prev_lp, lp);
+    if (nee) {  // the product this vertex built stays with prev_lp; the next one builds into the other buffer
+      std::swap(prev_lp, lp);
+      std::swap(cur, prev);
+    }
     next.dir = wi;
     ray = next;
   }
@@ -331,11 +343,15 @@ RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, 
   RenderStats st;
   const auto t0 = std::chrono::steady_clock::now();
   const int nt = thread_count(v.threads);
+  // mis_product's lighting, ready to carry into each hit's frame
+  const CarrySource carry = v.world_light ? CarrySource(*v.world_light) : CarrySource();
   for (int pass = first; pass < first + max_passes; ++pass) {
     std::atomic<int> next_row{0};
     std::atomic<std::uint64_t> rays{0}, vertices{0};
     auto work = [&]() {
       std::uint64_t local = 0, local_vertices = 0;
+      PathScratch scratch;
+      scratch.carry = &carry;
       for (int y = next_row++; y < v.height; y = next_row++)
         for (int x = 0; x < v.width; ++x) {
           const std::uint32_t p = std::uint32_t(y * v.width + x);
@@ -344,7 +360,7 @@ RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, 
           rng.draw(0, u);
           const Ray ray = camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]);
           const Rgb L = trace_path(v, est, which, ray, rng, local, local_vertices, nullptr,
-                                   v.train ? &(*v.train)[std::size_t(y)] : nullptr);
+                                   v.train ? &(*v.train)[std::size_t(y)] : nullptr, scratch);
           for (int c = 0; c < 3; ++c) sum[3 * std::size_t(p) + std::size_t(c)] += L[c];
         }
       rays += local;
@@ -372,6 +388,7 @@ std::vector<double> collect_theta_o(const SceneView& v, int spp) {
   auto work = [&]() {
     std::vector<double> local;
     std::uint64_t rays = 0, vertices = 0;
+    PathScratch scratch;  // uniform sampling: no product
     for (int y = next_row++; y < v.height; y = next_row++)
       for (int x = 0; x < v.width; ++x)
         for (int s = 0; s < spp; ++s) {
@@ -379,7 +396,7 @@ std::vector<double> collect_theta_o(const SceneView& v, int spp) {
           double u[4];
           rng.draw(0, u);
           trace_path(v, PathEstimator::Uniform, FSource::Table, camera_ray(v.camera, v.width, v.height, x + u[0], y + u[1]),
-                     rng, rays, vertices, &local, nullptr);
+                     rng, rays, vertices, &local, nullptr, scratch);
         }
     std::lock_guard<std::mutex> lock(m);
     out.insert(out.end(), local.begin(), local.end());

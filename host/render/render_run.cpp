@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <memory>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -16,6 +17,7 @@
 #include "render/render_report.hpp"
 #include "render/render_scene.hpp"
 #include "render/world_lighting.hpp"
+#include "tables/rgl_brdf.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -23,7 +25,22 @@ namespace render {
 RenderSettings render_settings(const Config& config) {
   if (!config.render) throw ConfigError(config.file + ": render: missing (the render command needs a render section)");
   if (!config.fit) throw ConfigError(config.file + ": fit: missing (the render fits the mixtures the scene needs)");
-  return parse_render(*config.render);
+  RenderSettings s = parse_render(*config.render);
+  // is_rgl and mis_light_rgl sample with the warps of the RGL file the table came from
+  std::vector<PathEstimator> all = s.estimators;
+  all.push_back(s.reference_estimator);
+  if (s.stand_in) all.push_back(s.stand_in_estimator);
+  for (const PathEstimator e : all)
+    if (uses_rgl(e) && !(config.import && !config.import->rgl.empty()))
+      throw ConfigError(config.file + ": render: estimator '" + path_estimator_name(e) +
+                        "' samples with an RGL file's own warps and needs a measured surface imported from one "
+                        "(import.rgl); this config's table '" + config.table + "' is not");
+  return s;
+}
+
+bool needs_rgl(const RenderSettings& s) {
+  return std::any_of(s.estimators.begin(), s.estimators.end(), uses_rgl) || uses_rgl(s.reference_estimator) ||
+         (s.stand_in && uses_rgl(s.stand_in_estimator));
 }
 
 GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std::string& device_selector) {
@@ -62,6 +79,12 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   prepare_output(json);
 
   TableBsdf bsdf(config.table);
+  // is_rgl, mis_light_rgl: the file's own sampler (f stays the table's, for every estimator)
+  std::unique_ptr<RglBrdf> rgl;
+  if (needs_rgl(s)) {
+    rgl = std::make_unique<RglBrdf>(config.import->rgl);
+    bsdf.set_rgl(rgl.get());
+  }
   const RenderScene scene(s, bsdf, config.file);
   log_line("render: " + scene.describe() + ", lighting '" + s.lighting.name + "', " + std::to_string(s.width) + " x " +
            std::to_string(s.height));

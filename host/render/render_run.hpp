@@ -14,8 +14,13 @@ namespace bsdfmix {
 namespace render {
 
 // The render settings of a config, checked before any work: ConfigError when the config
-// has no render or no fit section, or names a bad render setting.
+// has no render or no fit section, or names a bad render setting, or an estimator that
+// samples with an RGL file's warps (is_rgl, mis_light_rgl) where the table was not
+// imported from one (import.rgl).
 RenderSettings render_settings(const Config& config);
+
+// Whether some estimator of the render samples with the RGL file's warps.
+bool needs_rgl(const RenderSettings& s);
 
 // What the guided estimators learn with: the settings' guide, its leaves fitted with
 // `fit`'s seed, penalty and search (up to the guide's k_max, one restart, no refinement),

@@ -14,15 +14,17 @@ namespace render {
 
 namespace {
 
-const char* kNames[] = {"uniform",       "mis_tab",     "cdf_tab", "mis_light_cdf",
-                        "mis_light_gmm", "mis_product", "guided",  "guided_product"};
+// in the order of PathEstimator
+const char* kNames[] = {"uniform", "mis_tab",        "cdf_tab", "mis_light_cdf", "mis_light_gmm",
+                        "mis_product", "guided", "guided_product", "is_rgl",     "mis_light_rgl"};
 
 PathEstimator parse_estimator_name(const ConfigNode& n, const std::string& key, const std::string& name) {
-  for (int i = 0; i < int(std::size(kNames)); ++i)
+  std::string expected;
+  for (int i = 0; i < int(std::size(kNames)); ++i) {
     if (name == kNames[i]) return PathEstimator(i);
-  n.fail(key, "unknown estimator '" + name +
-                  "' (expected uniform, mis_tab, cdf_tab, mis_light_cdf, mis_light_gmm, mis_product, guided or "
-                  "guided_product)");
+    expected += std::string(i ? (i + 1 == int(std::size(kNames)) ? " or " : ", ") : "") + kNames[i];
+  }
+  n.fail(key, "unknown estimator '" + name + "' (expected " + expected + ")");
 }
 
 // A nested mapping with its defaults merged under it and unknown keys rejected.
@@ -51,9 +53,11 @@ const char* path_estimator_name(PathEstimator e) { return kNames[int(e)]; }
 
 bool is_guided(PathEstimator e) { return e == PathEstimator::Guided || e == PathEstimator::GuidedProduct; }
 
+bool uses_rgl(PathEstimator e) { return e == PathEstimator::IsRgl || e == PathEstimator::MisLightRgl; }
+
 bool uses_light_sampling(PathEstimator e) {
   return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm || e == PathEstimator::MisProduct ||
-         is_guided(e);
+         e == PathEstimator::MisLightRgl || is_guided(e);
 }
 
 RenderSettings parse_render(const RenderSection& section) {

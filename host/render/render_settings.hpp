@@ -17,11 +17,27 @@ namespace bsdfmix {
 namespace render {
 
 // How a path's next direction at a fiber is drawn (docs/render.md, "Estimators").
-enum class PathEstimator { Uniform, MisTab, CdfTab, MisLightCdf, MisLightGmm, MisProduct, Guided, GuidedProduct };
+// is_rgl and mis_light_rgl sample a measured surface with its RGL file's own warps
+// (render/table_bsdf.hpp): alone, and with light sampling as mis_light_cdf combines the
+// table CDF with it.
+enum class PathEstimator {
+  Uniform,
+  MisTab,
+  CdfTab,
+  MisLightCdf,
+  MisLightGmm,
+  MisProduct,
+  Guided,
+  GuidedProduct,
+  IsRgl,
+  MisLightRgl
+};
 const char* path_estimator_name(PathEstimator e);
 bool uses_light_sampling(PathEstimator e);
 // guided, guided_product: the estimators that learn the incident radiance (docs/render.md, "Guided paths").
 bool is_guided(PathEstimator e);
+// is_rgl, mis_light_rgl: the estimators that need the RGL file the table was imported from.
+bool uses_rgl(PathEstimator e);
 
 struct Camera {
   Vec3 position{0, -1.3, 1.1}, look_at{0, 0, 0}, up{0, 0, 1};

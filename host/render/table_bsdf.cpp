@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "tables/rgl_brdf.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -96,6 +97,8 @@ void TableBsdf::set_mixture(const mix::MixtureSet& set) {
   has_set_ = !set_.slices.empty();
   set_has_rgb_ = false;
   for (const auto& sl : set_.slices) set_has_rgb_ = set_has_rgb_ || sl.has_rgb;
+  factors_.assign(set_.slices.size(), ProductFactor{});
+  for (std::size_t k = 0; k < set_.slices.size(); ++k) factors_[k].assign(set_.slices[k]);
   fitted_.assign(meta_.theta_o.size(), -1);
   for (std::size_t k = 0; k < set_.slices.size(); ++k) {
     std::size_t best = 0;
@@ -104,6 +107,12 @@ void TableBsdf::set_mixture(const mix::MixtureSet& set) {
         best = i;
     fitted_[best] = int(k);
   }
+}
+
+void TableBsdf::set_rgl(const RglBrdf* rgl) {
+  if (rgl && meta_.domain != Domain::Hemisphere)
+    throw InputError("render: the RGL sampler serves a measured surface (a hemisphere table), not a fiber table");
+  rgl_ = rgl;
 }
 
 void TableBsdf::bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const {
@@ -205,8 +214,7 @@ double TableBsdf::mixture_pdf(double theta_o, double theta, double phi) const {
   return set_.slices[std::size_t(nearest_fitted(theta_o))].pdf_omega(meta_.domain, theta, phi);
 }
 
-mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& lighting,
-                                     const mix::ProductOptions& o) const {
+int TableBsdf::product_slice(double theta_o) const {
   if (!has_set_) throw InputError("render: product sampling needs the mixtures");
   // the nearer of the two slices around theta_o when it is fitted (half the pairs of the
   // blend; the product's pdf is its own, so this costs variance, never bias)
@@ -214,13 +222,32 @@ mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& li
   double w;
   bracket(theta_o, i0, i1, w);
   const std::size_t near = w < 0.5 ? i0 : i1;
-  const int k = fitted_[near] >= 0 ? fitted_[near] : nearest_fitted(theta_o);
-  return mix::product(set_.slices[std::size_t(k)], 0.0, lighting, o);
+  return fitted_[near] >= 0 ? fitted_[near] : nearest_fitted(theta_o);
+}
+
+mix::SliceMixture TableBsdf::product(double theta_o, const mix::SliceMixture& lighting,
+                                     const mix::ProductOptions& o) const {
+  return mix::product(set_.slices[std::size_t(product_slice(theta_o))], 0.0, lighting, o);
+}
+
+const ProductFactor& TableBsdf::product_factor(double theta_o) const {
+  return factors_[std::size_t(product_slice(theta_o))];
 }
 
 void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double& theta, double& phi,
                        double& pdf_out) const {
   pdf_out = 0;
+  if (s == BsdfSampler::Rgl) {
+    // the file's warps for the view omega_o = (sin theta_o, 0, cos theta_o), phi = 0 its plane
+    if (!rgl_) throw InputError("render: the RGL sampler needs the RGL file (import.rgl)");
+    const RglBrdf::Sample r = rgl_->sample({std::sin(theta_o), 0.0, std::cos(theta_o)}, u[1], u[2]);
+    if (!r.valid) return;
+    theta = std::acos(std::clamp(r.omega_i[2], 0.0, 1.0));
+    phi = std::atan2(r.omega_i[1], r.omega_i[0]);
+    if (!(theta <= kPi / 2)) return;
+    pdf_out = r.pdf;  // the warps' density there: what pdf() gives
+    return;
+  }
   if (s == BsdfSampler::Uniform || (s == BsdfSampler::Mixture && u[0] < uniform_fraction)) {
     // uniform over the domain's sphere or hemisphere of directions
     theta = meta_.domain == Domain::Fiber ? std::asin(std::clamp(2 * u[2] - 1, -1.0, 1.0))
@@ -265,6 +292,11 @@ void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double&
 double TableBsdf::pdf(BsdfSampler s, double theta_o, double theta, double phi) const {
   if (!(theta >= theta_lo(meta_.domain) && theta <= kPi / 2)) return 0;
   if (s == BsdfSampler::Uniform) return uniform_pdf_;
+  if (s == BsdfSampler::Rgl) {
+    if (!rgl_) throw InputError("render: the RGL sampler needs the RGL file (import.rgl)");
+    const double st = std::sin(theta);
+    return rgl_->pdf({std::sin(theta_o), 0.0, std::cos(theta_o)}, {st * std::cos(phi), st * std::sin(phi), std::cos(theta)});
+  }
   if (s == BsdfSampler::Mixture)
     return uniform_fraction * uniform_pdf_ + (1 - uniform_fraction) * mixture_pdf(theta_o, theta, phi);
   std::size_t i0, i1;

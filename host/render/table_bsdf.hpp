@@ -4,7 +4,9 @@
 // slices, the nearest cell in (theta_i, phi)) or from the mixture stand-in (thesis eqs.
 // 3.8-3.11), and the directions drawn by the same samplers as the convergence study:
 // uniform, the mixture with a defensive uniform share (the header's MixtureSet::sample
-// and pdf_omega, exactly what the study's CPU reference calls), and the table CDF. Angles
+// and pdf_omega, exactly what the study's CPU reference calls), the table CDF, and for a
+// measured surface imported from an RGL file the file's own warps (tables/rgl_brdf.hpp,
+// as Mitsuba 3 and pbrt-v4 sample it; f stays the table's or the stand-in's). Angles
 // in the local frame of the hit, phi from the plane of omega_o (so phi_o = 0, and the
 // tables' phi = phi_i - phi_o is phi itself): for a fiber sin(theta) = dot(w, tangent),
 // L_o = integral L_i f d(omega); for a surface cos(theta) = dot(w, normal),
@@ -20,14 +22,17 @@
 #include "core/color.hpp"
 #include "io/table.hpp"
 #include "render/cloth.hpp"
+#include "render/fast_product.hpp"
 #include "render/local_axes.hpp"
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
+
+class RglBrdf;
 namespace render {
 
 enum class FSource { Table, StandIn };
-enum class BsdfSampler { Uniform, Mixture, TableCdf };
+enum class BsdfSampler { Uniform, Mixture, TableCdf, Rgl };
 
 class TableBsdf {
  public:
@@ -35,6 +40,10 @@ class TableBsdf {
   // samplers, no stand-in) until set_mixture.
   explicit TableBsdf(const std::string& table_path);
   void set_mixture(const mix::MixtureSet& set);
+  // The RGL file the (hemisphere) table was imported from: BsdfSampler::Rgl samples the
+  // light direction with its warps. `rgl` must outlive this object; nullptr: none.
+  void set_rgl(const RglBrdf* rgl);
+  bool has_rgl() const { return rgl_ != nullptr; }
 
   const TableMeta& meta() const { return meta_; }
   std::size_t table_bytes() const { return f_.size() * sizeof(float); }
@@ -63,6 +72,9 @@ class TableBsdf {
   // same (theta, phi) of the hit's frame: the header's product, pruned by `o`.
   // Throws std::invalid_argument when the two do not overlap.
   mix::SliceMixture product(double theta_o, const mix::SliceMixture& lighting, const mix::ProductOptions& o) const;
+  // The same slice's mixture as the renderer's per-vertex product reads it
+  // (render/fast_product.hpp).
+  const ProductFactor& product_factor(double theta_o) const;
 
  private:
   void bracket(double theta_o, std::size_t& i0, std::size_t& i1, double& w) const;
@@ -79,10 +91,13 @@ class TableBsdf {
   std::vector<double> cell_w_;    // per theta_i row: integral of J over a cell
   double th0_ = 0, dth_ = 0, ph0_ = 0, dph_ = 0, to0_ = 0, dto_ = 0;
   double uniform_pdf_ = 0;       // uniform sampling's density: 1 / (4 pi) or 1 / (2 pi)
+  int product_slice(double theta_o) const;
   mix::MixtureSet set_;
+  std::vector<ProductFactor> factors_;  // per slice of set_
   bool has_set_ = false;
   bool set_has_rgb_ = false;      // some slice of the mixtures has rgb amplitudes
   std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
+  const RglBrdf* rgl_ = nullptr;  // BsdfSampler::Rgl's warps
 };
 
 // Surface frame at a hit: normal n, and the plane of omega_o (phi = 0 along x).
