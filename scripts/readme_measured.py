@@ -124,13 +124,15 @@ def peers():
         x = sorted(float(v["is_mixture"]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
         ratio[mat] = x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
     short = lambda m: m.split("_")[1] if m.startswith("c") and m.count("_") >= 1 else m.split("_")[0]
-    own = sorted((m for m in ratio if ratio[m] > 1), key=lambda m: ratio[m])
-    mine = sorted(m for m in ratio if ratio[m] <= 1)
-    return ("| Against an RGL file's own sampler | The file's sampler wins on %s (the mixture has %s its variance); "
-            "the mixture wins on %s (%s) | %s |" % (
-                ", ".join(short(m) for m in own), ", ".join("%s x" % times(ratio[m]) for m in own).replace(" x", "x"),
-                ", ".join(short(m) for m in mine), ", ".join("%sx" % times(ratio[m]) for m in mine),
-                link("sampling.md", "Against the file's own sampler", "sampling_peers.csv")))
+    # the grids that resolve the lobe, fitted to 2 % L1 (bench/results/rgl_resolve.csv, a few views)
+    fine = {r["material"]: r for r in rows("rgl_resolve.csv") if r["grid"] == "resolved_t2" and r["is_mixture_over_rgl_median"]}
+    resolved = ("; resolved grids, 2%% L1 fits: %s" % ", ".join(
+        "%s %sx" % (short(m), times(float(fine[m]["is_mixture_over_rgl_median"]))) for m in sorted(fine))) if fine else ""
+    return ("| Against an RGL file's own sampler | Mixture's variance over the file's sampler's: %s%s | %s |" % (
+                ", ".join("%s %sx" % (short(m), times(ratio[m])) for m in sorted(ratio, key=lambda m: ratio[m])),
+                resolved,
+                link("sampling.md", "Against the file's own sampler", "sampling_peers.csv") +
+                ", [CSV](bench/results/rgl_resolve.csv)"))
 
 
 def lighting():
