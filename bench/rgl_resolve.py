@@ -120,7 +120,7 @@ def main():
                         "cdf_table_over_rgl_median": f"{np.median(cdf):.4g}",
                         "cdf_table_over_rgl_max": f"{np.max(cdf):.4g}", "cpu": cpu_model()})
             print(", ".join(f"{k} {v}" for k, v in out[-1].items() if k != "cpu"), flush=True)
-        if "resolved" not in tables:
+        if not any(kind == "resolved" for kind, _, _ in tables):
             out.append({"material": name, "grid": "resolved", "theta_o": grid[0], "theta_i": grid[1], "phi_i": grid[2],
                         "error_target": "", "fit_l1_median": "",
                         "lobe_fwhm_theta_deg": fwhm_t, "lobe_fwhm_across_deg": fwhm_x, "lobe_at_theta_o_deg": at,

@@ -54,6 +54,27 @@ def peer_ratios():
     return out
 
 
+def sky_product_ratios():
+    """Per RGL material under the sky: mis_product's variance per sample over mis_light_rgl's, median over views."""
+    by = {}
+    for r in rows("sampling_peers.csv"):
+        if r.get("lighting", "constant") != "constant":
+            by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+    out = {}
+    for mat, views in by.items():
+        x = sorted(float(v["mis_product"]["relvar"]) / float(v["mis_light_rgl"]["relvar"])
+                   for v in views.values() if "mis_product" in v and "mis_light_rgl" in v)
+        if x:
+            out[mat] = x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
+    return out
+
+
+def resolved_ratios():
+    """Per RGL material: the resolved grid fitted to 2 % L1 against the file's sampler (rgl_resolve.csv)."""
+    return {r["material"]: float(r["is_mixture_over_rgl_median"]) for r in rows("rgl_resolve.csv")
+            if r["grid"] == "resolved_t2" and r["is_mixture_over_rgl_median"]}
+
+
 def choice():
     c = converge_rows()
     const = [x for x in c if x["scene"] == "constant"]
@@ -71,6 +92,8 @@ def choice():
     peers = peer_ratios()
     file_wins = sorted(m for m in peers if peers[m] > 1)
     mix_wins = sorted(m for m in peers if peers[m] <= 1)
+    resolved = resolved_ratios()
+    sky_prod = sky_product_ratios()
     return [
         "| use | take | measured | CSV |", "|---|---|---|---|",
         "| BSDF only, smooth light | `mis_tab` | %s fewer samples than uniform for its error; a sample costs %s a uniform one "
@@ -90,9 +113,14 @@ def choice():
             span(gmm), span(prod)),
         "| Indirect light (the room) | `mis_light_gmm` | %s `mis_light_cdf`'s error at equal time; guided %s "
         "| [render/](../bench/results/render/) |" % (span(room_gmm), span(guided)),
-        "| RGL file at hand | the file's own sampler | it wins on %s; the mixture alone wins on %s (%sx its variance) "
-        "| [sampling_peers.csv](../bench/results/sampling_peers.csv) |" % (
-            ", ".join(file_wins), ", ".join(mix_wins), ", ".join(times(peers[m]) for m in mix_wins)),
+        "| RGL file at hand, BSDF only | the file's own sampler, or the mixture of a resolved grid | at the default grid it wins on %s; the mixture "
+        "alone wins on %s (%sx its variance); on resolved grids fitted to 2 %% L1 the mixture has %s its variance "
+        "| [sampling_peers.csv](../bench/results/sampling_peers.csv), [rgl_resolve.csv](../bench/results/rgl_resolve.csv) |" % (
+            ", ".join(file_wins), ", ".join(mix_wins), ", ".join(times(peers[m]) for m in mix_wins),
+            ", ".join("%sx (%s)" % (times(v), m) for m, v in sorted(resolved.items())) or "-"),
+        "| RGL file at hand, with lights | `mis_product` | %s `mis_light_rgl`'s variance (light sampling with the "
+        "file's sampler), median over views under the sky | [sampling_peers.csv](../bench/results/sampling_peers.csv) |" % (
+            ", ".join("%sx (%s)" % (times(v), m) for m, v in sorted(sky_prod.items()))),
         "| Stand-in, no table kept | `mis_light_gmm` on the mixture | image within %s of the table's (4 x 4 "
         "blocks), %s smaller | [render/](../bench/results/render/) |" % (
             span([x["stand_in_4x4"] for x in rr], "%"), span([x["memory"] for x in rr])),
