@@ -28,7 +28,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 ESTIMATORS = ["us_tab", "us_gmm", "is_tab", "is_gmm", "mis_tab", "cdf_tab",
-              "light", "mis_light_cdf", "mis_light_gmm", "product", "mis_product"]
+              "light", "mis_light_cdf", "mis_light_gmm", "product", "mis_product", "is_rgl", "mis_light_rgl"]
 STYLE = {
     "us_tab": dict(color="#7f7f7f", marker="o", ls="-"),
     "us_gmm": dict(color="#bcbd22", marker="v", ls="--"),
@@ -41,6 +41,8 @@ STYLE = {
     "mis_light_gmm": dict(color="#e377c2", marker="h", ls="--"),
     "product": dict(color="#17becf", marker="<", ls=":"),
     "mis_product": dict(color="#9467bd", marker=">", ls="-", lw=2.6),
+    "is_rgl": dict(color="#393b79", marker="d", ls="-."),
+    "mis_light_rgl": dict(color="#637939", marker="p", ls="-."),
 }
 LABEL = {
     "us_tab": "us_tab (uniform, table)",
@@ -54,6 +56,8 @@ LABEL = {
     "mis_light_gmm": "mis_light_gmm (light + mixture)",
     "product": "product (BSDF x lighting mixture alone)",
     "mis_product": "mis_product (product + light + uniform): default with lighting",
+    "is_rgl": "is_rgl (the RGL file's warps): measured baseline",
+    "mis_light_rgl": "mis_light_rgl (light + the RGL file's warps)",
 }
 
 

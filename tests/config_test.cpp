@@ -76,6 +76,38 @@ TEST_CASE("a bare section takes every default", "[config]") {
                                                              "product", "mis_product"});
 }
 
+TEST_CASE("converge.rgl: the RGL file of is_rgl and mis_light_rgl, by default import.rgl", "[config]") {
+  const std::string t = "table: " + existing_table() + "\n";
+  const std::string satin = std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/satin_rosaline_rgb.bsdf";
+  // not named, and no import: empty (no estimator needs it)
+  const Config none = parse_config(t + "converge:\n", "cfg.yaml");
+  REQUIRE(none.converge);
+  CHECK(none.converge->rgl.empty());
+  // named
+  const Config named = parse_config(t + "converge:\n  estimators: [is_rgl, mis_light_rgl]\n  rgl: " + satin + "\n",
+                                    "cfg.yaml");
+  REQUIRE(named.converge);
+  CHECK(named.converge->rgl == satin);
+  CHECK(named.converge->estimators == std::vector<std::string>{"is_rgl", "mis_light_rgl"});
+  // not named, but the config imports the table from an RGL file: that one (the stage resolves it)
+  const Config imported = parse_config("table: nowhere/satin.h5\nimport:\n  rgl: " + satin +
+                                           "\nconverge:\n  estimators: [mis_light_rgl]\n",
+                                       "cfg.yaml");
+  REQUIRE(imported.converge);
+  CHECK(imported.converge->rgl.empty());
+  CHECK(imported.import->rgl == satin);
+  // neither: one error naming the key
+  CHECK_THAT(config_error(t + "converge:\n  estimators: [us_tab, is_rgl]\n"),
+             Catch::Contains("cfg.yaml: converge.rgl: is_rgl samples with an RGL file's own warps"));
+  CHECK_THAT(config_error(t + "converge:\n  estimators: [mis_light_rgl]\n  rgl: ~\n"),
+             Catch::Contains("converge.rgl") && Catch::Contains("mis_light_rgl samples with an RGL file's own warps"));
+  CHECK_THAT(config_error(t + "converge:\n  estimators: [is_rgl]\n  rgl: nowhere/x.bsdf\n"),
+             Catch::Contains("converge.rgl (line 4): file 'nowhere/x.bsdf' not found"));
+  // never among the default estimators
+  const Config lit = parse_config(t + "converge:\n  scene:\n    constant: 1\n", "cfg.yaml");
+  for (const auto& e : lit.converge->estimators) CHECK(e.find("rgl") == std::string::npos);
+}
+
 TEST_CASE("unknown keys are rejected with their full path", "[config]") {
   const std::string t = "table: " + existing_table() + "\n";
   CHECK_THAT(config_error(t + "fitt:\n  k_max: 3\n"), Catch::Contains("cfg.yaml: fitt (line 2): unknown key"));

@@ -2,8 +2,9 @@
 // (host/sampling/sample_reference.cpp), the quadrature references and the convergence
 // study (host/converge): every table estimator unbiased, is_gmm converging to the
 // stand-in's integral (its bias is the stand-in's integral error), device and CPU
-// agreeing, scenes (lobes, gradient, PFM environment map, frames, errors), and the exact
-// CSV columns of `bsdfmix converge`.
+// agreeing, scenes (lobes, gradient, PFM environment map, frames, errors), the exact
+// CSV columns of `bsdfmix converge`, and is_rgl and mis_light_rgl (an RGL file's own
+// warps, on the CPU) unbiased on a table imported from that file.
 // labels: sample
 #include <catch2/catch.hpp>
 
@@ -12,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "scene/light_mixture.hpp"
@@ -24,6 +26,8 @@
 #include "io/pfm.hpp"
 #include "io/table.hpp"
 #include "sampling/sampling.hpp"
+#include "tables/rgl_brdf.hpp"
+#include "tables/rgl_import.hpp"
 
 using namespace bsdfmix;
 namespace fs = std::filesystem;
@@ -179,7 +183,7 @@ void check_unbiased(const Fixture& fx, const Lighting& light, double to, double 
   const double ref = table_integral(p), stand_in = stand_in_integral(p);
   const int runs = 64;
   const std::uint64_t n = 1024;
-  for (int e = 0; e < kEstimators; ++e) {
+  for (int e = 0; e < kDeviceEstimators; ++e) {
     const RunSums s = integrate_device(device(), p, Estimator(e), runs, n, kSeed);
     const Stats st = stats(s);
     const double target = uses_table(Estimator(e)) ? ref : stand_in;
@@ -248,7 +252,7 @@ TEST_CASE("device estimators agree with the CPU reference run for run", "[conver
     const mix::MixtureSet set = to_mixture_set(read_mixture_file(fx->mixture));
     const mix::SliceMixture lm = light_mixture(*fx, sky(fx->domain));
     const Problem p = make_problem(table, set, 0.4, 0.9, sky(fx->domain), MisOptions{}, &lm);
-    for (int e = 0; e < kEstimators; ++e) {
+    for (int e = 0; e < kDeviceEstimators; ++e) {
       const RunSums a = integrate_cpu(p, Estimator(e), 4, 512, kSeed);
       const RunSums b = integrate_device(device(), p, Estimator(e), 4, 512, kSeed, 64);
       REQUIRE(a.levels == b.levels);
@@ -343,4 +347,208 @@ TEST_CASE("bsdfmix converge writes the convergence CSV with the exact columns", 
   std::ofstream(cfg) << "table: " << fiber().table << "\nconverge:\n  mixture: " << fiber().mixture
                      << "\n  estimators: [us_tab, magic]\n  csv: " << csv << "\n";
   CHECK(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg + " 2>/dev/null").c_str()) != 0);
+}
+
+namespace {
+
+std::string rgl_file(const std::string& name) { return std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/" + name; }
+
+// A coarse import of satin_rosaline (4 theta_o x 32 theta_i x 64 phi_i) and a mixture for
+// it: per slice a broad Gaussian and one near the mirror direction (any mixture will do:
+// the RGL estimators draw with the file's warps, f is the table's).
+struct RglFixture {
+  std::string table, mixture, rgl;
+};
+
+const RglFixture& satin() {
+  static const RglFixture fx = [] {
+    Progress::set_enabled(false);
+    RglFixture f{(temp_dir() / "satin.h5").string(), (temp_dir() / "satin_mixture.h5").string(),
+                 rgl_file("satin_rosaline_rgb.bsdf")};
+    RglImportOptions o;
+    o.file = f.rgl;
+    o.n_theta_o = 4;
+    o.n_theta_i = 32;
+    o.n_phi_i = 64;
+    import_rgl_table(o, f.table);
+    const TableReader t(f.table);
+    MixtureFile m;
+    m.domain = Domain::Hemisphere;
+    m.azimuthal = true;
+    m.table_theta_o = t.meta().theta_o;
+    m.table_phi_o = t.meta().phi_o;
+    for (const double to : t.meta().theta_o)
+      m.add_slice(to, 0.0, 1.0, 0.0, 0.05, {0.7, 0.3}, {0.7, 0.0, to, 3.0}, {0.5, 0.0, 4.0, 0.05, 0.0, 0.2});
+    write_mixture_file(f.mixture, m);
+    return f;
+  }();
+  return fx;
+}
+
+Lighting sky_scene() {
+  const std::string path = std::string(BSDFMIX_SOURCE_DIR) + "/configs/scenes/sky.yaml";
+  return parse_scene(YAML::LoadFile(path), path, "", Domain::Hemisphere);
+}
+
+}  // namespace
+
+TEST_CASE("is_rgl and mis_light_rgl converge to the table's integral (constant light and the sky)", "[converge][rgl]") {
+  const RglFixture& fx = satin();
+  const TableReader table(fx.table);
+  const mix::MixtureSet set = to_mixture_set(read_mixture_file(fx.mixture));
+  const RglBrdf brdf(fx.rgl);
+  Lighting constant = default_lighting(Domain::Hemisphere, 1.0);
+  constant.name = "constant";
+  const Lighting sky = sky_scene();
+  const int runs = 16;
+  const std::uint64_t n = 8192;
+  // between slices, phi_o turning the frame (azimuthal symmetry)
+  for (const auto& [to, po] : {std::pair<double, double>{0.3, 0.0}, std::pair<double, double>{0.95, 0.7}})
+    for (const Lighting* light : std::initializer_list<const Lighting*>{&constant, &sky})
+      for (const bool power : {false, true}) {
+        if (power && light == &constant) continue;
+        MisOptions mis;
+        mis.power = power;
+        Problem p = make_problem(table, set, to, po, *light, mis, nullptr);
+        p.rgl = &brdf;
+        const double ref = table_integral(p);
+        REQUIRE(ref > 0);
+        for (const Estimator e : {Estimator::IsRgl, Estimator::MisLightRgl}) {
+          if (power && e == Estimator::IsRgl) continue;
+          const Stats st = stats(integrate_cpu(p, e, runs, n, kSeed));
+          const double se = st.sd / std::sqrt(double(runs));
+          std::printf("converge_test: satin %s%s theta_o %.2f phi_o %.2f: %-13s mean %.7g reference %.7g z %+.2f\n",
+                      light->name.c_str(), power ? " (power)" : "", to, po, estimator_name(e), st.mean, ref,
+                      se > 0 ? (st.mean - ref) / se : 0.0);
+          INFO(estimator_name(e) << " under " << light->name << " at theta_o " << to << ": mean " << st.mean
+                                 << " reference " << ref << " se " << se);
+          CHECK(se > 0);
+          CHECK(std::abs(st.mean - ref) <= 4 * se + 1e-6 * ref);
+        }
+        // from the cell probabilities (deterministic): the warps reach every cell where f > 0;
+        // under constant light they follow the table's lobe (rotated with phi_o as the table
+        // is) far better than uniform sampling, and under the sky light sampling helps them
+        const LightTail lt = light_tail(p, {Estimator::UsTab, Estimator::IsRgl, Estimator::MisLightRgl});
+        std::printf("converge_test: satin %s theta_o %.2f phi_o %.2f: relvar us_tab %.4g is_rgl %.4g mis_light_rgl %.4g, "
+                    "missed %.3g %.3g\n", light->name.c_str(), to, po, lt.relvar[0], lt.relvar[1], lt.relvar[2],
+                    lt.missed[1], lt.missed[2]);
+        CHECK(lt.missed[1] < 1e-9);
+        CHECK(lt.missed[2] < 1e-9);
+        if (light->is_constant()) CHECK(lt.relvar[1] < 0.1 * lt.relvar[0]);
+        else CHECK(lt.relvar[2] < 0.5 * lt.relvar[1]);
+        // what is_rgl draws has the density estimator_pdf gives (the file's warps' pdf)
+        const RglBrdf::Sample s = brdf.sample({std::sin(to), 0.0, std::cos(to)}, 0.3, 0.6);
+        REQUIRE(s.valid);
+        double th = 0, ph = 0;
+        const double u[4] = {0.9, 0.3, 0.6, 0.1};
+        REQUIRE(draw_cpu(p, Estimator::IsRgl, u, th, ph));
+        CHECK(std::cos(th) == Approx(s.omega_i[2]).epsilon(1e-9));
+        CHECK(wrap_phi(ph - po) == Approx(std::atan2(s.omega_i[1], s.omega_i[0])).margin(1e-9));
+        CHECK(estimator_pdf(p, Estimator::IsRgl, th, ph) == Approx(s.pdf).epsilon(1e-6));
+        // the light fraction splits mis_light_rgl's density
+        const double pl = estimator_pdf(p, Estimator::Light, th, ph);
+        CHECK(estimator_pdf(p, Estimator::MisLightRgl, th, ph) ==
+              Approx(mis.light_fraction * pl + (1 - mis.light_fraction) * s.pdf).epsilon(1e-9));
+      }
+}
+
+TEST_CASE("the RGL estimators have no kernel; they need the table's own RGL file", "[converge][rgl]") {
+  Progress::set_enabled(false);
+  const RglFixture& fx = satin();
+  const TableReader table(fx.table);
+  const mix::MixtureSet set = to_mixture_set(read_mixture_file(fx.mixture));
+  const RglBrdf brdf(fx.rgl);
+  Problem p = make_problem(table, set, 0.5, 0.0, default_lighting(Domain::Hemisphere, 1.0), MisOptions{}, nullptr);
+  p.rgl = &brdf;
+  CHECK_THROWS_WITH(integrate_device(device(), p, Estimator::IsRgl, 2, 64, kSeed),
+                    Catch::Contains("is_rgl has no kernel"));
+  CHECK_FALSE(on_device(Estimator::IsRgl));
+  CHECK_FALSE(on_device(Estimator::MisLightRgl));
+  CHECK(on_device(Estimator::MisProduct));
+  CHECK(int(Estimator::MisProduct) == 10);  // kernels/sample.cl's numbers stay
+  CHECK(parse_estimator("is_rgl", "x") == Estimator::IsRgl);
+  CHECK(parse_estimator("mis_light_rgl", "x") == Estimator::MisLightRgl);
+  CHECK(uses_lighting(Estimator::MisLightRgl));
+  CHECK_FALSE(uses_lighting(Estimator::IsRgl));
+
+  StudySpec spec;
+  spec.mixture = fx.mixture;
+  spec.table_label = "satin";
+  spec.directions = {{0.5, 0.0}};
+  spec.scenes = {default_lighting(Domain::Hemisphere, 1.0)};
+  spec.estimators = {Estimator::IsRgl};
+  spec.runs = 2;
+  spec.samples_max = 16;
+  spec.cpu = true;
+  spec.csv = (temp_dir() / "rgl_errors.csv").string();
+  spec.tail_csv = (temp_dir() / "rgl_errors_tail.csv").string();
+  spec.table = fx.table;
+  // no file
+  CHECK_THROWS_WITH(run_study(spec), Catch::Contains("converge.rgl: is_rgl and mis_light_rgl sample with an RGL file"));
+  // another material's file
+  spec.rgl = rgl_file("paper_white_rgb.bsdf");
+  CHECK_THROWS_WITH(run_study(spec), Catch::Contains("paper_white_rgb.bsdf: sha256") &&
+                                         Catch::Contains("differs from that of the file"));
+  // a table that no RGL file made
+  spec.rgl = fx.rgl;
+  spec.table = hemisphere().table;
+  spec.mixture = hemisphere().mixture;
+  CHECK_THROWS_WITH(run_study(spec), Catch::Contains("not imported from an RGL file"));
+  // and the right pair runs
+  spec.table = fx.table;
+  spec.mixture = fx.mixture;
+  CHECK(run_study(spec).size() == 5);  // N = 1 .. 16
+}
+
+TEST_CASE("bsdfmix converge writes the rows of is_rgl and mis_light_rgl", "[converge][cli][rgl]") {
+  const RglFixture& fx = satin();
+  const fs::path dir = temp_dir();
+  const std::string cfg = (dir / "rgl_cfg.yaml").string(), csv = (dir / "rgl_conv.csv").string();
+  const std::string sky_file = std::string(BSDFMIX_SOURCE_DIR) + "/configs/scenes/sky.yaml";
+  const auto write_cfg = [&](const std::string& rgl_line) {
+    std::ofstream(cfg) << "table: " << fx.table << "\nconverge:\n  mixture: " << fx.mixture
+                       << "\n  theta_o: [0.4]\n  phi_o: [0.5]\n  samples_max: 64\n  runs: 4\n  csv: " << csv
+                       << "\n  scene: " << sky_file << "\n  estimators: [mis_light_cdf, is_rgl, mis_light_rgl]\n"
+                       << rgl_line;
+  };
+  write_cfg("  rgl: " + fx.rgl + "\n");
+  fs::remove(csv);
+  REQUIRE(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg).c_str()) == 0);
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  CHECK(line == kConvergenceHeader);
+  std::map<std::string, int> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    REQUIRE(cells.size() == 12);
+    ++rows[cells[4]];
+    CHECK(std::isfinite(std::stod(cells[7])));  // mean
+    CHECK(std::stod(cells[8]) > 0);             // reference
+  }
+  CHECK(rows["is_rgl"] == 7);  // N = 1 .. 64
+  CHECK(rows["mis_light_rgl"] == 7);
+  CHECK(rows["mis_light_cdf"] == 7);
+  // without converge.rgl, the file of the config's import section (the table exists: no import)
+  write_cfg("import:\n  rgl: " + fx.rgl + "\n  theta_o: 4\n  theta_i: 32\n  phi_i: 64\n");
+  fs::remove(csv);
+  CHECK(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg).c_str()) == 0);
+  CHECK(fs::exists(csv));
+  // without the file: one error line naming the key
+  const std::string err = (dir / "rgl_err.txt").string();
+  write_cfg("");
+  CHECK(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg + " 2>" + err).c_str()) != 0);
+  std::ifstream e1(err);
+  std::getline(e1, line);
+  CHECK_THAT(line, Catch::Contains("converge.rgl") && Catch::Contains("is_rgl samples with an RGL file's own warps"));
+  CHECK_FALSE(std::getline(e1, line));
+  // another material's file: one error line naming both hashes' files
+  write_cfg("  rgl: " + rgl_file("paper_white_rgb.bsdf") + "\n");
+  CHECK(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg + " 2>" + err).c_str()) != 0);
+  std::ifstream e2(err);
+  std::getline(e2, line);
+  CHECK_THAT(line, Catch::Contains("paper_white_rgb.bsdf: sha256") && Catch::Contains(fx.table));
+  CHECK_FALSE(std::getline(e2, line));
 }

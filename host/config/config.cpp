@@ -81,6 +81,13 @@ Config parse_config(const std::string& text, const std::string& name) {
   if (user["render"]) c.render = RenderSection{name, merged(defaults["render"], user["render"]), defaults["render"]};
   if (c.generate && c.import)
     throw ConfigError(name + ": generate and import both make the table; keep one");
+  // is_rgl and mis_light_rgl sample with the RGL file the table came from
+  if (c.converge && c.converge->rgl.empty() && !(c.import && !c.import->rgl.empty()))
+    for (const std::string& e : c.converge->estimators)
+      if (e == "is_rgl" || e == "mis_light_rgl")
+        ConfigNode(name, "converge", user["converge"])
+            .fail("rgl", e + " samples with an RGL file's own warps: name the .bsdf file the table was imported "
+                             "from here (or import the table in this config, import.rgl)");
   if (!c.generate && !c.import && !exists_quiet(c.table))
     root.fail("table", "file '" + c.table + "' not found (and no generate or import section makes it)");
   return c;

@@ -85,6 +85,9 @@ struct ConvergeSection {
   bool power_heuristic = false;
   std::string light_mixture_dir;  // "" = <csv dir>/light_mixtures
   std::string light_tail_csv;     // "" = beside csv: <csv stem>_light_tail.csv
+  // is_rgl, mis_light_rgl: the RGL file (.bsdf) whose warps they sample with; "" = import.rgl
+  // when the config's import section made the table
+  std::string rgl;
 };
 
 // The `render` section, parsed by the renderer (host/render/render_settings.hpp): the

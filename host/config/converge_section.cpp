@@ -96,6 +96,10 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   if (n.has("light_mixture_dir")) c.light_mixture_dir = n.str("light_mixture_dir");
   if (n.has("light_tail_csv")) c.light_tail_csv = n.str("light_tail_csv");
   c.cpu = n.boolean("cpu");
+  if (n.has("rgl")) {
+    c.rgl = n.str("rgl");
+    if (!exists_quiet(c.rgl)) n.fail("rgl", "file '" + c.rgl + "' not found");
+  }
   return c;
 }
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "scene/light_mixture.hpp"
@@ -16,6 +17,7 @@
 #include "core/format.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
+#include "tables/rgl_brdf.hpp"
 
 namespace bsdfmix {
 
@@ -27,6 +29,39 @@ std::string num(double x) { return format_number(x, "%.9g"); }
 std::string short_num(double x) { return format_number(x, "%.3g"); }
 
 std::string fixed(double x, int digits) { return format_number(x, ("%." + std::to_string(digits) + "f").c_str()); }
+
+// The "sha256" of a table's source (JSON text, as the RGL importer writes it); "" if none.
+std::string source_sha256(const std::string& json) {
+  const std::string key = "\"sha256\"";
+  const std::size_t k = json.find(key);
+  if (k == std::string::npos) return "";
+  const std::size_t colon = json.find(':', k + key.size());
+  const std::size_t a = colon == std::string::npos ? colon : json.find('"', colon);
+  const std::size_t b = a == std::string::npos ? a : json.find('"', a + 1);
+  return b == std::string::npos ? "" : json.substr(a + 1, b - a - 1);
+}
+
+// is_rgl and mis_light_rgl: the RGL file, checked against the table it must have made.
+std::unique_ptr<RglBrdf> load_rgl(const StudySpec& spec, const TableReader& table) {
+  if (spec.rgl.empty())
+    throw ConfigError("converge.rgl: is_rgl and mis_light_rgl sample with an RGL file's own warps: name the .bsdf "
+                      "file the table was imported from (or import the table in this config, import.rgl)");
+  if (table.meta().domain != Domain::Hemisphere)
+    throw InputError(spec.table + ": is_rgl and mis_light_rgl need a hemisphere table imported from an RGL file");
+  for (const auto& d : spec.directions)
+    if (!(d.first >= 0 && d.first < kPi / 2))
+      throw ConfigError("converge.theta_o: is_rgl and mis_light_rgl need view elevations in [0, pi/2), not " +
+                        num(d.first));
+  auto rgl = std::make_unique<RglBrdf>(spec.rgl);
+  const std::string want = source_sha256(table.meta().source);
+  if (want.empty())
+    throw InputError(spec.table + ": not imported from an RGL file (its source names no sha256), so " + spec.rgl +
+                     " cannot sample it (is_rgl, mis_light_rgl)");
+  if (want != rgl->sha256())
+    throw InputError(spec.rgl + ": sha256 " + rgl->sha256() + " differs from that of the file " + spec.table +
+                     " was imported from (" + want + ")");
+  return rgl;
+}
 
 }  // namespace
 
@@ -74,11 +109,17 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
   std::vector<Device> devices;
   if (!spec.cpu) devices = select_devices(spec.device);
   const std::string where = spec.cpu ? std::string("CPU reference") : devices.front().info().label();
+  const bool rgl_used = std::any_of(spec.estimators.begin(), spec.estimators.end(), rgl_estimator);
+  const std::unique_ptr<RglBrdf> rgl = rgl_used ? load_rgl(spec, table) : nullptr;
   log_line("converge: " + spec.table + " with " + spec.mixture + " on " + where + ": " +
            std::to_string(spec.directions.size()) + " directions x " + std::to_string(spec.scenes.size()) +
            " scenes x " + std::to_string(spec.estimators.size()) + " estimators, " + std::to_string(spec.runs) +
            " runs of up to " + std::to_string(spec.samples_max) + " samples (seed " + std::to_string(spec.seed) + ")");
 
+  if (!spec.cpu && std::any_of(spec.estimators.begin(), spec.estimators.end(), [](Estimator e) { return !on_device(e); }))
+    log_line("converge: is_rgl and mis_light_rgl (the RGL file's warps) have no kernel: they run on the CPU "
+             "reference, and their ns_per_sample is that one CPU launch's (no timing rounds), not comparable "
+             "with the device's");
   // The lighting mixtures, one per scene, for the product estimators.
   const bool product = std::any_of(spec.estimators.begin(), spec.estimators.end(), uses_product);
   std::vector<LightMixture> light_mix(spec.scenes.size());
@@ -160,6 +201,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
     for (std::size_t si = 0; si < spec.scenes.size(); ++si) {
       const Lighting& light = spec.scenes[si];
       Problem p = make_problem(table, set, theta_o, phi_o, light, spec.mis, product ? &light_mix[si].mixture : nullptr);
+      p.rgl = rgl.get();
       if (product && spec.product_auto) {
         const ProductTuning tu = tune_product_fractions(p);
         p.mis.product_fraction = tu.product_fraction;
@@ -202,7 +244,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
       std::vector<double> best;
       for (const Estimator e : spec.estimators) {
         RunSums s;
-        if (spec.cpu) {
+        if (spec.cpu || !on_device(e)) {  // the RGL estimators have no kernel
           const auto t0 = std::chrono::steady_clock::now();
           s = integrate_cpu(p, e, spec.runs, spec.samples_max, spec.seed);
           s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -215,6 +257,10 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
       }
       for (int round = 0; round < timing_rounds; ++round)
         for (std::size_t i = 0; i < spec.estimators.size(); ++i) {
+          if (!on_device(spec.estimators[i])) {  // timed once, on the CPU
+            progress.advance();
+            continue;
+          }
           best[i] = std::min(best[i], time_integrate_device(devices.front(), p, spec.estimators[i], spec.runs,
                                                             spec.samples_max, spec.seed));
           progress.advance();
@@ -246,7 +292,7 @@ std::vector<ConvergenceRow> run_study(const StudySpec& spec) {
         line += std::string(i ? ";" : "") + " " + estimator_name(e) + " " + short_num(last.rel_rmse);
         if (var_us > 0 && e != Estimator::UsTab && last.rmse > 0)
           line += " (" + short_num(var_us / (last.rmse * last.rmse)) + "x)";
-        line += ", " + fixed(ns, 0);
+        line += ", " + fixed(ns, 0) + (spec.cpu || on_device(e) ? "" : " (CPU)");
         if (ns_us > 0 && e != Estimator::UsTab) line += " (" + fixed(ns / ns_us, 2) + "x)";
         rows.insert(rows.end(), rs.begin(), rs.end());
       }

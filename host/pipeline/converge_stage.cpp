@@ -60,7 +60,9 @@ void stage_converge(const Config& config, const std::string& device_selector) {
   spec.tail_csv = converge_tail_path(c);
   // The lighting tail CSV comes with the estimators that sample by the lighting.
   for (const Estimator e : spec.estimators)
-    if (int(e) >= kClassicEstimators) spec.light_tail_csv = converge_light_tail_path(c);
+    if (uses_lighting(e)) spec.light_tail_csv = converge_light_tail_path(c);
+  // is_rgl, mis_light_rgl: converge.rgl, else the file this config imports the table from
+  spec.rgl = !c.rgl.empty() ? c.rgl : config.import ? config.import->rgl : std::string();
   run_study(spec);
 }
 

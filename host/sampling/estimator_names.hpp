@@ -8,10 +8,11 @@ namespace bsdfmix {
 
 inline constexpr const char* kEstimatorNames[] = {"us_tab",        "us_gmm",        "is_tab",  "is_gmm",
                                                   "mis_tab",       "cdf_tab",       "light",   "mis_light_cdf",
-                                                  "mis_light_gmm", "product",       "mis_product"};
+                                                  "mis_light_gmm", "product",       "mis_product",   "is_rgl",
+                                                  "mis_light_rgl"};
 inline constexpr int kEstimatorCount = int(sizeof kEstimatorNames / sizeof kEstimatorNames[0]);
 
-// "us_tab, us_gmm, .. or mis_product"
+// "us_tab, us_gmm, .. or mis_light_rgl"
 inline std::string estimator_list() {
   std::string s;
   for (int i = 0; i < kEstimatorCount; ++i)

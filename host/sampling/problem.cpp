@@ -22,6 +22,10 @@ Estimator parse_estimator(const std::string& name, const std::string& where) {
 
 bool uses_table(Estimator e) { return e != Estimator::UsGmm && e != Estimator::IsGmm; }
 bool uses_product(Estimator e) { return e == Estimator::Product || e == Estimator::MisProduct; }
+bool rgl_estimator(Estimator e) { return e == Estimator::IsRgl || e == Estimator::MisLightRgl; }
+bool uses_lighting(Estimator e) {
+  return (int(e) >= kClassicEstimators && int(e) < kDeviceEstimators) || e == Estimator::MisLightRgl;
+}
 
 static int block_images(double sigma_c) {
   // Offsets from the conditional mean of the images beyond the nearest (|u0| <= pi), nearest

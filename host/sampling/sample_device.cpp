@@ -105,6 +105,8 @@ class IntegrateLaunch {
     if (n_max == 0 || (n_max & (n_max - 1)) != 0)
       throw ConfigError("integrate: the sample count must be a power of two");
     if (runs < 1) throw ConfigError("integrate: runs must be at least 1");
+    if (!on_device(e))
+      throw ConfigError(std::string("integrate: ") + estimator_name(e) + " has no kernel (run it with integrate_cpu)");
     chunk = std::uint32_t(std::min<std::uint64_t>(std::max<std::uint32_t>(chunk, 1), n_max));
     while (chunk & (chunk - 1)) chunk &= chunk - 1;
     chunk_ = chunk;

@@ -1,11 +1,14 @@
 // CPU references of kernels/sample.cl in double: sampling through the renderer-facing
-// header (include/bsdfmix/mixture.hpp) and the six estimators of the convergence study.
+// header (include/bsdfmix/mixture.hpp) and the estimators of the convergence study (is_rgl
+// and mis_light_rgl, the RGL file's own warps, exist here alone).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "sampling/sampling.hpp"
+#include "tables/rgl_brdf.hpp"
 
 namespace bsdfmix {
 
@@ -87,6 +90,32 @@ void light_draw(const Problem& p, double u0, double u1, double u2, double u3, do
   world_to_slice(p.light, p.light_sampler.sample(u0, u1, u2, u3), th, ph);
 }
 
+// The RGL file's warps in the table's frame: the view omega_o at phi = 0 of the slice
+// frame (where the importer puts it), the light direction rotated into the world frame by
+// the table's rotation (phi_o under azimuthal symmetry), as TableSlice::f_at reads it.
+const RglBrdf& rgl_of(const Problem& p) {
+  if (!p.rgl) throw std::invalid_argument("is_rgl, mis_light_rgl: the problem has no RGL file (Problem::rgl)");
+  return *p.rgl;
+}
+
+std::array<double, 3> rgl_view(const Problem& p) { return {std::sin(p.theta_o), 0.0, std::cos(p.theta_o)}; }
+
+// Draws with u1, u2 (the file's two uniforms); false below the horizon.
+bool rgl_draw(const Problem& p, double u1, double u2, double& th, double& ph, double* pdf = nullptr) {
+  const RglBrdf::Sample s = rgl_of(p).sample(rgl_view(p), u1, u2);
+  if (!s.valid) return false;
+  th = std::acos(std::clamp(s.omega_i[2], -1.0, 1.0));
+  ph = wrap_phi(std::atan2(s.omega_i[1], s.omega_i[0]) + p.table.rotate);
+  if (pdf) *pdf = s.pdf;
+  return inside(p.table.domain, th);
+}
+
+double rgl_pdf(const Problem& p, double th, double ph) {
+  if (!inside(p.table.domain, th)) return 0;
+  const double pl = wrap_phi(ph - p.table.rotate), st = std::sin(th);
+  return rgl_of(p).pdf(rgl_view(p), {st * std::cos(pl), st * std::sin(pl), std::cos(th)});
+}
+
 // One-sample MIS: techniques with fractions c[k] and densities pdf[k] at the point, the
 // point drawn by technique `chosen`. Balance: 1 / sum c p; power (beta 2): c_s p_s / sum (c p)^2.
 double mis_weight(const double* c, const double* pdf, int n, int chosen, bool power) {
@@ -104,6 +133,7 @@ int techniques(const Problem& p, Estimator e, double* c) {
   const MisOptions& m = p.mis;
   switch (e) {
     case Estimator::MisLightCdf:  // light, table CDF
+    case Estimator::MisLightRgl:  // light, the RGL file's warps
       c[0] = m.light_fraction;
       c[1] = 1 - m.light_fraction;
       return 2;
@@ -140,6 +170,10 @@ void technique_pdfs(const Problem& p, Estimator e, double th, double ph, double*
       pdf[1] = light_pdf(p, th, ph);
       pdf[2] = in ? uniform_pdf(d) : 0;
       break;
+    case Estimator::MisLightRgl:
+      pdf[0] = light_pdf(p, th, ph);
+      pdf[1] = rgl_pdf(p, th, ph);
+      break;
     default: break;
   }
 }
@@ -160,9 +194,11 @@ double estimator_pdf(const Problem& p, Estimator e, double th, double ph) {
     case Estimator::CdfTab: return cdf_pdf(p, th, ph);
     case Estimator::Light: return light_pdf(p, th, ph);
     case Estimator::Product: return p.has_product ? p.product.pdf_omega(d, th, ph) : 0;
+    case Estimator::IsRgl: return rgl_pdf(p, th, ph);
     case Estimator::MisLightCdf:
     case Estimator::MisLightGmm:
-    case Estimator::MisProduct: {
+    case Estimator::MisProduct:
+    case Estimator::MisLightRgl: {
       double c[3], pdf[3];
       const int n = techniques(p, e, c);
       technique_pdfs(p, e, th, ph, pdf);
@@ -206,6 +242,7 @@ bool draw_cpu(const Problem& p, Estimator e, const double u[4], double& th, doub
       ph = s.phi;
       return s.valid;
     }
+    case Estimator::IsRgl: return rgl_draw(p, u[1], u[2], th, ph);
     default: throw std::invalid_argument(std::string("draw_cpu: not for ") + estimator_name(e));
   }
 }
@@ -275,9 +312,17 @@ double estimate_cpu(const Problem& p, Estimator e, const double u[4]) {
       if (f == 0) return 0;
       return p.light.radiance(s.theta, s.phi) * f * cos_factor(d, s.theta) / s.pdf_omega;
     }
+    case Estimator::IsRgl: {
+      double th, ph, pdf = 0;
+      if (!rgl_draw(p, u[1], u[2], th, ph, &pdf)) return 0;
+      const double f = p.table.f_at(th, ph);
+      if (f == 0 || !(pdf > 0)) return 0;
+      return p.light.radiance(th, ph) * f * cos_factor(d, th) / pdf;
+    }
     case Estimator::MisLightCdf:
     case Estimator::MisLightGmm:
-    case Estimator::MisProduct: {
+    case Estimator::MisProduct:
+    case Estimator::MisLightRgl: {
       if (e == Estimator::MisProduct && !p.has_product) return 0;
       double c[3], pdf[3];
       const int n = techniques(p, e, c);
@@ -288,13 +333,15 @@ double estimate_cpu(const Problem& p, Estimator e, const double u[4]) {
       const double r0 = std::clamp((u[0] - lo) / c[k], 0.0, 1.0 - 1e-17);
       double th = 0, ph = 0;
       const bool light = (e == Estimator::MisProduct) ? k == 1 : k == 0;
-      const bool uniform = (e != Estimator::MisLightCdf) && k == 2;
+      const bool uniform = (e == Estimator::MisLightGmm || e == Estimator::MisProduct) && k == 2;
       if (light) {
         light_draw(p, r0, u[1], u[2], u[3], th, ph);
       } else if (uniform) {
         uniform_draw(d, u[2], u[3], th, ph);
       } else if (e == Estimator::MisLightCdf) {
         if (!cdf_draw(p, r0, u[1], u[2], u[3], th, ph)) return 0;
+      } else if (e == Estimator::MisLightRgl) {
+        if (!rgl_draw(p, u[1], u[2], th, ph)) return 0;
       } else if (e == Estimator::MisLightGmm) {
         const mix::Sample s = set.sample(to, po, r0, u[1], u[2], u[3]);
         th = s.theta;

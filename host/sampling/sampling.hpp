@@ -21,6 +21,8 @@
 
 namespace bsdfmix {
 
+class RglBrdf;
+
 // Counter streams (third counter word): sample CLI and each estimator.
 constexpr std::uint32_t kSampleStream = 0x73616d70u;  // "samp"
 std::uint32_t estimator_stream(int estimator);
@@ -63,15 +65,27 @@ std::vector<std::pair<double, double>> eval_device(const Device& device, const m
 
 // ---- estimators ------------------------------------------------------------------------
 
+// kernels/sample.cl numbers the estimators it implements as this enum does (ESTIMATOR):
+// new ones go at the end.
 enum class Estimator {
   UsTab = 0, UsGmm = 1, IsTab = 2, IsGmm = 3, MisTab = 4, CdfTab = 5,
-  Light = 6, MisLightCdf = 7, MisLightGmm = 8, Product = 9, MisProduct = 10
+  Light = 6, MisLightCdf = 7, MisLightGmm = 8, Product = 9, MisProduct = 10,
+  IsRgl = 11, MisLightRgl = 12
 };
-constexpr int kEstimators = 11;
+constexpr int kEstimators = 13;
 static_assert(kEstimators == kEstimatorCount, "estimator names");
 constexpr int kClassicEstimators = 6;  // us_tab .. cdf_tab: the ones that ignore the lighting
+// us_tab .. mis_product (0 .. 10): the estimators kernels/sample.cl implements. The others
+// (is_rgl, mis_light_rgl: the RGL file's warps) run on the CPU alone (integrate_cpu).
+constexpr int kDeviceEstimators = 11;
+static_assert(int(Estimator::MisProduct) + 1 == kDeviceEstimators, "the kernel's estimators come first");
+inline bool on_device(Estimator e) { return int(e) < kDeviceEstimators; }
 // The estimators that sample by the lighting mixture's product (they need one fitted).
 bool uses_product(Estimator e);
+// The estimators that draw with the RGL file's own warps (Problem::rgl).
+bool rgl_estimator(Estimator e);
+// The estimators whose draw depends on the lighting (light sampling, the product).
+bool uses_lighting(Estimator e);
 const char* estimator_name(Estimator e);
 // Throws ConfigError naming `where` for an unknown name.
 Estimator parse_estimator(const std::string& name, const std::string& where);
@@ -132,6 +146,9 @@ struct Problem {
   QueryMixture product_query;
   double product_kept = 1;
   MisOptions mis;
+  // is_rgl, mis_light_rgl: the RGL file the table was imported from (its warps draw the
+  // light direction for the view omega_o; f stays the table's). Not owned; nullptr: none.
+  const RglBrdf* rgl = nullptr;
   std::vector<float> geometry() const;
 };
 
@@ -147,8 +164,8 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
 double estimator_pdf(const Problem& p, Estimator e, double theta, double phi);
 
 // The direction (theta, phi; world phi) that estimator `e` draws from the uniforms u, as
-// estimate_cpu draws it, for us_tab, us_gmm, is_tab, is_gmm, mis_tab, cdf_tab, light and
-// product: false when it draws none (a sample outside the domain, an empty cell). Its
+// estimate_cpu draws it, for us_tab, us_gmm, is_tab, is_gmm, mis_tab, cdf_tab, light,
+// product and is_rgl: false when it draws none (a sample outside the domain, an empty cell). Its
 // density is estimator_pdf. Throws std::invalid_argument for the other MIS estimators.
 bool draw_cpu(const Problem& p, Estimator e, const double u[4], double& theta, double& phi);
 
@@ -167,6 +184,8 @@ struct RunSums {
 };
 
 RunSums integrate_cpu(const Problem& p, Estimator e, int runs, std::uint64_t n_max, std::uint64_t seed);
+// The device's run sums, for the estimators of the kernel (on_device); the others throw
+// ConfigError (the study runs them with integrate_cpu).
 RunSums integrate_device(const Device& device, const Problem& p, Estimator e, int runs, std::uint64_t n_max,
                          std::uint64_t seed, std::uint32_t chunk = 256);
 // Seconds of one more launch of integrate_device's shape (after its untimed warm-up),
