@@ -241,7 +241,7 @@ TEST_CASE("a lobe that moves between two slices is interpolated as one lobe at i
   for (double t : {0.05, 0.2, 0.35, 0.6})
     CHECK(moved.pdf_param(0.2, 0.0, t, 3.0) == Approx(blend.pdf_param(0.2, 0.0, t, 3.0)).epsilon(1e-12));
   // the plan moves the narrow lobe alone; the broad component (sigma 0.8) is blended
-  const auto plan = mix::transport_plan(moved.slices[0], moved.slices[1]);
+  const auto plan = mix::transport_plan(moved.slices[0], moved.slices[1]).flows;
   REQUIRE(plan.size() == 1);
   CHECK(plan[0].i == 1);
   CHECK(plan[0].j == 1);

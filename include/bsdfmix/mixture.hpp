@@ -351,6 +351,14 @@ struct Flow {
   double mass = 0;
 };
 
+// A partial transport plan between two slices: the matched pairs, and the mass of each
+// component that no pair carries (left_a[i] of the lower slice's component i, left_b[j]
+// of the upper's).
+struct Transport {
+  std::vector<Flow> flows;
+  std::vector<double> left_a, left_b;
+};
+
 // The squared 2-Wasserstein distance of two 2D normals, phi measured the short way:
 // |mu_x - mu_y|^2 + tr Sx + tr Sy - 2 tr (Sx^1/2 Sy Sx^1/2)^1/2; for 2 x 2 matrices
 // tr M^1/2 = sqrt(tr M + 2 sqrt(det M)), and Sx^1/2 Sy Sx^1/2 has the trace and
@@ -381,7 +389,7 @@ inline bool same_lobe(const Gaussian& x, const Gaussian& y, double reach) {
 // mixtures): over the pairs that can be one lobe (same_lobe), the cheapest by w2_squared
 // first, each carrying as much mass as both ends have left (a greedy plan). Mass left
 // unmatched stays where it is: displaced() blends it.
-inline std::vector<Flow> transport_plan(const SliceMixture& a, const SliceMixture& b) {
+inline Transport transport_plan(const SliceMixture& a, const SliceMixture& b) {
   const std::size_t na = a.components.size(), nb = b.components.size();
   struct Pair {
     double cost;
@@ -398,16 +406,19 @@ inline std::vector<Flow> transport_plan(const SliceMixture& a, const SliceMixtur
   std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
     return x.cost < y.cost || (x.cost == y.cost && (x.i < y.i || (x.i == y.i && x.j < y.j)));
   });
-  std::vector<double> left_a(na), left_b(nb);
-  for (std::size_t i = 0; i < na; ++i) left_a[i] = a.components[i].weight;
-  for (std::size_t j = 0; j < nb; ++j) left_b[j] = b.components[j].weight;
-  std::vector<Flow> plan;
+  Transport plan;
+  plan.left_a.resize(na);
+  plan.left_b.resize(nb);
+  for (std::size_t i = 0; i < na; ++i) plan.left_a[i] = a.components[i].weight;
+  for (std::size_t j = 0; j < nb; ++j) plan.left_b[j] = b.components[j].weight;
   for (const Pair& p : pairs) {
-    const double m = std::min(left_a[std::size_t(p.i)], left_b[std::size_t(p.j)]);
+    double& la = plan.left_a[std::size_t(p.i)];
+    double& lb = plan.left_b[std::size_t(p.j)];
+    const double m = std::min(la, lb);
     if (!(m > 0)) continue;
-    plan.push_back({p.i, p.j, m});
-    left_a[std::size_t(p.i)] -= m;
-    left_b[std::size_t(p.j)] -= m;
+    plan.flows.push_back({p.i, p.j, m});
+    la -= m;
+    lb -= m;
   }
   return plan;
 }
@@ -415,7 +426,7 @@ inline std::vector<Flow> transport_plan(const SliceMixture& a, const SliceMixtur
 // The mixture a fraction t of the way from a to b along `plan` (transport_plan(a, b)),
 // in the slices' own phi frame: components as described at Interpolation, scale linear
 // in t, colour amplitudes shared by each pair in proportion to the mass it carries.
-inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, const std::vector<Flow>& plan, double t) {
+inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, const Transport& plan, double t) {
   auto between = [t](const Gaussian& x, const Gaussian& y, double share_x, double share_y) {
     Gaussian g;
     g.mu_t = (1 - t) * x.mu_t + t * y.mu_t;
@@ -441,13 +452,6 @@ inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, cons
     return copy_of(g, m, rgb);
   };
   // Unmatched mass: a's share fades out as (1 - t), b's fades in as t, in place.
-  std::vector<double> left_a(a.components.size()), left_b(b.components.size());
-  for (std::size_t i = 0; i < left_a.size(); ++i) left_a[i] = a.components[i].weight;
-  for (std::size_t j = 0; j < left_b.size(); ++j) left_b[j] = b.components[j].weight;
-  for (const Flow& f : plan) {
-    left_a[std::size_t(f.i)] -= f.mass;
-    left_b[std::size_t(f.j)] -= f.mass;
-  }
   auto stay = [&](const SliceMixture& s, std::size_t k, double left, double share) {
     const Gaussian& x = s.components[k];
     if (!(left > 1e-12 * x.weight) || !(share > 0)) return;
@@ -463,9 +467,9 @@ inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, cons
         out.colour.push_back(c);
       }
   };
-  for (std::size_t i = 0; i < left_a.size(); ++i) stay(a, i, left_a[i], 1 - t);
-  for (std::size_t j = 0; j < left_b.size(); ++j) stay(b, j, left_b[j], t);
-  for (const Flow& f : plan) {
+  for (std::size_t i = 0; i < plan.left_a.size(); ++i) stay(a, i, plan.left_a[i], 1 - t);
+  for (std::size_t j = 0; j < plan.left_b.size(); ++j) stay(b, j, plan.left_b[j], t);
+  for (const Flow& f : plan.flows) {
     const Gaussian& x = a.components[std::size_t(f.i)];
     const Gaussian& y = b.components[std::size_t(f.j)];
     const double sx = x.weight > 0 ? f.mass / x.weight : 0, sy = y.weight > 0 ? f.mass / y.weight : 0;
@@ -574,8 +578,9 @@ class MixtureSet {
     double f = 0;
   };
 
-  // The columns serving omega_o (up to 2; 1 with azimuthal symmetry), their weights
-  // normalized, and the phi_o to add to sampled phi (azimuthal symmetry).
+  // The columns serving omega_o (up to 2; 1 with azimuthal symmetry), with the phi weights
+  // of those that have a fitted slice (not normalized), and the phi_o to add to sampled
+  // phi (azimuthal symmetry).
   int columns(double theta_o, double phi_o, Column out[2], double& rotate) const {
     const Bracket t = bracket(grid_theta_o, theta_o, false);
     Bracket p;
@@ -802,7 +807,7 @@ class MixtureSet {
   }
 
  private:
-  std::vector<std::vector<Flow>> plan_up_;  // per slice: the plan to the next fitted slice above
+  std::vector<Transport> plan_up_;  // per slice: the plan to the next fitted slice above
 
   // The mixture of n pieces with weights w, means rotated by `rotate`: every component of
   // every piece, weighted by its piece's weight; scale the weighted scale; with rgb when
