@@ -13,18 +13,19 @@ them. Each of the two interpolations is then measured
 The fits are the study sampling_peers' (bench/reproduce.sh sampling_peers makes them).
 """
 import argparse
-import csv
 import glob
 import os
-import subprocess
 import sys
 
 import h5py
 import numpy as np
 from machine import cpu_model  # noqa: E402  (bench/machine.py)
+from study_io import ROOT, by_view, bsdfmix, over_rgl, rows, write_rows  # noqa: E402  (bench/study_io.py)
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BIN = os.path.join(ROOT, "build", "bsdfmix")
+
+
+def run(*args):
+    bsdfmix("interpolation", *args)
 
 
 def every_other_slice(src, dst):
@@ -58,17 +59,6 @@ def every_other_slice(src, dst):
             o.create_dataset("rgb_copies", data=np.concatenate(rows) if rows else np.zeros((0, 4, 3)))
 
 
-def run(*args):
-    r = subprocess.run([BIN, *args], capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"interpolation: `bsdfmix {' '.join(args)}` failed: {r.stderr.strip()}")
-
-
-def rows(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "sampling_peers"))
@@ -93,10 +83,7 @@ def main():
             left_out = [float(r["l1_rel"]) for r in rows(cmp_csv) if r["fitted"] == "0"]
             run("bench", "sampling", "-q", "--rgl", rgl, "--table", table, "--mixture", f, "--directions",
                 str(a.directions), "--samples", str(a.samples), "--seed", "1", "--csv", smp_csv)
-            by = {}
-            for r in rows(smp_csv):
-                by.setdefault(r["theta_o_deg"], {})[r["sampler"]] = float(r["relvar"])
-            ratio = [v["is_mixture"] / v["rgl"] for v in by.values()]
+            ratio = over_rgl(by_view(smp_csv), "is_mixture")
             out.append({"material": name, "interpolation": mode, "slices_left_out": len(left_out),
                         "l1_left_out_median": f"{np.median(left_out):.5f}",
                         "l1_left_out_p90": f"{np.percentile(left_out, 90):.5f}",
@@ -106,12 +93,7 @@ def main():
             print(f"{name:20s} {mode:9s} L1 left out median {float(out[-1]['l1_left_out_median']):.4f} "
                   f"p90 {float(out[-1]['l1_left_out_p90']):.4f}; is_mixture / rgl median "
                   f"{out[-1]['is_mixture_over_rgl_median']} max {out[-1]['is_mixture_over_rgl_max']}", flush=True)
-    tmp = a.csv + ".tmp"
-    with open(tmp, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(out[0].keys()))
-        w.writeheader()
-        w.writerows(out)
-    os.replace(tmp, a.csv)
+    write_rows(a.csv, out)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ A material whose resolved table would exceed --max-mib is reported with its grid
 and not imported.
 """
 import argparse
-import csv
 import glob
 import math
 import os
@@ -24,22 +23,13 @@ import sys
 
 import numpy as np
 from machine import cpu_model  # noqa: E402  (bench/machine.py)
+from study_io import BIN, ROOT, by_view, bsdfmix, over_rgl, rows, write_rows  # noqa: E402  (bench/study_io.py)
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BIN = os.path.join(ROOT, "build", "bsdfmix")
 VIEW_STREAM = 0x76696577  # bench/sampling_peers.cpp kViewStream
 
 
 def run(*args):
-    r = subprocess.run([BIN, *args], capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"rgl_resolve: `bsdfmix {' '.join(args)}` failed: {r.stderr.strip()}")
-    return r.stdout + r.stderr
-
-
-def rows(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
+    bsdfmix("rgl_resolve", *args)
 
 
 def main():
@@ -100,11 +90,8 @@ def main():
             smp = f"{base}_{kind}_sampling.csv"
             run("bench", "sampling", "-q", "--rgl", rgl, "--table", table, "--mixture", mixture, "--directions",
                 str(a.directions), "--samples", str(a.samples), "--seed", "1", "--csv", smp)
-            by = {}
-            for r in rows(smp):
-                by.setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
-            ratio = [float(v["is_mixture"]["relvar"]) / float(v["rgl"]["relvar"]) for v in by.values()]
-            cdf = [float(v["cdf_table"]["relvar"]) / float(v["rgl"]["relvar"]) for v in by.values()]
+            by = by_view(smp)
+            ratio, cdf = over_rgl(by, "is_mixture"), over_rgl(by, "cdf_table")
             any_row = next(iter(by.values()))
             res = kind != "default"
             fit_rows = rows(f"{base}_{kind}_fit.csv")
@@ -128,12 +115,7 @@ def main():
                         "is_mixture_over_rgl_median": "", "is_mixture_over_rgl_max": "",
                         "cdf_table_over_rgl_median": "", "cdf_table_over_rgl_max": "", "cpu": cpu_model()})
             print(f"{name}: the resolved grid {grid} needs {table_mib:.0f} MiB (over --max-mib): not imported", flush=True)
-    tmp = a.csv + ".tmp"
-    with open(tmp, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(out[0].keys()))
-        w.writeheader()
-        w.writerows(out)
-    os.replace(tmp, a.csv)
+    write_rows(a.csv, out)
 
 
 def view_elevations(directions, theta_max_deg=85.0, seed=1):

@@ -1,0 +1,45 @@
+"""What the studies that drive the CLI share: running build/bsdfmix, reading and writing
+their CSVs, and the per-view ratios of `bsdfmix bench sampling`'s CSV."""
+import csv
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.path.join(ROOT, "build", "bsdfmix")
+
+
+def bsdfmix(study, *args):
+    """Runs `bsdfmix ARGS`; a failure ends the study with one line naming the command."""
+    r = subprocess.run([BIN, *args], capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"{study}: `bsdfmix {' '.join(args)}` failed: {r.stderr.strip()}")
+
+
+def rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def write_rows(path, out):
+    """The rows (dicts with the same keys) as a CSV, written under a temporary name first."""
+    tmp = path + ".tmp"
+    with open(tmp, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(out[0].keys()))
+        w.writeheader()
+        w.writerows(out)
+    os.replace(tmp, path)
+
+
+def by_view(sampling_csv):
+    """`bench sampling`'s rows under constant light: {theta_o_deg: {sampler: row}}."""
+    by = {}
+    for r in rows(sampling_csv):
+        if r.get("lighting", "constant") == "constant":
+            by.setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
+    return by
+
+
+def over_rgl(by, sampler):
+    """Per view, the sampler's variance per sample over the RGL file's own sampler's."""
+    return [float(v[sampler]["relvar"]) / float(v["rgl"]["relvar"]) for v in by.values()]
