@@ -82,7 +82,7 @@ TEST_CASE("bsdfmix render writes its CSV, JSON and images", "[render][cli]") {
   REQUIRE(run(cfg) == 0);
   const fs::path out = temp_dir() / "plain";
   const std::string csv = slurp(out / "render.csv");
-  CHECK(csv.rfind("scene,fiber,estimator,mode,spp,seconds,rays_per_second,rel_mse,image,ns_per_vertex\n", 0) == 0);
+  CHECK(csv.rfind("scene,fiber,estimator,mode,spp,seconds,rays_per_second,rel_mse,image,ns_per_vertex,rel_mse_material\n", 0) == 0);
   CHECK(csv.find(",uniform,equal_spp,4,") != std::string::npos);
   CHECK(csv.find(",mis_light_gmm,equal_time,") != std::string::npos);
   CHECK(slurp(out / "render.json").find("\"slices_needed\": ") != std::string::npos);

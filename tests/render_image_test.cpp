@@ -350,4 +350,17 @@ TEST_CASE("relative_mse follows its formula", "[render][image]") {
   Image other(3, 4);
   CHECK_THROWS_AS(relative_mse(other, ref), InputError);
   CHECK_THROWS_AS(relative_mse(Image(4, 2), ref), InputError);
+
+  // A mask: the mean over its pixels only, eps still from every value.
+  Image off = ref;
+  off.at(1, 2, 0) += 1.f;  // one value off, in a masked pixel
+  off.at(3, 0, 2) += 5.f;  // and one outside the mask
+  std::vector<std::uint8_t> mask(12, 0);
+  mask[2 * 4 + 1] = mask[2 * 4 + 2] = 1;
+  const double r = ref.at(1, 2, 0);
+  CHECK(relative_mse(off, ref, &mask) == Approx(1.0 / (r * r + eps) / 6.0).epsilon(1e-6));
+  const std::vector<std::uint8_t> none(12, 0);
+  CHECK(relative_mse(off, ref, &none) == -1.0);
+  const std::vector<std::uint8_t> short_mask(11, 1);
+  CHECK_THROWS_AS(relative_mse(off, ref, &short_mask), InputError);
 }

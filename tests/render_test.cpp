@@ -610,6 +610,43 @@ TEST_CASE("surface furnace: a white and a colored Lambertian table on a sphere u
   }
 }
 
+TEST_CASE("the material mask holds the pixels whose centre sees the sphere", "[render]") {
+  // A sphere resting on the ground, seen from above it: the pixels whose centre ray passes
+  // the sphere's centre closer than its radius are the material's, the rest the ground's or
+  // the sky's. Rays within 2 % of the radius are left out (the mesh is inscribed).
+  const double r = 0.35;
+  const SurfaceMesh sphere = make_sphere({0, 0, r}, r, 48, 96, "test sphere");
+  GroundPlane g;
+  g.enabled = true;
+  const Tracer tracer(Cloth{}, g, CurveType::FlatLinear, &sphere);
+  SceneView v;
+  v.tracer = &tracer;
+  v.camera.position = {0, -1.5, 0.8};
+  v.camera.look_at = {0, 0, r};
+  v.camera.fov_deg = 40;
+  v.width = 24;
+  v.height = 16;
+  const std::vector<std::uint8_t> mask = material_mask(v);
+  REQUIRE(mask.size() == 24u * 16u);
+  int material = 0, checked = 0, ground = 0;
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) {
+      const Ray ray = camera_ray(v.camera, v.width, v.height, x + 0.5, y + 0.5);
+      const Vec3 to{-ray.org[0], -ray.org[1], r - ray.org[2]};
+      const double t = dot(to, ray.dir);
+      const double d = std::sqrt(std::max(0.0, dot(to, to) - t * t));  // ray to the centre
+      if (std::abs(d - r) < 0.02 * r) continue;
+      ++checked;
+      const bool inside = d < r;
+      CHECK(bool(mask[std::size_t(y * v.width + x)]) == inside);
+      material += inside;
+      ground += !inside && ray.dir[2] < 0;
+    }
+  CHECK(checked > 300);
+  CHECK(material > 40);  // both kinds of pixel are there
+  CHECK(ground > 40);
+}
+
 TEST_CASE("a render is reproducible for a seed, whatever the thread count", "[render]") {
   Progress::set_enabled(false);
   TableBsdf bsdf(small_table("silk"));

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <tuple>
 
 #include "core/format.hpp"
 #include "core/progress.hpp"
@@ -21,7 +22,12 @@ double rays_per_second(const RenderStats& st) { return double(st.rays) / std::ma
 class PassRunner {
  public:
   PassRunner(const SceneView& view, const Image& reference, const GuideSetup& guide)
-      : view_(view), reference_(reference), guide_(guide) {}
+      : view_(view), reference_(reference), guide_(guide), mask_(material_mask(view)) {}
+
+  // The relative MSE over the whole image and over the material's pixels.
+  std::pair<double, double> errors(const Image& im) const {
+    return {relative_mse(im, reference_), relative_mse(im, reference_, &mask_)};
+  }
 
   std::pair<Image, RenderStats> run(PathEstimator e, FSource f, int spp, double budget, const std::string& what,
                                     std::vector<RenderRow>* progress) {
@@ -45,7 +51,7 @@ class PassRunner {
         r.mode = "progress";
         r.spp = done;
         r.seconds = sec;
-        r.rel_mse = relative_mse(mean_image(sum, done, view_.width, view_.height), reference_);
+        std::tie(r.rel_mse, r.rel_mse_material) = errors(mean_image(sum, done, view_.width, view_.height));
         progress->push_back(r);
       }
       return budget > 0 ? sec < budget : true;
@@ -67,6 +73,7 @@ class PassRunner {
   const Image& reference_;
   const GuideSetup& guide_;
   std::map<std::string, double> pass_seconds_;
+  const std::vector<std::uint8_t> mask_;
 };
 
 }  // namespace
@@ -105,8 +112,9 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
       pr.rays_per_second = rays_per_second(st);
       pr.ns_per_vertex = st.ns_per_vertex();
     }
-    out.rows.push_back({name, "equal_spp", name + "_spp.exr", st.spp, st.seconds, rays_per_second(st),
-                        relative_mse(im, reference), st.ns_per_vertex()});
+    const auto [all, material] = passes.errors(im);
+    out.rows.push_back({name, "equal_spp", name + "_spp.exr", st.spp, st.seconds, rays_per_second(st), all,
+                        st.ns_per_vertex(), material});
     out.rows.insert(out.rows.end(), prog.begin(), prog.end());
     slowest = std::max(slowest, st.seconds);
   }
@@ -116,8 +124,9 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
     const std::string name = path_estimator_name(e);
     auto [im, st] = passes.run(e, FSource::Table, 0, budget, name + " (" + format_number(budget, "%.1f") + " s)", nullptr);
     save_image(s.output, name + "_time", im);
-    out.rows.push_back({name, "equal_time", name + "_time.exr", st.spp, st.seconds, rays_per_second(st),
-                        relative_mse(im, reference), st.ns_per_vertex()});
+    const auto [all, material] = passes.errors(im);
+    out.rows.push_back({name, "equal_time", name + "_time.exr", st.spp, st.seconds, rays_per_second(st), all,
+                        st.ns_per_vertex(), material});
   }
 
   // The stand-in against the table: the same estimator, seed and samples.
@@ -138,10 +147,10 @@ Comparisons run_comparisons(const SceneView& view, const RenderSettings& s, cons
   for (int c = 0; c < 3; ++c) out.stand_in_channel_mean[c] = ma[c] > 0 ? mb[c] / ma[c] - 1 : 0;
   const double ya = Rgb(ma[0], ma[1], ma[2]).luminance(), yb = Rgb(mb[0], mb[1], mb[2]).luminance();
   out.stand_in_mean = ya > 0 ? yb / ya - 1 : 0;
-  out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), relative_mse(a, reference),
-                      sa.ns_per_vertex()});
-  out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), relative_mse(b, reference),
-                      sb.ns_per_vertex()});
+  const auto [ea, ma_] = passes.errors(a);
+  const auto [eb, mb_] = passes.errors(b);
+  out.rows.push_back({se, "table", "table.exr", sa.spp, sa.seconds, rays_per_second(sa), ea, sa.ns_per_vertex(), ma_});
+  out.rows.push_back({se, "stand_in", "stand_in.exr", sb.spp, sb.seconds, rays_per_second(sb), eb, sb.ns_per_vertex(), mb_});
   log_line("render: the stand-in image differs from the table image by " + format_number(100 * out.stand_in_difference, "%.2f") +
            " % per pixel, " + format_number(100 * out.stand_in_difference_4x4, "%.2f") +
            " % over 4 x 4 blocks (the table image's own noise against the reference there: " +

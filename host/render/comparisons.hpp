@@ -18,6 +18,8 @@ struct RenderRow {
   int spp = 0;
   double seconds = 0, rays_per_second = 0, rel_mse = -1;  // rel_mse < 0: none
   double ns_per_vertex = 0;  // thread-nanoseconds per path vertex; 0: none
+  // rel_mse over the pixels that show the material (render/integrator.hpp's material_mask)
+  double rel_mse_material = -1;
 };
 
 struct Comparisons {

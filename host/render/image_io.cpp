@@ -154,24 +154,30 @@ Image read_pfm_image(const std::string& path) {
   return image;
 }
 
-double relative_mse(const Image& image, const Image& reference) {
+double relative_mse(const Image& image, const Image& reference, const std::vector<std::uint8_t>* mask) {
   if (image.width != reference.width || image.height != reference.height)
     throw InputError("relative_mse: image is " + std::to_string(image.width) + "x" +
                      std::to_string(image.height) + " but the reference is " +
                      std::to_string(reference.width) + "x" + std::to_string(reference.height));
   const std::size_t n = reference.v.size();
   if (n == 0 || image.v.size() != n) throw InputError("relative_mse: empty or inconsistent image");
+  if (mask && mask->size() != n / 3)
+    throw InputError("relative_mse: the mask has " + std::to_string(mask->size()) + " pixels but the image " +
+                     std::to_string(n / 3));
   double mean = 0;
   for (float r : reference.v) mean += double(r);
   mean /= double(n);
   const double eps = 1e-2 * mean * mean;
   double sum = 0;
+  std::size_t counted = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    if (mask && !(*mask)[i / 3]) continue;
+    ++counted;
     const double r = reference.v[i], d = double(image.v[i]) - r;
     if (d == 0) continue;  // also when r = eps = 0
     sum += d * d / (r * r + eps);
   }
-  return sum / double(n);
+  return counted ? sum / double(counted) : -1.0;
 }
 
 }  // namespace render

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -40,8 +41,10 @@ Image read_pfm_image(const std::string& path);
 // Relative mean squared error of `image` against `reference`, averaged over the channels:
 // mean over pixels and channels of (image - reference)^2 / (reference^2 + eps),
 // eps = 1e-2 * mean(reference)^2 over every value (so that dark pixels do not dominate).
+// With `mask` (one byte per pixel, row-major, non-zero: counted), the mean is over the
+// masked pixels only, eps still from every value; -1 when the mask holds no pixel.
 // InputError when the sizes differ.
-double relative_mse(const Image& image, const Image& reference);
+double relative_mse(const Image& image, const Image& reference, const std::vector<std::uint8_t>* mask = nullptr);
 
 }  // namespace render
 }  // namespace bsdfmix

@@ -336,6 +336,16 @@ Ray camera_ray(const Camera& c, int width, int height, double x, double y) {
   return ray;
 }
 
+std::vector<std::uint8_t> material_mask(const SceneView& v) {
+  std::vector<std::uint8_t> mask(std::size_t(v.width) * std::size_t(v.height), 0);
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) {
+      const HitKind k = v.tracer->intersect(camera_ray(v.camera, v.width, v.height, x + 0.5, y + 0.5)).kind;
+      mask[std::size_t(y) * std::size_t(v.width) + std::size_t(x)] = k == HitKind::Fiber || k == HitKind::Surface;
+    }
+  return mask;
+}
+
 RenderStats render_passes(const SceneView& v, PathEstimator est, FSource which, int first, int max_passes,
                           std::vector<double>& sum, const std::function<bool(int, double)>& pass_done) {
   const std::size_t pixels = std::size_t(v.width) * std::size_t(v.height);

@@ -69,5 +69,10 @@ std::vector<double> collect_theta_o(const SceneView& view, int spp);
 // The primary ray of pixel (x, y) at sub-pixel offset (ux, uy).
 Ray camera_ray(const Camera& c, int width, int height, double x, double y);
 
+// The pixels that show the material: 1 where the primary ray through the pixel's centre
+// first hits a fiber or the measured surface, 0 where it hits the ground, the room or
+// nothing; one byte per pixel, row-major.
+std::vector<std::uint8_t> material_mask(const SceneView& view);
+
 }  // namespace render
 }  // namespace bsdfmix

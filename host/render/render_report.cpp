@@ -23,11 +23,12 @@ void write_render_report(const std::string& csv, const std::string& json, const 
   ref.mode = "reference";
   ref.spp = s.reference_spp;
   ref.image = "reference.exr";
-  std::string text = "scene,fiber,estimator,mode,spp,seconds,rays_per_second,rel_mse,image,ns_per_vertex\n";
+  std::string text = "scene,fiber,estimator,mode,spp,seconds,rays_per_second,rel_mse,image,ns_per_vertex,rel_mse_material\n";
   auto add = [&](const RenderRow& r) {
     text += facts.scene + "," + facts.fiber + "," + r.estimator + "," + r.mode + "," + std::to_string(r.spp) + "," +
             num(r.seconds) + "," + num(r.rays_per_second) + "," + (r.rel_mse >= 0 ? num(r.rel_mse) : "") + "," +
-            r.image + "," + (r.ns_per_vertex > 0 ? num(r.ns_per_vertex, "%.0f") : "") + "\n";
+            r.image + "," + (r.ns_per_vertex > 0 ? num(r.ns_per_vertex, "%.0f") : "") + "," +
+            (r.rel_mse_material >= 0 ? num(r.rel_mse_material) : "") + "\n";
   };
   add(ref);
   for (const RenderRow& r : c.rows) add(r);

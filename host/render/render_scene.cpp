@@ -69,12 +69,10 @@ std::string RenderScene::describe() const {
 }
 
 Image RenderScene::cloth_mask() const {
+  const std::vector<std::uint8_t> m = material_mask(view_);
   Image mask(view_.width, view_.height);
   for (int y = 0; y < view_.height; ++y)
-    for (int x = 0; x < view_.width; ++x) {
-      const Hit hit = tracer_.intersect(camera_ray(view_.camera, view_.width, view_.height, x + 0.5, y + 0.5));
-      mask.set_grey(x, y, hit.kind == HitKind::Fiber || hit.kind == HitKind::Surface ? 1.f : 0.f);
-    }
+    for (int x = 0; x < view_.width; ++x) mask.set_grey(x, y, m[std::size_t(y) * std::size_t(view_.width) + std::size_t(x)]);
   return mask;
 }
 

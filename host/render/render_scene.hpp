@@ -33,8 +33,8 @@ class RenderScene {
   const SceneView& view() const { return view_; }
   // The view of the pre-pass: prepass x prepass pixels, at most prepass_depth bounces.
   SceneView prepass_view(const RenderSettings& s) const;
-  // 1 where the primary ray through the pixel's center meets a fiber, else 0: the cloth's
-  // pixels, by which the figures set their exposure.
+  // 1 where the primary ray through the pixel's center meets a fiber or the surface, else 0
+  // (material_mask as an image): the material's pixels, by which the figures set their exposure.
   Image cloth_mask() const;
 
  private:
