@@ -1,14 +1,20 @@
 #!/usr/bin/python3
 """Sharp lobes resolved: each shipped RGL material imported at the default grid and at the
 grid `bsdfmix import rgl --resolve` chooses (the file's narrowest lobe spans 3 cells), fitted
-at the slices serving a few random view elevations, at the default settings and (the resolved
-grid) also to a relative L1 error of 2 % (fit.error_target 0.02), and
-each mixture measured as a sampler against the file's own (`bsdfmix bench sampling`, f the
-file's evaluation): the variance per sample over the RGL sampler's, with the bytes of the
-table and of the mixture.
+at the slices serving random view elevations (those of `bench sampling --directions`), at the
+default settings and (the resolved grid) also to a relative L1 error of 2 % (fit.error_target
+0.02), and each mixture measured as a sampler against the file's own (`bsdfmix bench
+sampling`, f the file's evaluation): the variance per sample over the RGL sampler's, with the
+bytes of the table and of the mixture, the views over 3x and the table CDF's ratio at the
+mixture's worst view.
 
-    /usr/bin/python3 bench/rgl_resolve.py [--directions 8] [--samples 16384]
-        [--materials satin_rosaline,...] [--max-mib 400] [--csv bench/results/rgl_resolve.csv]
+The --probe materials also get the resolved grid, fitted to 2 % L1, with one thing more
+each: twice the theta_o slices, four times the theta_i cells, phi_i at its cap (1440), or K up
+to 64: what the worst (grazing) views are limited by.
+
+    /usr/bin/python3 bench/rgl_resolve.py [--directions 20] [--samples 16384]
+        [--materials satin_rosaline,...] [--probe satin_rosaline] [--max-mib 400]
+        [--csv bench/results/rgl_resolve.csv]
 
 A material whose resolved table would exceed --max-mib is reported with its grid and bytes
 and not imported.
@@ -35,14 +41,16 @@ def run(*args):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "rgl_resolve"))
-    ap.add_argument("--directions", type=int, default=8)
+    ap.add_argument("--directions", type=int, default=20)
     ap.add_argument("--samples", type=int, default=16384)
     ap.add_argument("--materials", default="")
+    ap.add_argument("--probe", default="satin_rosaline")
     ap.add_argument("--max-mib", type=float, default=400)
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "rgl_resolve.csv"))
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     want = set(filter(None, a.materials.split(",")))
+    probe_set = set(filter(None, a.probe.split(",")))
     out = []
     for rgl in sorted(glob.glob(os.path.join(ROOT, "data", "rgl", "*_rgb.bsdf"))):
         name = os.path.basename(rgl).replace("_rgb.bsdf", "")
@@ -68,52 +76,82 @@ def main():
         g = re.search(r"grid (\d+) x (\d+) x (\d+)", line)
         grid = tuple(int(x) for x in g.groups())
         table_mib = grid[0] * grid[1] * grid[2] * 16 / 2**20
-        # (kind, table, extra fit settings): the default grid, the resolved one, and the resolved
-        # one fitted to a relative L1 error of 2 % (fit.error_target) instead of the K penalty
-        tables = [("default", default_table, "")]
+        # (kind, table, grid, k_max): the default grid, the resolved one, the resolved one fitted
+        # to a relative L1 error of 2 % (fit.error_target) instead of the K penalty, and (--probe)
+        # that fit with a finer grid along one axis or more components
+        tables = [("default", default_table, (90, 90, 180), 32)]
         if table_mib <= a.max_mib:
             resolved = base + "_resolved.h5"
             if not os.path.exists(resolved):
                 run("import", "rgl", "-q", rgl, "--resolve", "-o", resolved)
-            tables += [("resolved", resolved, ""), ("resolved_t2", resolved, "  error_target: 0.02\n")]
-        for kind, table, extra in tables:
+            tables += [("resolved", resolved, grid, 32), ("resolved_t2", resolved, grid, 32)]
+            if name in probe_set:
+                finer = {"resolved_t2_theta_o_x2": (2 * grid[0], grid[1], grid[2]),
+                         "resolved_t2_theta_i_x4": (grid[0], 4 * grid[1], grid[2]),
+                         "resolved_t2_phi_i_1440": (grid[0], grid[1], 1440)}
+                for kind, g in finer.items():
+                    table = f"{base}_{kind}.h5"
+                    if not os.path.exists(table):
+                        run("import", "rgl", "-q", rgl, "--theta-o", str(g[0]), "--theta-i", str(g[1]),
+                            "--phi-i", str(g[2]), "-o", table)
+                    tables.append((kind, table, g, 32))
+                tables.append(("resolved_t2_k64", resolved, grid, 64))
+        for kind, table, g, k_max in tables:
+            extra = ("  error_target: 0.02\n" if kind.startswith("resolved_t2") else "") + \
+                    (f"  k_max: {k_max}\n" if k_max != 32 else "")
             mixture = f"{base}_{kind}_mixture.h5"
-            if not os.path.exists(mixture):
-                # only the slices serving the study's view elevations are fitted
-                vs = view_elevations(a.directions)
-                cfg = f"{base}_{kind}.yaml"
-                with open(cfg, "w") as f:
-                    f.write(f"table: {table}\nfit:\n  output: {mixture}\n  report: {base}_{kind}_fit.csv\n"
-                            f"  search_report: {base}_{kind}_search.csv\n"
-                            f"  theta_o: [{', '.join(f'{v:.6f}' for v in vs)}]\n{extra}")
-                run("fit", "-q", cfg)
+            # only the slices serving the study's view elevations are fitted; a mixture made by
+            # another config (other views or settings) is fitted again, one of this config kept
+            vs = view_elevations(a.directions)
+            cfg = f"{base}_{kind}.yaml"
+            text = (f"table: {table}\nfit:\n  output: {mixture}\n  report: {base}_{kind}_fit.csv\n"
+                    f"  search_report: {base}_{kind}_search.csv\n"
+                    f"  theta_o: [{', '.join(f'{v:.6f}' for v in vs)}]\n{extra}")
+            old = open(cfg).read() if os.path.exists(cfg) else None
             smp = f"{base}_{kind}_sampling.csv"
-            run("bench", "sampling", "-q", "--rgl", rgl, "--table", table, "--mixture", mixture, "--directions",
-                str(a.directions), "--samples", str(a.samples), "--seed", "1", "--csv", smp)
+            if old != text:
+                for p in (mixture, smp, f"{base}_{kind}_fit.csv", f"{base}_{kind}_search.csv"):
+                    if os.path.exists(p):
+                        os.remove(p)
+                with open(cfg + ".tmp", "w") as f:
+                    f.write(text)
+                os.replace(cfg + ".tmp", cfg)
+            if not os.path.exists(mixture):  # a fit killed before it wrote the mixture resumes
+                run("fit", "-q", cfg)
+            if os.path.exists(smp) and len(by_view(smp)) == a.directions and \
+                    all(r["samples"] == str(a.samples) for v in by_view(smp).values() for r in v.values()):
+                pass  # measured by an earlier run of this config
+            else:
+                run("bench", "sampling", "-q", "--rgl", rgl, "--table", table, "--mixture", mixture, "--directions",
+                    str(a.directions), "--samples", str(a.samples), "--seed", "1", "--csv", smp)
             by = by_view(smp)
             ratio, cdf = over_rgl(by, "is_mixture"), over_rgl(by, "cdf_table")
+            views = list(by.keys())
+            worst = int(np.argmax(ratio))
             any_row = next(iter(by.values()))
-            res = kind != "default"
             fit_rows = rows(f"{base}_{kind}_fit.csv")
             l1 = [float(r["l1_rel"]) for r in fit_rows if r.get("l1_rel")]
-            out.append({"material": name, "grid": kind, "theta_o": grid[0] if res else 90,
-                        "theta_i": grid[1] if res else 90, "phi_i": grid[2] if res else 180,
-                        "error_target": "0.02" if extra else "", "fit_l1_median": f"{np.median(l1):.4f}" if l1 else "",
+            out.append({"material": name, "grid": kind, "theta_o": g[0], "theta_i": g[1], "phi_i": g[2],
+                        "error_target": "0.02" if "error_target" in extra else "", "k_max": k_max,
+                        "fit_l1_median": f"{np.median(l1):.4f}" if l1 else "",
                         "lobe_fwhm_theta_deg": fwhm_t, "lobe_fwhm_across_deg": fwhm_x, "lobe_at_theta_o_deg": at,
-                        "table_mib": f"{(grid[0] * grid[1] * grid[2] if res else 90 * 90 * 180) * 16 / 2**20:.1f}",
+                        "table_mib": f"{g[0] * g[1] * g[2] * 16 / 2**20:.1f}",
                         "mixture_bytes": any_row["is_mixture"]["bytes"], "views": len(ratio), "samples": a.samples,
                         "is_mixture_over_rgl_median": f"{np.median(ratio):.4g}",
                         "is_mixture_over_rgl_max": f"{np.max(ratio):.4g}",
                         "cdf_table_over_rgl_median": f"{np.median(cdf):.4g}",
-                        "cdf_table_over_rgl_max": f"{np.max(cdf):.4g}", "cpu": cpu_model()})
+                        "cdf_table_over_rgl_max": f"{np.max(cdf):.4g}",
+                        "views_over_3x": sum(x > 3 for x in ratio), "worst_view_deg": f"{float(views[worst]):.1f}",
+                        "cdf_table_over_rgl_at_worst": f"{cdf[worst]:.4g}", "cpu": cpu_model()})
             print(", ".join(f"{k} {v}" for k, v in out[-1].items() if k != "cpu"), flush=True)
-        if not any(kind == "resolved" for kind, _, _ in tables):
+        if not any(t[0] == "resolved" for t in tables):
             out.append({"material": name, "grid": "resolved", "theta_o": grid[0], "theta_i": grid[1], "phi_i": grid[2],
-                        "error_target": "", "fit_l1_median": "",
+                        "error_target": "", "k_max": 32, "fit_l1_median": "",
                         "lobe_fwhm_theta_deg": fwhm_t, "lobe_fwhm_across_deg": fwhm_x, "lobe_at_theta_o_deg": at,
                         "table_mib": f"{table_mib:.1f}", "mixture_bytes": "", "views": 0, "samples": 0,
                         "is_mixture_over_rgl_median": "", "is_mixture_over_rgl_max": "",
-                        "cdf_table_over_rgl_median": "", "cdf_table_over_rgl_max": "", "cpu": cpu_model()})
+                        "cdf_table_over_rgl_median": "", "cdf_table_over_rgl_max": "",
+                        "views_over_3x": "", "worst_view_deg": "", "cdf_table_over_rgl_at_worst": "", "cpu": cpu_model()})
             print(f"{name}: the resolved grid {grid} needs {table_mib:.0f} MiB (over --max-mib): not imported", flush=True)
     write_rows(a.csv, out)
 

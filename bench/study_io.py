@@ -6,7 +6,8 @@ import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BIN = os.path.join(ROOT, "build", "bsdfmix")
+# BSDFMIX_BIN: another build of the CLI (a copy, so that rebuilding does not stop a long study)
+BIN = os.environ.get("BSDFMIX_BIN") or os.path.join(ROOT, "build", "bsdfmix")
 
 
 def bsdfmix(study, *args):
