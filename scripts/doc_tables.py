@@ -622,7 +622,8 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity,
           "compact_rivals": compact_tables.at_8k, "compact_rivals_budgets": compact_tables.budgets,
           "compact_rivals_cost": compact_tables.cost, "compact_rivals_image": compact_tables.image,
-          "interpolation": lobe_tables.interpolation, "rgl_resolve": lobe_tables.rgl_resolve}
+          "interpolation": lobe_tables.interpolation, "rgl_resolve": lobe_tables.rgl_resolve,
+          "render_material": lobe_tables.render_material}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 
