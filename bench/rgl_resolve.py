@@ -5,7 +5,7 @@ at the slices serving random view elevations (those of `bench sampling --directi
 default settings and (the resolved grid) also to a relative L1 error of 2 % (fit.error_target
 0.02), and each mixture measured as a sampler against the file's own (`bsdfmix bench
 sampling`, f the file's evaluation): the variance per sample over the RGL sampler's, with the
-bytes of the table and of the mixture, the views over 3x and the table CDF's ratio at the
+bytes of the table and of the mixture, the fit's wall time, the views over 3x and the table CDF's ratio at the
 mixture's worst view.
 
 The --probe materials also get the resolved grid, fitted to 2 % L1, with one thing more
@@ -26,6 +26,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 
 import numpy as np
 from machine import cpu_model  # noqa: E402  (bench/machine.py)
@@ -109,15 +110,20 @@ def main():
                     f"  theta_o: [{', '.join(f'{v:.6f}' for v in vs)}]\n{extra}")
             old = open(cfg).read() if os.path.exists(cfg) else None
             smp = f"{base}_{kind}_sampling.csv"
+            fit_seconds = f"{base}_{kind}_fit_seconds.txt"  # the wall time of the fit run that finished it
             if old != text:
-                for p in (mixture, smp, f"{base}_{kind}_fit.csv", f"{base}_{kind}_search.csv"):
+                for p in (mixture, smp, f"{base}_{kind}_fit.csv", f"{base}_{kind}_search.csv", fit_seconds):
                     if os.path.exists(p):
                         os.remove(p)
                 with open(cfg + ".tmp", "w") as f:
                     f.write(text)
                 os.replace(cfg + ".tmp", cfg)
             if not os.path.exists(mixture):  # a fit killed before it wrote the mixture resumes
+                t0 = time.monotonic()
                 run("fit", "-q", cfg)
+                with open(fit_seconds + ".tmp", "w") as f:
+                    f.write(f"{time.monotonic() - t0:.1f}\n")
+                os.replace(fit_seconds + ".tmp", fit_seconds)
             if os.path.exists(smp) and len(by_view(smp)) == a.directions and \
                     all(r["samples"] == str(a.samples) for v in by_view(smp).values() for r in v.values()):
                 pass  # measured by an earlier run of this config
@@ -134,6 +140,7 @@ def main():
             out.append({"material": name, "grid": kind, "theta_o": g[0], "theta_i": g[1], "phi_i": g[2],
                         "error_target": "0.02" if "error_target" in extra else "", "k_max": k_max,
                         "fit_l1_median": f"{np.median(l1):.4f}" if l1 else "",
+                        "fit_seconds": open(fit_seconds).read().strip() if os.path.exists(fit_seconds) else "",
                         "lobe_fwhm_theta_deg": fwhm_t, "lobe_fwhm_across_deg": fwhm_x, "lobe_at_theta_o_deg": at,
                         "table_mib": f"{g[0] * g[1] * g[2] * 16 / 2**20:.1f}",
                         "mixture_bytes": any_row["is_mixture"]["bytes"], "views": len(ratio), "samples": a.samples,
@@ -146,7 +153,7 @@ def main():
             print(", ".join(f"{k} {v}" for k, v in out[-1].items() if k != "cpu"), flush=True)
         if not any(t[0] == "resolved" for t in tables):
             out.append({"material": name, "grid": "resolved", "theta_o": grid[0], "theta_i": grid[1], "phi_i": grid[2],
-                        "error_target": "", "k_max": 32, "fit_l1_median": "",
+                        "error_target": "", "k_max": 32, "fit_l1_median": "", "fit_seconds": "",
                         "lobe_fwhm_theta_deg": fwhm_t, "lobe_fwhm_across_deg": fwhm_x, "lobe_at_theta_o_deg": at,
                         "table_mib": f"{table_mib:.1f}", "mixture_bytes": "", "views": 0, "samples": 0,
                         "is_mixture_over_rgl_median": "", "is_mixture_over_rgl_max": "",

@@ -39,17 +39,18 @@ def rgl_resolve():
              "resolved_t2_theta_i_x4": "resolved, 2 % L1, 4x the theta_i cells",
              "resolved_t2_phi_i_1440": "resolved, 2 % L1, phi_i at its cap",
              "resolved_t2_k64": "resolved, 2 % L1, K up to 64"}
-    out = ["| material | narrowest lobe, degrees (theta x across), at view | grid | table MiB | fit L1, median | mixture bytes | "
+    out = ["| material | narrowest lobe, degrees (theta x across), at view | grid | table MiB | fit L1, median | fit seconds | mixture bytes | "
            "mixture / file's sampler, median (largest) | views over 3x | at the worst view: its elevation, table CDF / file's | "
            "table CDF / file's, median (largest) |",
-           "|---|---|---|---|---|---|---|---|---|---|"]
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows("rgl_resolve.csv"):
         measured = r["is_mixture_over_rgl_median"] != ""
         l1 = r.get("fit_l1_median", "")
-        out.append("| %s | %s x %s at %s | %s: %s x %s x %s | %s | %s | %s | %s | %s | %s | %s |" % (
+        out.append("| %s | %s x %s at %s | %s: %s x %s x %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
             r["material"], r["lobe_fwhm_theta_deg"], r["lobe_fwhm_across_deg"], r["lobe_at_theta_o_deg"],
             label.get(r["grid"], r["grid"]), r["theta_o"], r["theta_i"], r["phi_i"], r["table_mib"],
-            "%.1f%%" % (100 * float(l1)) if l1 else "-", r["mixture_bytes"] or "-",
+            "%.1f%%" % (100 * float(l1)) if l1 else "-", "%.0f" % float(r["fit_seconds"]) if r.get("fit_seconds") else "-",
+            r["mixture_bytes"] or "-",
             "%s (%s)" % (r["is_mixture_over_rgl_median"], r["is_mixture_over_rgl_max"]) if measured else "not imported",
             "%s of %s" % (r["views_over_3x"], r["views"]) if measured else "-",
             "%s deg, %s" % (r["worst_view_deg"], r["cdf_table_over_rgl_at_worst"]) if measured else "-",
