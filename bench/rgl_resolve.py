@@ -124,13 +124,12 @@ def main():
                 with open(fit_seconds + ".tmp", "w") as f:
                     f.write(f"{time.monotonic() - t0:.1f}\n")
                 os.replace(fit_seconds + ".tmp", fit_seconds)
-            if os.path.exists(smp) and len(by_view(smp)) == a.directions and \
-                    all(r["samples"] == str(a.samples) for v in by_view(smp).values() for r in v.values()):
-                pass  # measured by an earlier run of this config
-            else:
+            by = by_view(smp) if os.path.exists(smp) else {}
+            if len(by) != a.directions or any(r["samples"] != str(a.samples) for v in by.values() for r in v.values()):
                 run("bench", "sampling", "-q", "--rgl", rgl, "--table", table, "--mixture", mixture, "--directions",
                     str(a.directions), "--samples", str(a.samples), "--seed", "1", "--csv", smp)
-            by = by_view(smp)
+                by = by_view(smp)
+            # else: measured by an earlier run of this config
             ratio, cdf = over_rgl(by, "is_mixture"), over_rgl(by, "cdf_table")
             views = list(by.keys())
             worst = int(np.argmax(ratio))

@@ -55,6 +55,12 @@ The tables (NAME: CSV):
   compact_rivals, compact_rivals_budgets, compact_rivals_cost, compact_rivals_image
                        bench/results/compact_rivals{,_image}.csv (docs/fitting.md, "The stand-in against its
                        rivals"), by scripts/compact_tables.py
+  interpolation        bench/results/interpolation.csv (docs/sampling.md, "Interpolation between slices"),
+                       by scripts/lobe_tables.py
+  rgl_resolve          bench/results/rgl_resolve.csv (docs/rgl.md, "Resolving sharp lobes"), by
+                       scripts/lobe_tables.py
+  render_material      bench/results/render_material.csv (docs/render.md, "What limits the glossy
+                       spheres"), by scripts/lobe_tables.py
 """
 import json
 import math
