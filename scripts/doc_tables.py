@@ -70,7 +70,10 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join(ROOT, "bench", "results")
-DOCS = ["README.md", "CHANGELOG.md", os.path.join("bench", "README.md")] + [os.path.join("docs", f) for f in sorted(os.listdir(os.path.join(ROOT, "docs"))) if f.endswith(".md")]
+DOCS = ["README.md", "CHANGELOG.md", os.path.join("bench", "README.md")] + [
+    os.path.join(folder, f) for folder in ("docs", os.path.join("docs", "studies"))
+    if os.path.isdir(os.path.join(ROOT, folder))
+    for f in sorted(os.listdir(os.path.join(ROOT, folder))) if f.endswith(".md")]
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
