@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""The objective of the stand-in's amplitudes, by measurement (docs/fitting.md, "Colour and
-energy"): on the Gaussians of a mixture file, held fixed, the amplitudes of the luminance
+"""The objective of the stand-in's amplitudes, by measurement (docs/studies/colour.md, "The
+objective"): on the Gaussians of a mixture file, held fixed, the amplitudes of the luminance
 and of R, G, B fitted three ways, each channel's integral kept (but for a channel that is
 noise around zero, whose negative cells hold more than 0.5% of its absolute sum):
 

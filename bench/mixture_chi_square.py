@@ -9,7 +9,7 @@ relative L1 error medians. With --csv, appends one row per comparison.
 
     bench/mixture_chi_square.py TABLE.h5 BEFORE_mixture.h5 AFTER_mixture.h5 [--label NAME] [--csv FILE]
 
-docs/fitting.md ("The L1 refinement") quotes the rows of bench/results/search_chi_square.csv:
+docs/studies/search.md ("The L1 refinement in full") quotes the rows of bench/results/search_chi_square.csv:
     for t in satin paper sunflower; do bench/mixture_chi_square.py out/bench_search/$t.h5 \\
       out/bench_search/${t}_smem_none_search_mixture.h5 out/bench_search/${t}_smem_l1_search_mixture.h5 \\
       --label $t --csv bench/results/search_chi_square.csv; done

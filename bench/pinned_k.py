@@ -6,9 +6,9 @@ colour amplitudes), one row per slice and setting: the K and the relative L1 err
 fit report, and where the error lies: the part of it (over the slice's mass) in the cells
 within 10 degrees of phi of the slice's largest cell (`l1_peak`, with that band's share of
 the mass, `mass_peak`) and in the cells past theta_i 85 degrees (`l1_horizon`), the
-stand-in's luminance computed from the file as bench/rgb_stand_in.py does. docs/fitting.md
-("Satin at grazing") quotes it for satin's grazing slices, where the default search keeps
-its p90.
+stand-in's luminance computed from the file as bench/rgb_stand_in.py does.
+docs/studies/satin_grazing.md quotes it for satin's grazing slices, where the default
+search keeps its p90.
 
     /usr/bin/python3 bench/pinned_k.py --table out/bench_rgb/satin.h5 --name satin \\
         --min-theta-o 1.2 --k 8,16,32 --csv bench/results/pinned_k.csv [--bsdfmix build/bsdfmix]

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The channels in the L1 refinement (docs/fitting.md, "The channels move the Gaussians"),
+"""The channels in the L1 refinement (docs/studies/colour.md, "The channels in the refinement"),
 variant by variant in one run: each fits the same tables with bench/rgb_stand_in.py under
 its fit settings and is compared with the luminance alone (refine_rgb 0): the report's
 luminance L1 median and p90, the RGB error less its negative part (median) and its ratio to

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""The tables of docs/fitting.md "The stand-in against its rivals" and the README's size row, from
+"""The tables of docs/fitting.md "The stand-in against its rivals" (the 8 KiB table) and
+docs/studies/compact_rivals.md (the others), and the README's size row, from
 bench/results/compact_rivals.csv and compact_rivals_image.csv (bench/compact_rivals.py,
 bench/compact_image.py); scripts/doc_tables.py writes them between their markers."""
 import csv

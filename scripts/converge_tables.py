@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The convergence study's measured table (docs/sampling.md, "Measured"), from convergence CSVs.
+"""The convergence study's measured table (docs/sampling.md, "Measured results"), from convergence CSVs.
 
 For every (table, theta_o, phi_o, scene) of the CSVs, one row:
   K           components of the main slice serving omega_o (tail CSV)

@@ -11,56 +11,63 @@ bench/results/, between markers:
 
 The tables (NAME: CSV):
   rgb_stand_in         bench/results/rgb_stand_in.csv (docs/fitting.md, "Colour and energy")
-  rgb_copies           bench/results/rgb_stand_in{,_no_copies}.csv (docs/fitting.md, "Colour copies")
-  rgb_refine           bench/results/rgb_refine.csv (docs/fitting.md, "The channels move the Gaussians")
+  rgb_copies           bench/results/rgb_stand_in{,_no_copies}.csv (docs/studies/colour.md, "Colour copies in
+                       detail")
+  rgb_refine           bench/results/rgb_refine.csv (docs/studies/colour.md, "The channels in the refinement")
   catalog              bench/results/catalog_summary.csv (docs/scale.md, "Catalogs")
-  scale, scale_traffic bench/results/scale_amd-epyc-2c.csv (docs/scale.md, "Scaling measured")
+  scale, scale_traffic bench/results/scale_amd-epyc-2c.csv (docs/studies/scale_measured.md, "Scaling measured")
   stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
-  search_before_after  bench/results/search_before_after.csv (docs/fitting.md, "A walk that does not give up")
-  search_unseen        bench/results/search_unseen.csv (docs/fitting.md, the same section)
-  search_time          bench/results/search_time.csv (docs/fitting.md, the same section)
-  pinned_k             bench/results/pinned_k.csv (docs/fitting.md, "Satin at grazing")
-  tails                bench/results/tails.csv (docs/fitting.md, the same section)
-  parameterization     bench/results/parameterization.csv (docs/fitting.md, "The pole and the border")
+  search_before_after  bench/results/search_before_after.csv (CHANGELOG.md, "A walk that does not give up")
+  search_unseen        bench/results/search_unseen.csv (CHANGELOG.md, the same section)
+  search_time          bench/results/search_time.csv (CHANGELOG.md, the same section)
+  pinned_k             bench/results/pinned_k.csv (docs/studies/satin_grazing.md)
+  tails                bench/results/tails.csv (docs/studies/satin_grazing.md, "Heavier tails")
+  parameterization     bench/results/parameterization.csv (docs/studies/parameterization.md)
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
-  render_rgl           bench/results/render/<material>_skymap/render.csv (docs/render.md, "Measured
-                       materials"): the RGL file's own sampler against the mixtures and the table CDF
+  render_rgl           bench/results/render/<material>_skymap/render.csv (docs/studies/render_materials.md,
+                       "The file's own sampler against the mixtures, in the image"): the RGL file's own
+                       sampler against the mixtures and the table CDF
   render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_tables.py
   render_reading       the same renders' reading under that table, by scripts/render_tables.py
-  render_room          bench/results/render/<fiber>_room/ (docs/render.md, "Measured"), by scripts/room_tables.py
+  render_room          bench/results/render/<fiber>_room/ (docs/studies/render_guided.md, "In the room"), by
+                       scripts/room_tables.py
   render_room_reading  the room renders' reading under that table, by scripts/room_tables.py
   failure_map, stability  bench/results/failure_map.csv (docs/guide_estimators.md, docs/stability.md
                        "Measured"), by scripts/failure_tables.py
-  search_compare       bench/results/search_compare.csv (docs/fitting.md, "Before and after")
-  amplitude_objective  bench/results/amplitude_objective.csv (docs/fitting.md, "Colour and energy")
-  converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (docs/fitting.md,
+  search_compare       bench/results/search_compare.csv (CHANGELOG.md, "Before and after")
+  amplitude_objective  bench/results/amplitude_objective.csv (docs/studies/colour.md, "The objective")
+  converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (CHANGELOG.md,
                        "Before and after")
   em_precision         bench/results/em_precision.csv (docs/em.md, "Kernel vs reference")
-  theta_border         bench/results/theta_border.csv (docs/fitting.md, "The theta border")
+  mixed_devices        bench/results/mixed_devices.csv (docs/em.md, "Devices of different speeds")
+  theta_border         bench/results/theta_border.csv (docs/studies/theta_border.md)
   em_results           the newest bench/results/em_k{50,16}_<machine>.csv (bench/README.md, "Results"), by
                        scripts/em_tables.py
   readme_measured      the README's results table, row by row from its CSVs (scripts/readme_measured.py)
   estimator_choice     docs/guide_estimators.md's decision table, by scripts/guide_tables.py
-  converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured"),
-                       by scripts/converge_tables.py
-  converge_light       bench/results/converge_light/*_convergence*.csv (docs/sampling.md, "Measured: the sky
-                       and the sky map"), by scripts/light_tables.py
-  fiber_quadrature     bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h"), by
+  converge             bench/results/converge/*_convergence{,_tail}.csv (docs/sampling.md, "Measured
+                       results"), by scripts/converge_tables.py
+  converge_light       bench/results/converge_light/*_convergence*.csv (docs/studies/sampling_lighting.md,
+                       "The table"), by scripts/light_tables.py
+  fiber_quadrature     bench/results/fiber_quadrature.csv (docs/studies/fiber_quadrature.md), by
                        scripts/input_tables.py
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
                        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
   sampling_peers, sampling_peers_sky, sampling_peers_fiber
-                       bench/results/sampling_peers.csv (docs/sampling.md, "Against the file's own sampler")
+                       bench/results/sampling_peers.csv (sampling_peers in docs/sampling.md, "Against the
+                       file's own sampler"; the others in docs/studies/sampling_peers.md)
   compact_rivals, compact_rivals_budgets, compact_rivals_cost, compact_rivals_image
-                       bench/results/compact_rivals{,_image}.csv (docs/fitting.md, "The stand-in against its
-                       rivals"), by scripts/compact_tables.py
-  interpolation        bench/results/interpolation.csv (docs/sampling.md, "Interpolation between slices"),
-                       by scripts/lobe_tables.py
-  rgl_resolve          bench/results/rgl_resolve.csv (docs/rgl.md, "Resolving sharp lobes"), by
+                       bench/results/compact_rivals{,_image}.csv (compact_rivals in docs/fitting.md, "The
+                       stand-in against its rivals"; the others in docs/studies/compact_rivals.md), by
+                       scripts/compact_tables.py
+  interpolation        bench/results/interpolation.csv (docs/studies/sampling_interpolation.md), by
                        scripts/lobe_tables.py
-  render_material      bench/results/render_material.csv (docs/render.md, "What limits the glossy
-                       spheres"), by scripts/lobe_tables.py
+  rgl_resolve          bench/results/rgl_resolve.csv (docs/studies/rgl_resolve.md), by
+                       scripts/lobe_tables.py
+  rgl_negative         bench/results/rgl_negative.csv (docs/studies/rgl_negative.md)
+  render_material      bench/results/render_material.csv (docs/studies/render_materials.md, "What limits
+                       the glossy spheres"), by scripts/lobe_tables.py
 """
 import json
 import math

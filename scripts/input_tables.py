@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The doc tables of the input tables' own accuracy (scripts/doc_tables.py calls these):
 
-  fiber_quadrature  bench/results/fiber_quadrature.csv (docs/fiber.md, "Quadrature in h")
+  fiber_quadrature  bench/results/fiber_quadrature.csv (docs/studies/fiber_quadrature.md)
   fiber_generate    bench/results/fiber_generate.csv (docs/fiber.md, the generator's time and memory)
   rgl_albedo        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"): the albedo on the
                     default grid and sampled, their difference to the converged midpoint rule,

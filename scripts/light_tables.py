@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The measured table of sampling with the lighting (docs/sampling.md, "Sampling with the lighting").
+"""The measured table of sampling with the lighting (docs/studies/sampling_lighting.md, "The table").
 
 For every (table, theta_o, phi_o, scene) of the convergence CSVs, one row:
   K, K light, K prod   the BSDF mixture's components (tail CSV), the lighting mixture's and

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""The guided estimators against the renderers' baseline (docs/render.md, "Measured"), from
-the render.csv of each render directory given (the room renders).
+"""The guided estimators against the renderers' baseline (docs/studies/render_guided.md, "In the
+room"), from the render.csv of each render directory given (the room renders).
 
 For every directory, one row: the equal-time relative MSE of mis_light_cdf (the baseline),
 mis_light_gmm, mis_product, guided and guided_product; the best of the three new ones
