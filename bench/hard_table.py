@@ -6,7 +6,7 @@ angle, period 0.57 rad). Azimuthal symmetry, 90 x 180 cells per slice, `values` 
 
     /usr/bin/python3 bench/hard_table.py OUT.h5 [--theta-o 12] [--peak-sigma 0.035]
 
-bench/search_before_after.py fits it (docs/fitting.md, "A walk that does not give up").
+bench/search_before_after.py fits it (CHANGELOG.md, "A walk that does not give up").
 """
 import argparse
 import json

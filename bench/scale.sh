@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Scaling of the MPI task farm on this machine (docs/scale.md): one silk table fitted by
+# Scaling of the MPI task farm on this machine (docs/studies/scale_measured.md): one silk table fitted by
 #   1rank_1core   one process pinned to core 0 (taskset), no mpirun: the baseline
 #   2ranks_2cores mpirun -n 2, each rank bound to its own core
 #   1proc_2cores  one process, no mpirun, both cores (PoCL's own threads): for context

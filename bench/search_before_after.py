@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The Gaussian-count search of two builds side by side, in one run (docs/fitting.md,
+"""The Gaussian-count search of two builds side by side, in one run (CHANGELOG.md,
 "A walk that does not give up"): for each table, each build fits it with the default
 settings and the script reads the fit report: slices, mean K, median, p90 and max
 relative L1 error, and the wall time (the best of --runs runs; the fits are the same every

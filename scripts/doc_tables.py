@@ -27,8 +27,9 @@ The tables (NAME: CSV):
   render_rgl           bench/results/render/<material>_skymap/render.csv (docs/studies/render_materials.md,
                        "The file's own sampler against the mixtures, in the image"): the RGL file's own
                        sampler against the mixtures and the table CDF
-  render_cloth         bench/results/render/<fiber>_<scene>/ (docs/render.md, "Measured"), by scripts/render_tables.py
-  render_reading       the same renders' reading under that table, by scripts/render_tables.py
+  render_cloth         bench/results/render/<fiber>_<scene>/ (docs/studies/render_cloth.md, "The measured renders"), by
+                       scripts/render_tables.py
+  render_reading       the same renders' reading (docs/render.md, "Measured"), by scripts/render_tables.py
   render_room          bench/results/render/<fiber>_room/ (docs/studies/render_guided.md, "In the room"), by
                        scripts/room_tables.py
   render_room_reading  the room renders' reading under that table, by scripts/room_tables.py
@@ -39,7 +40,8 @@ The tables (NAME: CSV):
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (CHANGELOG.md,
                        "Before and after")
   em_precision         bench/results/em_precision.csv (docs/em.md, "Kernel vs reference")
-  mixed_devices        bench/results/mixed_devices.csv (docs/em.md, "Devices of different speeds")
+  mixed_devices        bench/results/mixed_devices.csv (docs/studies/em_kernels.md, "Devices of different speeds: the
+                       mixed run")
   theta_border         bench/results/theta_border.csv (docs/studies/theta_border.md)
   em_results           the newest bench/results/em_k{50,16}_<machine>.csv (bench/README.md, "Results"), by
                        scripts/em_tables.py

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""The measured table of `bsdfmix render` (docs/render.md, "Measured"), from render.csv and render.json.
+"""The measured table of `bsdfmix render` (docs/studies/render_cloth.md, "The measured renders"), from
+render.csv and render.json.
 
 For every render directory given, one row:
   equal-time rel MSE   of uniform, of the best mixture estimator (mis_tab, mis_light_gmm,
@@ -123,7 +124,7 @@ def markdown(dirs):
 
 
 def reading(dirs):
-    """The reading of the renders under their table (docs/render.md), as lines: every figure
+    """The reading of the renders (docs/render.md, "Measured"), as lines: every figure
     from the rows, so that it cannot drift from them."""
     rows = [row_for(d) for d in dirs]
     f2 = lambda x: "%d" % round(float("%.3g" % x)) if x >= 100 else "%.3g" % x
