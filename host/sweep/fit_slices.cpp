@@ -15,7 +15,7 @@ std::size_t SweepResult::failed() const {
   return std::size_t(std::count_if(report.begin(), report.end(), [](const ReportRow& r) { return r.failed(); }));
 }
 
-SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSection& fit,
+SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSettings& fit,
                        const std::vector<Device>& devices, const std::string& what) {
   const TableMeta& meta = source.meta();
   for (std::size_t i = 0; i < slices.size(); ++i) {

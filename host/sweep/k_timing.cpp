@@ -15,7 +15,7 @@
 
 namespace bsdfmix {
 
-std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
+std::vector<KTimingRow> time_k(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
                                const std::vector<std::size_t>& slices, const std::vector<std::string>& types) {
   TableReader reader(table_path);
   const TableMeta& meta = reader.meta();
@@ -36,7 +36,7 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& 
       while (bucket < k) bucket *= 2;
       if (bucket <= warmed) continue;
       warmed = bucket;
-      FitSection pinned = fit;
+      FitSettings pinned = fit;
       pinned.k_min = pinned.k_max = k;
       fit_slices(source, {SliceRef{s, s / meta.phi_o.size(), s % meta.phi_o.size()}}, pinned, devices, "warm K");
     }
@@ -49,7 +49,7 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& 
       // The sweep's own fit of this slice with K pinned: what the search's final fits do
       // at that K (k-means++ and split-and-merge, final restarts and iterations, the L1
       // refinement when `refine: l1`).
-      FitSection pinned = fit;
+      FitSettings pinned = fit;
       pinned.k_min = pinned.k_max = k;
       Progress::set_enabled(false);
       const auto t0 = std::chrono::steady_clock::now();

@@ -40,7 +40,7 @@ EmFitter engine_fitter(EmEngine& engine) {
 // best fit so far grown by components seeded at the slice's largest residual (a sharp
 // peak the splits miss), and keeps the better: that K was tried well.
 void search_smem(Batch& b) {
-  const FitSection& fit = b.fit;
+  const FitSettings& fit = b.fit;
   const std::vector<int>& ks = b.ks;
   const bool pooled = fit.search_pool > 1;
   const SliceSet pooled_set = pooled ? b.pooled_set() : SliceSet{};
@@ -173,7 +173,7 @@ void search_smem(Batch& b) {
 // refinement can cut by more at the K above than the penalty of its components); and a
 // walk that stalled with a poor best fit is fitted past its last K as well.
 void final_smem(Batch& b) {
-  const FitSection& fit = b.fit;
+  const FitSettings& fit = b.fit;
   const std::size_t n = b.size();
   std::vector<EmTask> tasks, first;
   std::vector<int> role;  // per task: 0 a restart of the chosen K, 1 the K below, 2 the K above

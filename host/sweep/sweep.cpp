@@ -28,10 +28,10 @@ BatchFarm* g_batch_farm = nullptr;
 void set_batch_farm(BatchFarm* farm) { g_batch_farm = farm; }
 
 struct BatchWorker::Impl {
-  Impl(const std::string& table_path, const FitSection& fit, const std::string& device_selector)
+  Impl(const std::string& table_path, const FitSettings& fit, const std::string& device_selector)
       : fit_settings(fit), reader(table_path), slices(reader), devices(select_devices(device_selector)),
         engine(devices), fitter(slices, fit_settings, engine, joined_names(devices)) {}
-  const FitSection fit_settings;
+  const FitSettings fit_settings;
   TableReader reader;
   TableSlices slices;
   const std::vector<Device> devices;
@@ -39,12 +39,12 @@ struct BatchWorker::Impl {
   BatchFitter fitter;
 };
 
-BatchWorker::BatchWorker(const std::string& table_path, const FitSection& fit, const std::string& device_selector)
+BatchWorker::BatchWorker(const std::string& table_path, const FitSettings& fit, const std::string& device_selector)
     : impl_(std::make_unique<Impl>(table_path, fit, device_selector)) {}
 BatchWorker::~BatchWorker() = default;
 BatchPart BatchWorker::fit(const std::vector<SliceRef>& batch) { return impl_->fitter.fit(batch); }
 
-SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
+SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
                        std::size_t max_batches) {
   const auto t_start = std::chrono::steady_clock::now();
   const OutputLock lock(fit.output);  // a second run on the same output fails here, at once

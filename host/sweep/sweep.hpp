@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "sweep/fit_settings.hpp"
 #include "sweep/checkpoint.hpp"
 #include "sweep/slice_plan.hpp"
 
@@ -38,12 +38,12 @@ struct SweepSummary {
 
 // The fit settings that make a result, as JSON (the mixture file's `fit_settings`
 // attribute, docs/formats.md): every key of the `fit:` section but the paths and slices.
-std::string fit_settings_json(const FitSection& fit);
+std::string fit_settings_json(const FitSettings& fit);
 
 // Fits the slices `fit` asks for. With `max_batches`, stops after committing that many
 // batches (the summary's `complete` is false and no final file is written): a later run
 // resumes from the checkpoint.
-SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
+SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
                        std::size_t max_batches = SIZE_MAX);
 
 // How run_sweep fits its batches. Without a farm, one after the other in this process.
@@ -65,7 +65,7 @@ void set_batch_farm(BatchFarm* farm);
 // farm runs. Fits batches of `table_path` exactly as run_sweep does.
 class BatchWorker {
  public:
-  BatchWorker(const std::string& table_path, const FitSection& fit, const std::string& device_selector);
+  BatchWorker(const std::string& table_path, const FitSettings& fit, const std::string& device_selector);
   ~BatchWorker();
   BatchPart fit(const std::vector<SliceRef>& batch);
 

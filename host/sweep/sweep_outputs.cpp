@@ -43,7 +43,7 @@ std::string search_csv(const std::vector<SearchRow>& rows) {
 }
 
 SweepSummary write_outputs(const SweepResult& result, const std::string& table_path, const TableMeta& meta,
-                           const FitSection& fit) {
+                           const FitSettings& fit) {
   const MixtureFile& out = result.mixture;
   write_mixture_file(fit.output, out);
   write_text_atomic(fit.report, report_csv(result.report));
@@ -71,7 +71,7 @@ SweepSummary write_outputs(const SweepResult& result, const std::string& table_p
 }
 
 std::string sweep_fingerprint(const std::string& table_path, const TableMeta& meta, const std::vector<SliceRef>& plan,
-                              const FitSection& fit, std::size_t batch, const EmEngine& engine,
+                              const FitSettings& fit, std::size_t batch, const EmEngine& engine,
                               const std::vector<Device>& devices) {
   static const std::string executable = hex64(hash_file("/proc/self/exe"));
   std::string fit_sources;  // every program a fit runs
@@ -91,7 +91,7 @@ std::string sweep_fingerprint(const std::string& table_path, const TableMeta& me
   return fp.str();
 }
 
-std::string fit_settings_json(const FitSection& f) {
+std::string fit_settings_json(const FitSettings& f) {
   std::ostringstream s;
   s << "{\"k_min\": " << f.k_min << ", \"k_max\": " << f.k_max << ", \"seed\": " << f.seed
     << ", \"restarts\": " << f.restarts << ", \"final_restarts\": " << f.final_restarts
