@@ -39,6 +39,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A sweep that stops after committing n batches.
+SweepOptions stop_after(std::size_t n) {
+  SweepOptions o;
+  o.max_batches = n;
+  return o;
+}
+
 fs::path temp_dir() {
   const fs::path d = fs::temp_directory_path() / "bsdfmix_sweep_test";
   fs::create_directories(d);
@@ -359,7 +366,7 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   part.search_report = (temp_dir() / (colour ? "part_rgb_search.csv" : "part_search.csv")).string();
   fs::remove_all(part.output + ".parts");
   fs::remove(part.output);
-  const SweepSummary first = run_sweep(table, part, "", 2);
+  const SweepSummary first = run_sweep(table, part, "", stop_after(2));
   CHECK_FALSE(first.complete);
   CHECK_FALSE(fs::exists(part.output));
   const SweepSummary second = run_sweep(table, part, "");
@@ -627,7 +634,7 @@ TEST_CASE("a checkpoint is not reused after the table is rewritten with the same
   f.batch = 2;
   f.k_max = 3;
   fs::remove_all(f.output + ".parts");
-  CHECK_FALSE(run_sweep(table, f, "", 1).complete);
+  CHECK_FALSE(run_sweep(table, f, "", stop_after(1)).complete);
   REQUIRE(fs::exists(f.output + ".parts"));
 
   // Same path, same size, same source attribute; other values.
@@ -648,7 +655,7 @@ TEST_CASE("a checkpoint is not reused after the table is rewritten with the same
 
   // Unchanged, the same partial run is resumed.
   fs::remove(f.output);
-  CHECK_FALSE(run_sweep(table, f, "", 1).complete);
+  CHECK_FALSE(run_sweep(table, f, "", stop_after(1)).complete);
   CHECK(run_sweep(table, f, "").resumed == 2);
 }
 

@@ -1,5 +1,6 @@
 // `bsdfmix catalog CATALOG.yaml`: many tables fitted as one job (docs/scale.md).
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "core/progress.hpp"
 #include "scale/catalog.hpp"
 #include "scale/mpi_farm.hpp"
@@ -17,7 +18,8 @@ void add_catalog(CLI::App& app, Common& common) {
     Progress::set_enabled(!common.quiet);
     const scale::Catalog cat = scale::load_catalog(file);
     const std::string dev = common.device.empty() ? cat.device : common.device;
-    scale::MpiFarm mpi;  // MPI only under mpirun: rank 0 runs the catalog, the others fit its batches
+    const RunEnvironment env = run_environment();
+    scale::MpiFarm mpi(env.farm);  // MPI only under mpirun: rank 0 runs the catalog, the others fit its batches
     if (mpi.worker()) {
       std::vector<scale::FarmJob> jobs;
       for (const auto& e : cat.entries) {
@@ -25,9 +27,9 @@ void add_catalog(CLI::App& app, Common& common) {
         const bool remade = (c.generate && c.generate->force) || (c.import && c.import->force);
         jobs.push_back({c.table, *c.fit, !remade && exists_quiet(c.table)});
       }
-      return mpi.serve(jobs, dev);
+      return mpi.serve(jobs, dev, env.engine);
     }
-    scale::run_catalog(cat, dev, mpi.active() ? &mpi : nullptr);
+    scale::run_catalog(cat, dev, mpi.active() ? &mpi : nullptr, env.engine);
   });
 }
 

@@ -1,5 +1,6 @@
 // `bsdfmix fit CONFIG.yaml`: the fitting sweep (docs/fitting.md), shared under mpirun.
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "config/config.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
@@ -22,13 +23,14 @@ void add_fit(CLI::App& app, Common& common) {
     const Config c = load_config(file);
     if (!c.fit) throw ConfigError(file + ": fit: section missing (add `fit:` to use the defaults)");
     const std::string dev = device_for(c, common.device);
-    scale::MpiFarm mpi;  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
+    const RunEnvironment env = run_environment();
+    scale::MpiFarm mpi(env.farm);  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
     if (mpi.worker()) {
       const bool remade = (c.generate && c.generate->force) || (c.import && c.import->force);
-      return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev);
+      return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev, env.engine);
     }
     stage_table(c, dev);
-    stage_fit(c, dev, max_batches);
+    stage_fit(c, dev, SweepOptions{max_batches, mpi.batch_farm(), env.engine});
   });
 }
 

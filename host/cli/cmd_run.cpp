@@ -3,6 +3,7 @@
 #include <optional>
 
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "config/config.hpp"
 #include "core/progress.hpp"
 #include "pipeline/stages.hpp"
@@ -21,7 +22,7 @@ void add_run(CLI::App& app, Common& common) {
     const Config config = load_config(file);
     std::optional<render::RenderSettings> render;
     if (config.render) render = render::render_settings(config);  // checked before any work
-    run_all(config, common.device);
+    run_all(config, common.device, run_environment().engine);
     if (render) render::run_render(config, *render, device_for(config, common.device));
   });
 }
