@@ -1,4 +1,6 @@
 // `bsdfmix fit CONFIG.yaml`: the fitting sweep (docs/fitting.md), shared under mpirun.
+#include <memory>
+
 #include "cli/commands.hpp"
 #include "cli/environment.hpp"
 #include "config/config.hpp"
@@ -10,18 +12,21 @@
 namespace bsdfmix::cli {
 
 void add_fit(CLI::App& app, Common& common) {
-  static std::string file;
-  static std::size_t max_batches = SIZE_MAX;
+  struct Args {  // the options, kept alive by the callback
+    std::string file;
+    std::size_t max_batches = SIZE_MAX;
+  };
+  const auto args = std::make_shared<Args>();
   auto* sub = add_config_command(app, common, "fit",
                                  "the fitting sweep: Gaussian-count search and final fits, writing the "
                                  "mixture file and the fit report CSV",
-                                 file);
-  sub->add_option("--max-batches", max_batches,
+                                 args->file);
+  sub->add_option("--max-batches", args->max_batches,
                   "commit at most this many batches, then stop (a later run resumes)");
-  sub->callback([&common] {
+  sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
-    const Config c = load_config(file);
-    if (!c.fit) throw ConfigError(file + ": fit: section missing (add `fit:` to use the defaults)");
+    const Config c = load_config(args->file);
+    if (!c.fit) throw ConfigError(args->file + ": fit: section missing (add `fit:` to use the defaults)");
     const std::string dev = device_for(c, common.device);
     const RunEnvironment env = run_environment();
     scale::MpiFarm mpi(env.farm);  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
@@ -30,7 +35,7 @@ void add_fit(CLI::App& app, Common& common) {
       return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev, env.engine);
     }
     stage_table(c, dev);
-    stage_fit(c, dev, SweepOptions{max_batches, mpi.batch_farm(), env.engine});
+    stage_fit(c, dev, SweepOptions{args->max_batches, mpi.batch_farm(), env.engine});
   });
 }
 
