@@ -23,12 +23,7 @@ void add_generate(CLI::App& app, Common& common) {
   };
   const auto args = std::make_shared<Args>();
   fiber->add_option("--preset", args->opt.preset, "model parameters: " + fiber_preset_names())->required();
-  fiber->add_option("--theta-o", args->opt.n_theta_o, "theta_o slices over [-pi/2, pi/2]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  fiber->add_option("--theta-i", args->opt.n_theta_i, "theta_i cells over [-pi/2, pi/2]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  fiber->add_option("--phi-i", args->opt.n_phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+  add_grid_options(*fiber, "[-pi/2, pi/2]", args->opt.n_theta_o, args->opt.n_theta_i, args->opt.n_phi_i);
   fiber->add_flag("--no-symmetry", args->no_symmetry,
                   "tabulate every (theta_o, phi_o) slice instead of one phi_o (azimuthal symmetry)");
   fiber->add_option("--phi-o", args->opt.n_phi_o, "phi_o slices over [-pi, pi) with --no-symmetry (default: --phi-i)")

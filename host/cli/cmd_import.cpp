@@ -19,12 +19,7 @@ void add_import(CLI::App& app, Common& common) {
   };
   const auto args = std::make_shared<Args>();
   rgl->add_option("file", args->opt.file, "the RGL .bsdf file")->required()->check(CLI::ExistingFile);
-  rgl->add_option("--theta-o", args->opt.n_theta_o, "theta_o slices over [0, pi/2]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  rgl->add_option("--theta-i", args->opt.n_theta_i, "theta_i cells over [0, pi/2]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  rgl->add_option("--phi-i", args->opt.n_phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+  add_grid_options(*rgl, "[0, pi/2]", args->opt.n_theta_o, args->opt.n_theta_i, args->opt.n_phi_i);
   rgl->add_flag("--resolve", args->opt.resolve,
                 "raise the three resolutions until the file's narrowest lobe spans 3 cells (docs/rgl.md, \"Resolving "
                 "sharp lobes\"); the resolutions given are the least");
