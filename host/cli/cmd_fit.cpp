@@ -25,10 +25,10 @@ void add_fit(CLI::App& app, Common& common) {
                   "commit at most this many batches, then stop (a later run resumes)");
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
+    const RunEnvironment env = run_environment();
     const Config c = load_config(args->file);
     if (!c.fit) throw ConfigError(args->file + ": fit: section missing (add `fit:` to use the defaults)");
     const std::string dev = device_for(c, common.device);
-    const RunEnvironment env = run_environment();
     scale::MpiFarm mpi(env.farm);  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
     if (mpi.worker()) {
       const bool remade = (c.generate && c.generate->force) || (c.import && c.import->force);

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kFingerprintFile = "fingerprint.txt";
+constexpr const char* kFingerprintFile = "fingerprint.txt";
 
 h5::Handle string_type() {
   h5::Handle t(H5Tcopy(H5T_C_S1));
