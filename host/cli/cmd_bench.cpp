@@ -6,7 +6,9 @@
 #include "bench/em_bench.hpp"
 #include "bench/sampling_peers.hpp"
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "core/progress.hpp"
+#include "fit/em.hpp"
 
 namespace bsdfmix::cli {
 
@@ -69,7 +71,11 @@ void add_bench(CLI::App& app, Common& common) {
   sub->require_subcommand(1);
   em->callback([args, &common] {
     if (common.quiet) Progress::set_enabled(false);
-    bench::bench_em(args->o, common.device, common.quiet);
+    bench::EmBenchOptions o = args->o;
+    // BSDFMIX_PRECISION sets a precision left at auto
+    if (parse_precision(o.precision) == EmPrecision::Auto)
+      o.precision = precision_name(run_environment().engine.precision);
+    bench::bench_em(o, common.device, common.quiet);
   });
 }
 

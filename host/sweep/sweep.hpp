@@ -54,7 +54,8 @@ class BatchFarm {
                    const std::function<void(BatchPart&&)>& commit) = 0;
 };
 
-// How run_sweep runs, beside the settings that make its result.
+// How run_sweep runs, beside the fit settings: where it stops, where its batches are
+// fitted, and how its engine runs (the fingerprint records the precision in force).
 struct SweepOptions {
   // Stop after committing this many batches (the summary's `complete` is false and no
   // final file is written): a later run resumes from the checkpoint.
