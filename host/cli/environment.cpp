@@ -28,6 +28,8 @@ RunEnvironment run_environment() {
     }
   }
   env.engine.pool_log = std::getenv("BSDFMIX_POOL_LOG") != nullptr;
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE"})
+    if (!variable(v).empty()) env.farm.launched = true;
   env.farm.root_fits = variable("BSDFMIX_MPI_ROOT_FITS") != "0";
   env.farm.stats_path = variable("BSDFMIX_MPI_STATS");
   return env;

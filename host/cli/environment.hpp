@@ -9,7 +9,9 @@ namespace bsdfmix::cli {
 
 struct RunEnvironment {
   EngineOptions engine;     // BSDFMIX_PRECISION (auto, fp32, fp64), BSDFMIX_POOL_LOG (set: log every batch run)
-  scale::FarmOptions farm;  // BSDFMIX_MPI_ROOT_FITS (0: rank 0 only hands out), BSDFMIX_MPI_STATS (a CSV path)
+  // the launcher's OMPI_COMM_WORLD_SIZE, PMIX_RANK or PMI_SIZE, BSDFMIX_MPI_ROOT_FITS (0: rank 0
+  // only hands out), BSDFMIX_MPI_STATS (a CSV path)
+  scale::FarmOptions farm;
 };
 
 // Reads them; throws ConfigError naming a variable whose value is not one it takes.

@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <thread>
@@ -77,12 +76,6 @@ T get(const std::vector<std::uint8_t>& in, std::size_t& at) {
 }
 
 }  // namespace
-
-bool launched_by_mpi() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE"})
-    if (const char* e = std::getenv(v); e && *e) return true;
-  return false;
-}
 
 // Rank 0's side: the farm run_sweep calls.
 struct MpiFarm::Root : BatchFarm {
@@ -185,7 +178,7 @@ struct MpiFarm::Root : BatchFarm {
 };
 
 MpiFarm::MpiFarm(const FarmOptions& options) {
-  if (!launched_by_mpi()) return;
+  if (!options.launched) return;
   int already = 0;
   MPI_Initialized(&already);
   if (!already) {

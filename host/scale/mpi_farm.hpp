@@ -19,10 +19,6 @@
 
 namespace bsdfmix::scale {
 
-// True when a launcher started this process (mpirun/mpiexec of Open MPI, or any PMI or
-// PMIx launcher): OMPI_COMM_WORLD_SIZE, PMIX_RANK or PMI_SIZE is set.
-bool launched_by_mpi();
-
 // One fitting job a worker may be handed batches of: a table and its fit settings.
 // Every rank builds the same list from the same config, in the same order.
 struct FarmJob {
@@ -42,11 +38,14 @@ struct FarmStats {
 // How the farm runs; the command line fills it from the environment
 // (host/cli/environment.hpp).
 struct FarmOptions {
+  // A launcher started this process (mpirun/mpiexec of Open MPI, or any PMI or PMIx
+  // launcher: OMPI_COMM_WORLD_SIZE, PMIX_RANK or PMI_SIZE set); else no MPI call is made.
+  bool launched = false;
   bool root_fits = true;   // rank 0 fits batches while every worker is busy (BSDFMIX_MPI_ROOT_FITS=0: never)
   std::string stats_path;  // "" or a CSV file each run_sweep appends its traffic to (BSDFMIX_MPI_STATS)
 };
 
-// MPI for the length of one command. Under a launcher with more than one rank, rank 0
+// MPI for the length of one command. Launched, with more than one rank, rank 0
 // hands batch_farm() to run_sweep (sweep/sweep.hpp SweepOptions) and every other rank
 // calls serve(). The destructor tells the workers to stop, waits for them, and ends MPI
 // (also when an error is on its way out of rank 0).
