@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -74,6 +75,13 @@ TEST_CASE("errors are one line on stderr with a non-zero exit", "[cli]") {
   CHECK(no_cfg.code == 1);
   CHECK(lines(no_cfg.err) == 1);
   CHECK_THAT(no_cfg.err, Catch::Contains("nowhere.yaml: cannot read config file"));
+
+  setenv("BSDFMIX_PRECISION", "fp16", 1);  // read once, at the edge, before the config
+  const Run bad_env = run("fit nowhere.yaml");
+  unsetenv("BSDFMIX_PRECISION");
+  CHECK(bad_env.code != 0);
+  CHECK(lines(bad_env.err) == 1);
+  CHECK_THAT(bad_env.err, Catch::Contains("BSDFMIX_PRECISION"));
 
   const Run bad_dev = run("devices --check --device no-such-device-xyz");
   CHECK(bad_dev.code == 1);

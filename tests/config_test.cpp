@@ -55,6 +55,30 @@ TEST_CASE("defaults are merged under the user's keys", "[config]") {
   CHECK(c.device.empty());
 }
 
+TEST_CASE("fit settings compare as values", "[config]") {
+  const std::string t = "table: " + existing_table() + "\nfit:\n";
+  const FitSettings plain = *parse_config(t, "cfg.yaml").fit;
+  CHECK(plain == *parse_config(t, "cfg.yaml").fit);
+  FitSettings defaults;  // configs/defaults.yaml's fit section is the type's defaults, but for the paths
+  defaults.output = "out/mixture.h5";
+  defaults.report = "out/fit.csv";
+  defaults.search_report = "out/search.csv";
+  CHECK(plain == defaults);
+  const FitSettings moved = *parse_config(t + "  output: elsewhere/m.h5\n", "cfg.yaml").fit;
+  CHECK(moved != plain);
+  CHECK(same_result_settings(moved, plain));  // the paths do not make the result
+  for (const char* key : {"  k_max: 8\n", "  tolerance: 1e-5\n", "  search: restarts\n", "  rgb_copies: ~\n",
+                          "  error_target: 0.05\n", "  refine: none\n"}) {
+    INFO(key);
+    const FitSettings other = *parse_config(t + key, "cfg.yaml").fit;
+    CHECK(other != plain);
+    CHECK_FALSE(same_result_settings(other, plain));
+  }
+  const FitSettings batched = *parse_config(t + "  batch: 7\n", "cfg.yaml").fit;
+  CHECK(batched != plain);
+  CHECK(same_result_settings(batched, plain));
+}
+
 TEST_CASE("a bare section takes every default", "[config]") {
   const Config c = parse_config("table: " + existing_table() + "\nfit:\nconverge:\n", "cfg.yaml");
   REQUIRE(c.fit);

@@ -298,6 +298,21 @@ TEST_CASE("mpirun -n 2 and -n 3 fits equal the 1-process fit bit for bit", "[sca
   }
 }
 
+TEST_CASE("BSDFMIX_MPI_ROOT_FITS=0 keeps rank 0 to handing out; BSDFMIX_MPI_STATS appends the traffic", "[scale]") {
+  const std::string one = reference_mixture();
+  const fs::path stats = temp_dir() / "root_idle_stats.csv";
+  fs::remove(stats);
+  const std::string env = "BSDFMIX_MPI_ROOT_FITS=0 BSDFMIX_MPI_STATS=" + stats.string() + " ";
+  const Run r = run(env + mpirun(2), "fit " + fit_config("root_idle"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto [batches, by_root] = farm_batches(r.err);
+  CHECK(batches == 6);
+  CHECK(by_root == 0);
+  CHECK(slurp(stats).rfind("2,6,0,", 0) == 0);  // ranks, batches, fitted by rank 0, ...
+  require_same_mixture(one, (temp_dir() / "root_idle_mixture.h5").string());
+}
+
 TEST_CASE("a stopped 2-rank fit resumes to the 1-process file", "[scale]") {
   const std::string one = reference_mixture();
   const std::string cfg = fit_config("resumed");

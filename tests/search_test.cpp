@@ -139,8 +139,8 @@ std::string known_table(const std::string& name, const std::vector<Known>& known
   return path;
 }
 
-FitSection settings(const std::string& stem, const std::string& search, const std::string& refine = "l1") {
-  FitSection f;
+FitSettings settings(const std::string& stem, const std::string& search, const std::string& refine = "l1") {
+  FitSettings f;
   f.output = (temp_dir() / (stem + "_mixture.h5")).string();
   f.report = (temp_dir() / (stem + "_fit.csv")).string();
   f.search_report = (temp_dir() / (stem + "_search.csv")).string();
@@ -318,7 +318,7 @@ TEST_CASE("the search finds the true K of known mixtures and their parameters", 
     known.insert(known.end(), k.begin(), k.end());
   }
   const std::string table = known_table("known.h5", known, 90, 180);
-  const FitSection f = settings("known", "smem");
+  const FitSettings f = settings("known", "smem");
   const SweepSummary sum = run_sweep(table, f, "");
   REQUIRE(sum.slices == known.size());
   const MixtureFile m = read_mixture_file(f.output);
@@ -362,7 +362,7 @@ TEST_CASE("the L1 refinement lowers the error on slices that are not mixtures, n
   std::vector<Known> known;
   for (int i = 0; i < 8; ++i) known.push_back(random_known(2 + i % 3, Case::Plain, 9000 + std::uint64_t(i)));
   const std::string table = known_table("banded.h5", known, 90, 180, 0.05);
-  const FitSection none = settings("banded_none", "smem", "none"), l1 = settings("banded_l1", "smem", "l1");
+  const FitSettings none = settings("banded_none", "smem", "none"), l1 = settings("banded_l1", "smem", "l1");
   run_sweep(table, none, "");
   run_sweep(table, l1, "");
   const MixtureFile a = read_mixture_file(none.output), b = read_mixture_file(l1.output);
@@ -375,8 +375,8 @@ TEST_CASE("the L1 refinement lowers the error on slices that are not mixtures, n
     CHECK(score_b <= score_a + 1e-9);
   }
   // At a pinned K, the refined fits misplace at least 10% less energy in total.
-  FitSection pinned_none = settings("banded_k5_none", "smem", "none"), pinned_l1 = settings("banded_k5_l1", "smem", "l1");
-  for (FitSection* f : {&pinned_none, &pinned_l1}) {
+  FitSettings pinned_none = settings("banded_k5_none", "smem", "none"), pinned_l1 = settings("banded_k5_l1", "smem", "l1");
+  for (FitSettings* f : {&pinned_none, &pinned_l1}) {
     f->k_min = f->k_max = 5;
     run_sweep(table, *f, "");
   }
@@ -431,7 +431,7 @@ TEST_CASE("measure: lobes near the theta border", "[.measure]") {
   std::ostringstream csv;
   csv << "search,refine,c,draw,k,true_k,l1_rel,true_l1_rel,mean_shift_sigma,sigma_ratio\n";
   for (const auto& [method, refine] : methods) {
-    const FitSection f = settings("border_" + method + "_" + refine, method, refine);
+    const FitSettings f = settings("border_" + method + "_" + refine, method, refine);
     run_sweep(table, f, "");
     const MixtureFile m = read_mixture_file(f.output);
     REQUIRE(m.slices() == known.size());
@@ -510,7 +510,7 @@ TEST_CASE("a walk that stalls still reaches the score of the best pinned fit", "
   const std::string table = (temp_dir() / "stall.h5").string();
   write_table(table, m, v);
   auto fit_at = [&](const std::string& stem, int k_min, int k_max) {
-    FitSection f;
+    FitSettings f;
     f.output = (temp_dir() / (stem + "_mixture.h5")).string();
     f.report = (temp_dir() / (stem + "_fit.csv")).string();
     f.search_report = (temp_dir() / (stem + "_search.csv")).string();
@@ -522,7 +522,7 @@ TEST_CASE("a walk that stalls still reaches the score of the best pinned fit", "
   };
   const MixtureFile walk = fit_at("stall_walk", 1, 32);
   REQUIRE(walk.slices() == 2);
-  const double k_penalty = FitSection{}.k_penalty;
+  const double k_penalty = FitSettings{}.k_penalty;
   for (int pinned : {4, 8, 16}) {
     const MixtureFile p = fit_at("stall_k" + std::to_string(pinned), pinned, pinned);
     for (std::size_t s = 0; s < 2; ++s) {
@@ -548,7 +548,7 @@ TEST_CASE("a stalled walk with a poor best fit is fitted past its last K, as wel
   imp.n_phi_i = 180;
   const std::string table = (temp_dir() / "iris.h5").string();
   import_rgl_table(imp, table);
-  FitSection f;
+  FitSettings f;
   f.output = (temp_dir() / "iris_mixture.h5").string();
   f.report = (temp_dir() / "iris_fit.csv").string();
   f.search_report = (temp_dir() / "iris_search.csv").string();
@@ -579,7 +579,7 @@ TEST_CASE("a stalled walk with a poor best fit is fitted past its last K, as wel
   f.search_report = (temp_dir() / "iris80_search.csv").string();
   run_sweep(table, f, "");
   const MixtureFile walked80 = read_mixture_file(f.output);
-  FitSection pinned = f;
+  FitSettings pinned = f;
   pinned.output = (temp_dir() / "iris_pinned.h5").string();
   pinned.report = (temp_dir() / "iris_pinned.csv").string();
   pinned.search_report = (temp_dir() / "iris_pinned_search.csv").string();

@@ -80,8 +80,8 @@ std::string colour_table(const std::string& name, std::size_t n_to, std::size_t 
   return path;
 }
 
-FitSection settings(const std::string& stem) {
-  FitSection f;
+FitSettings settings(const std::string& stem) {
+  FitSettings f;
   f.output = (temp_dir() / (stem + "_mixture.h5")).string();
   f.report = (temp_dir() / (stem + "_fit.csv")).string();
   f.search_report = (temp_dir() / (stem + "_search.csv")).string();
@@ -119,7 +119,7 @@ std::vector<Lobe> leaking(std::size_t t) {
 TEST_CASE("a lobe leaking past the theta border keeps the stand-in's energy in every channel", "[stand_in]") {
   Progress::set_enabled(false);
   const std::string table = colour_table("leak.h5", 3, 45, 90, leaking);
-  FitSection f = settings("leak");
+  FitSettings f = settings("leak");
   f.k_min = f.k_max = 3;  // the true K: one Gaussian draws the cut lobe, and leaks
   run_sweep(table, f, "");
   const MixtureFile m = read_mixture_file(f.output);
@@ -173,7 +173,7 @@ TEST_CASE("a lobe leaking past the theta border keeps the stand-in's energy in e
 TEST_CASE("a grey table gives rgb_scale = scale * weight in every channel", "[stand_in]") {
   Progress::set_enabled(false);
   const std::string table = colour_table("grey.h5", 3, 45, 90, leaking, true);
-  const FitSection f = settings("grey");
+  const FitSettings f = settings("grey");
   run_sweep(table, f, "");
   const MixtureFile m = read_mixture_file(f.output);
   REQUIRE(m.has_rgb());
@@ -203,7 +203,7 @@ TEST_CASE("the report's errors are the stand-in's through the header, recomputed
     l[2].rgb[2] = -0.05;  // a channel that dips below zero: measured noise a stand-in cannot follow
     return l;
   });
-  const FitSection f = settings("recompute");
+  const FitSettings f = settings("recompute");
   run_sweep(table, f, "");
   const MixtureFile m = read_mixture_file(f.output);
   const mix::MixtureSet set = to_mixture_set(m);
@@ -341,7 +341,7 @@ TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured mate
   import_rgl_table(opt, table);
   double sums[2][2] = {{0, 0}, {0, 0}};  // [luminance alone / with the channels][luminance L1, RGB error]
   for (int with : {0, 1}) {
-    FitSection f;
+    FitSettings f;
     const std::string stem = with ? "sunflower_rgb" : "sunflower_y";
     f.output = (temp_dir() / (stem + "_mixture.h5")).string();
     f.report = (temp_dir() / (stem + "_fit.csv")).string();

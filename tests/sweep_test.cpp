@@ -39,6 +39,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// A sweep that stops after committing n batches.
+SweepOptions stop_after(std::size_t n) {
+  SweepOptions o;
+  o.max_batches = n;
+  return o;
+}
+
 fs::path temp_dir() {
   const fs::path d = fs::temp_directory_path() / "bsdfmix_sweep_test";
   fs::create_directories(d);
@@ -84,8 +91,8 @@ std::string mixture_table(const std::string& name, std::size_t n_theta_o, std::s
   return path;
 }
 
-FitSection fit_settings(const std::string& stem) {
-  FitSection f;
+FitSettings fit_settings(const std::string& stem) {
+  FitSettings f;
   f.output = (temp_dir() / (stem + "_mixture.h5")).string();
   f.report = (temp_dir() / (stem + "_fit.csv")).string();
   f.search_report = (temp_dir() / (stem + "_search.csv")).string();
@@ -160,7 +167,7 @@ TEST_CASE("a sweep that fails on a bad cell leaves no output and no checkpoint",
   v[2 * 200 + 7] = std::numeric_limits<float>::quiet_NaN();
   const std::string table = (temp_dir() / "nan_cell.h5").string();
   write_table(table, meta, v);
-  FitSection f = fit_settings("nan_cell");
+  FitSettings f = fit_settings("nan_cell");
   f.batch = 8;  // one batch: the failure comes before any commit
   fs::remove_all(f.output + ".parts");
   CHECK_THROWS_WITH(run_sweep(table, f, ""), Catch::Contains("cell (theta_i 0, phi_i 7): NaN"));
@@ -232,7 +239,7 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
   });
   for (const std::string method : {"smem", "restarts"}) {
     INFO("search: " << method);
-    FitSection f = fit_settings("known_" + method);
+    FitSettings f = fit_settings("known_" + method);
     f.k_max = 10;
     f.search = *search_strategy(method);
     const SweepSummary s = run_sweep(table, f, "");
@@ -285,7 +292,7 @@ TEST_CASE("an error target picks the smallest K that meets it", "[fit][search]")
   const std::string table = mixture_table("target.h5", 1, 40, 80, [](std::size_t) -> std::vector<Lobe> {
     return {{0.5, -0.5, -1.0, 0.02, 0.0, 0.05}, {0.3, 0.3, 1.0, 0.03, 0.0, 0.05}, {0.2, 0.6, 2.5, 0.02, 0.0, 0.05}};
   });
-  FitSection f = fit_settings("target");
+  FitSettings f = fit_settings("target");
   f.error_target = 1.9;  // one Gaussian meets any target this loose
   run_sweep(table, f, "");
   CHECK(read_mixture_file(f.output).k[0] == 1);
@@ -303,7 +310,7 @@ TEST_CASE("zero slices are stored with scale 0 and never NaN", "[fit]") {
     if (t == 0) return {};
     return {{1.0, 0.0, 0.0, 0.05, 0.0, 0.1}};
   });
-  FitSection f = fit_settings("zero");
+  FitSettings f = fit_settings("zero");
   f.k_max = 3;
   run_sweep(table, f, "");
   const MixtureFile m = read_mixture_file(f.output);
@@ -325,7 +332,7 @@ TEST_CASE("a slice with fewer non-zero cells than K gets one component per cell"
   v[14 * 40 + 33] = 0.5f;
   const std::string table = (temp_dir() / "three_cells.h5").string();
   write_table(table, meta, v);
-  FitSection f = fit_settings("three_cells");
+  FitSettings f = fit_settings("three_cells");
   f.k_min = f.k_max = 8;
   run_sweep(table, f, "");
   const MixtureFile m = read_mixture_file(f.output);
@@ -345,7 +352,7 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   const std::string table = mixture_table(colour ? "resume_rgb.h5" : "resume.h5", 12, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
     return {{0.6, -0.4 + 0.05 * double(t), -1.0, 0.03, 0.0, 0.06}, {0.4, 0.5, 1.5 - 0.1 * double(t), 0.02, 0.005, 0.05}};
   }, colour);
-  FitSection whole = fit_settings(colour ? "whole_rgb" : "whole");
+  FitSettings whole = fit_settings(colour ? "whole_rgb" : "whole");
   whole.batch = 3;
   whole.k_max = 4;
   run_sweep(table, whole, "");
@@ -353,13 +360,13 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
 
   // The same sweep stopped after two batches, then rerun: it resumes from the
   // committed batches and ends with the same file.
-  FitSection part = whole;
+  FitSettings part = whole;
   part.output = (temp_dir() / (colour ? "part_rgb_mixture.h5" : "part_mixture.h5")).string();
   part.report = (temp_dir() / (colour ? "part_rgb_fit.csv" : "part_fit.csv")).string();
   part.search_report = (temp_dir() / (colour ? "part_rgb_search.csv" : "part_search.csv")).string();
   fs::remove_all(part.output + ".parts");
   fs::remove(part.output);
-  const SweepSummary first = run_sweep(table, part, "", 2);
+  const SweepSummary first = run_sweep(table, part, "", stop_after(2));
   CHECK_FALSE(first.complete);
   CHECK_FALSE(fs::exists(part.output));
   const SweepSummary second = run_sweep(table, part, "");
@@ -416,7 +423,7 @@ TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") 
   }, true);
   for (const SearchStrategy search : {SearchStrategy::Smem, SearchStrategy::Restarts}) {
     INFO("search: " << search_name(search));
-    FitSection f = fit_settings(std::string("in_memory_") + search_name(search));
+    FitSettings f = fit_settings(std::string("in_memory_") + search_name(search));
     f.k_max = 4;
     f.batch = 3;
     f.search = search;
@@ -589,7 +596,7 @@ TEST_CASE("a second run on the same output fails at once, naming the run that ho
   const std::string table = mixture_table("lock.h5", 2, 20, 40, [](std::size_t) -> std::vector<Lobe> {
     return {{1.0, 0.1, 0.5, 0.03, 0.0, 0.05}};
   });
-  FitSection f = fit_settings("lock");
+  FitSettings f = fit_settings("lock");
   f.k_max = 2;
   fs::remove(f.output);
   const std::string cfg = (temp_dir() / "lock.yaml").string();
@@ -623,11 +630,11 @@ TEST_CASE("a checkpoint is not reused after the table is rewritten with the same
   };
   const std::string table = mixture_table("rewritten.h5", 6, 24, 48, lobes_at(0.2));
   const auto size_before = fs::file_size(table);
-  FitSection f = fit_settings("rewritten");
+  FitSettings f = fit_settings("rewritten");
   f.batch = 2;
   f.k_max = 3;
   fs::remove_all(f.output + ".parts");
-  CHECK_FALSE(run_sweep(table, f, "", 1).complete);
+  CHECK_FALSE(run_sweep(table, f, "", stop_after(1)).complete);
   REQUIRE(fs::exists(f.output + ".parts"));
 
   // Same path, same size, same source attribute; other values.
@@ -637,7 +644,7 @@ TEST_CASE("a checkpoint is not reused after the table is rewritten with the same
   CHECK(resumed.resumed == 0);
   const MixtureFile got = read_mixture_file(f.output);
 
-  FitSection fresh = fit_settings("rewritten_fresh");
+  FitSettings fresh = fit_settings("rewritten_fresh");
   fresh.batch = 2;
   fresh.k_max = 3;
   run_sweep(table, fresh, "");
@@ -648,7 +655,7 @@ TEST_CASE("a checkpoint is not reused after the table is rewritten with the same
 
   // Unchanged, the same partial run is resumed.
   fs::remove(f.output);
-  CHECK_FALSE(run_sweep(table, f, "", 1).complete);
+  CHECK_FALSE(run_sweep(table, f, "", stop_after(1)).complete);
   CHECK(run_sweep(table, f, "").resumed == 2);
 }
 
@@ -658,7 +665,7 @@ TEST_CASE("the summary's sizes are the files' bytes: on disk and as their datase
     if (t == 0) return {{1.0, 0.1, 0.5, 0.03, 0.0, 0.05}};
     return {{0.5, 0.1, 0.5, 0.03, 0.0, 0.05}, {0.3, -0.4, -2.0, 0.02, 0.0, 0.03}, {0.2, 0.5, 2.0, 0.02, 0.0, 0.03}};
   });
-  FitSection f = fit_settings("sizes");
+  FitSettings f = fit_settings("sizes");
   f.k_max = 4;
   const SweepSummary sum = run_sweep(table, f, "");
   CHECK(sum.mixture_file_bytes == fs::file_size(f.output));

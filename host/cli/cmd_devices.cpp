@@ -1,5 +1,6 @@
 // `bsdfmix devices`: the OpenCL platforms and devices, with the indices that select them.
 #include <cstdio>
+#include <memory>
 
 #include "cli/commands.hpp"
 #include "core/error.hpp"
@@ -11,10 +12,13 @@ namespace bsdfmix::cli {
 
 void add_devices(CLI::App& app, Common& common) {
   auto* sub = app.add_subcommand("devices", "list OpenCL platforms and devices with the indices that select them");
-  static bool check = false;
-  sub->add_flag("--check", check, "also build and run a self-test kernel on the selected device(s)");
+  struct Args {  // the options, kept alive by the callback
+    bool check = false;
+  };
+  const auto args = std::make_shared<Args>();
+  sub->add_flag("--check", args->check, "also build and run a self-test kernel on the selected device(s)");
   add_common_options(*sub, common);
-  sub->callback([&common] {
+  sub->callback([args, &common] {
     const auto infos = enumerate_devices();
     int platform = -1;
     for (const auto& i : infos) {
@@ -33,7 +37,7 @@ void add_devices(CLI::App& app, Common& common) {
     }
     std::printf("select with --device INDEX|NAME|cpu|gpu|all or BSDFMIX_DEVICE; default: %s\n",
                 effective_selector(common.device).c_str());
-    if (check) {
+    if (args->check) {
       bool all_ok = true;
       for (const auto& d : select_devices(common.device)) {
         const auto r = run_selftest(d);

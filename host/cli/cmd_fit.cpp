@@ -1,5 +1,8 @@
 // `bsdfmix fit CONFIG.yaml`: the fitting sweep (docs/fitting.md), shared under mpirun.
+#include <memory>
+
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "config/config.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
@@ -9,26 +12,30 @@
 namespace bsdfmix::cli {
 
 void add_fit(CLI::App& app, Common& common) {
-  static std::string file;
-  static std::size_t max_batches = SIZE_MAX;
+  struct Args {  // the options, kept alive by the callback
+    std::string file;
+    std::size_t max_batches = SIZE_MAX;
+  };
+  const auto args = std::make_shared<Args>();
   auto* sub = add_config_command(app, common, "fit",
                                  "the fitting sweep: Gaussian-count search and final fits, writing the "
                                  "mixture file and the fit report CSV",
-                                 file);
-  sub->add_option("--max-batches", max_batches,
+                                 args->file);
+  sub->add_option("--max-batches", args->max_batches,
                   "commit at most this many batches, then stop (a later run resumes)");
-  sub->callback([&common] {
+  sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
-    const Config c = load_config(file);
-    if (!c.fit) throw ConfigError(file + ": fit: section missing (add `fit:` to use the defaults)");
+    const RunEnvironment env = run_environment();
+    const Config c = load_config(args->file);
+    if (!c.fit) throw ConfigError(args->file + ": fit: section missing (add `fit:` to use the defaults)");
     const std::string dev = device_for(c, common.device);
-    scale::MpiFarm mpi;  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
+    scale::MpiFarm mpi(env.farm);  // MPI only under mpirun: rank 0 runs the sweep, the others fit its batches
     if (mpi.worker()) {
       const bool remade = (c.generate && c.generate->force) || (c.import && c.import->force);
-      return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev);
+      return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev, env.engine);
     }
     stage_table(c, dev);
-    stage_fit(c, dev, max_batches);
+    stage_fit(c, dev, SweepOptions{args->max_batches, mpi.batch_farm(), env.engine});
   });
 }
 

@@ -1,4 +1,6 @@
 // `bsdfmix import rgl FILE.bsdf`: tabulates a measured RGL BRDF.
+#include <memory>
+
 #include "cli/commands.hpp"
 #include "core/progress.hpp"
 #include "tables/rgl_import.hpp"
@@ -10,32 +12,30 @@ void add_import(CLI::App& app, Common& common) {
   auto* rgl = sub->add_subcommand(
       "rgl", "a measured isotropic BRDF of the RGL material database (.bsdf): luminance in `values`, "
              "RGB beside it, hemisphere domain, azimuthal symmetry");
-  static RglImportOptions opt;
-  static std::string output;
-  rgl->add_option("file", opt.file, "the RGL .bsdf file")->required()->check(CLI::ExistingFile);
-  rgl->add_option("--theta-o", opt.n_theta_o, "theta_o slices over [0, pi/2]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  rgl->add_option("--theta-i", opt.n_theta_i, "theta_i cells over [0, pi/2]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  rgl->add_option("--phi-i", opt.n_phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  rgl->add_flag("--resolve", opt.resolve,
+  struct Args {  // the options, kept alive by the callback
+    RglImportOptions opt;
+    std::string output;
+    std::string negative = "keep";
+  };
+  const auto args = std::make_shared<Args>();
+  rgl->add_option("file", args->opt.file, "the RGL .bsdf file")->required()->check(CLI::ExistingFile);
+  add_grid_options(*rgl, "[0, pi/2]", args->opt.n_theta_o, args->opt.n_theta_i, args->opt.n_phi_i);
+  rgl->add_flag("--resolve", args->opt.resolve,
                 "raise the three resolutions until the file's narrowest lobe spans 3 cells (docs/rgl.md, \"Resolving "
                 "sharp lobes\"); the resolutions given are the least");
-  rgl->add_option("--threads", opt.threads, "worker threads (0: all cores)")->capture_default_str();
-  static std::string negative = "keep";
-  rgl->add_option("--negative", negative,
+  rgl->add_option("--threads", args->opt.threads, "worker threads (0: all cores)")->capture_default_str();
+  rgl->add_option("--negative", args->negative,
                   "negative RGB channels (out of the sRGB gamut): keep them signed, or clip each to 0 as Mitsuba "
                   "and pbrt render the file (docs/rgl.md)")
       ->capture_default_str()->check(CLI::IsMember({"keep", "clip"}));
-  rgl->add_option("-o,--output", output, "the table file to write (HDF5)")->required();
+  rgl->add_option("-o,--output", args->output, "the table file to write (HDF5)")->required();
   add_common_options(*rgl, common);
   sub->require_subcommand(1);
-  rgl->callback([&common] {
+  rgl->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
-    parse_rgl_negative(negative, opt.negative);
-    import_rgl_table(opt, output);
-    log_line("wrote " + output);
+    parse_rgl_negative(args->negative, args->opt.negative);
+    import_rgl_table(args->opt, args->output);
+    log_line("wrote " + args->output);
   });
 }
 

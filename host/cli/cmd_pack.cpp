@@ -2,6 +2,7 @@
 // float32 rgb_scale): the bytes a user ships; --interpolation sets how slices are
 // interpolated.
 #include <cstdio>
+#include <memory>
 
 #include "cli/commands.hpp"
 #include "core/atomic_file.hpp"
@@ -10,25 +11,28 @@
 namespace bsdfmix::cli {
 
 void add_pack(CLI::App& app, Common& common) {
-  static std::string mixture, output, storage = "ragged_f32", interpolation;
+  struct Args {  // the options, kept alive by the callback
+    std::string mixture, output, storage = "ragged_f32", interpolation;
+  };
+  const auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand(
       "pack", "write a mixture file's mixtures again in another storage: padded or ragged component arrays, "
               "rgb_scale as float64 or float32 (docs/formats.md, \"Storage\")");
-  sub->add_option("mixture", mixture, "mixture file (HDF5)")->required()->check(CLI::ExistingFile);
-  sub->add_option("-o,--output", output, "the packed mixture file")->required();
-  sub->add_option("--storage", storage, "padded, ragged, padded_f32 or ragged_f32 (default ragged_f32)");
-  sub->add_option("--interpolation", interpolation,
+  sub->add_option("mixture", args->mixture, "mixture file (HDF5)")->required()->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", args->output, "the packed mixture file")->required();
+  sub->add_option("--storage", args->storage, "padded, ragged, padded_f32 or ragged_f32 (default ragged_f32)");
+  sub->add_option("--interpolation", args->interpolation,
                   "between fitted slices: blend (mix the two slices' mixtures) or displace (move matched "
                   "components); default: as the file has it (docs/formats.md, \"Interpolation between slices\")");
   add_common_options(*sub, common);
-  sub->callback([] {
-    MixtureFile m = read_mixture_file(mixture);
+  sub->callback([args] {
+    MixtureFile m = read_mixture_file(args->mixture);
     const std::uint64_t before = m.payload_bytes();
-    m.storage = parse_storage(storage, "--storage");
-    if (!interpolation.empty()) m.interpolation = parse_interpolation(interpolation, "--interpolation");
-    prepare_output(output);
-    write_mixture_file(output, m);
-    std::printf("pack %s -> %s (%s): payload %llu -> %llu bytes\n", mixture.c_str(), output.c_str(),
+    m.storage = parse_storage(args->storage, "--storage");
+    if (!args->interpolation.empty()) m.interpolation = parse_interpolation(args->interpolation, "--interpolation");
+    prepare_output(args->output);
+    write_mixture_file(args->output, m);
+    std::printf("pack %s -> %s (%s): payload %llu -> %llu bytes\n", args->mixture.c_str(), args->output.c_str(),
                 storage_name(m.storage).c_str(), static_cast<unsigned long long>(before),
                 static_cast<unsigned long long>(m.payload_bytes()));
     std::fflush(stdout);

@@ -1,8 +1,10 @@
 // `bsdfmix run CONFIG.yaml`: every stage the config names, in order (host/pipeline/), and
 // last, when the config has a `render` section, the render (host/render/, docs/render.md).
+#include <memory>
 #include <optional>
 
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "config/config.hpp"
 #include "core/progress.hpp"
 #include "pipeline/stages.hpp"
@@ -11,17 +13,20 @@
 namespace bsdfmix::cli {
 
 void add_run(CLI::App& app, Common& common) {
-  static std::string file;
+  struct Args {  // the options, kept alive by the callback
+    std::string file;
+  };
+  const auto args = std::make_shared<Args>();
   auto* sub = add_config_command(app, common, "run",
                                  "every stage the config names, in order, charts included, and the render when the "
                                  "config has a render section",
-                                 file);
-  sub->callback([&common] {
+                                 args->file);
+  sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
-    const Config config = load_config(file);
+    const Config config = load_config(args->file);
     std::optional<render::RenderSettings> render;
     if (config.render) render = render::render_settings(config);  // checked before any work
-    run_all(config, common.device);
+    run_all(config, common.device, run_environment().engine);
     if (render) render::run_render(config, *render, device_for(config, common.device));
   });
 }

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstddef>
 #include <string>
 
 namespace bsdfmix::cli {
@@ -30,6 +31,11 @@ void add_tune(CLI::App& app, Common& common);
 
 // Adds --device and --quiet to a subcommand.
 void add_common_options(CLI::App& sub, Common& common);
+
+// The table grid's --theta-o, --theta-i (both over theta_range) and --phi-i of a
+// subcommand that tabulates.
+void add_grid_options(CLI::App& sub, const std::string& theta_range, std::size_t& theta_o, std::size_t& theta_i,
+                      std::size_t& phi_i);
 
 // A subcommand of one required CONFIG.yaml argument (stored in `file`), with the common options.
 CLI::App* add_config_command(CLI::App& app, Common& common, const char* name, const char* help, std::string& file);

@@ -19,6 +19,15 @@ void add_common_options(CLI::App& sub, Common& common) {
   sub.add_flag("-q,--quiet", common.quiet, "no progress or log lines on stderr");
 }
 
+void add_grid_options(CLI::App& sub, const std::string& theta_range, std::size_t& theta_o, std::size_t& theta_i,
+                      std::size_t& phi_i) {
+  sub.add_option("--theta-o", theta_o, "theta_o slices over " + theta_range)->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--theta-i", theta_i, "theta_i cells over " + theta_range)->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--phi-i", phi_i, "phi_i cells over [-pi, pi)")->capture_default_str()->check(CLI::PositiveNumber);
+}
+
 CLI::App* add_config_command(CLI::App& app, Common& common, const char* name, const char* help, std::string& file) {
   auto* sub = app.add_subcommand(name, help);
   sub->add_option("config", file, "YAML config (keys: configs/defaults.yaml)")->required();

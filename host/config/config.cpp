@@ -43,7 +43,7 @@ YAML::Node merged(const YAML::Node& defaults, const YAML::Node& user) {
   return out;
 }
 
-const char* kSections[] = {"generate", "import", "fit", "converge", "charts", "render"};
+constexpr const char* kSections[] = {"generate", "import", "fit", "converge", "charts", "render"};
 
 }  // namespace
 

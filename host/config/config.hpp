@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "config/node.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 
@@ -31,37 +32,8 @@ struct ImportSection {  // tabulate an RGL BRDF into `table`
   bool resolve = false;           // raise the grid to resolve the narrowest lobe (tables/rgl_lobe.hpp)
 };
 
-// How the sweep searches each slice's Gaussian count (docs/fitting.md), the `search`
-// key of the fit section.
-enum class SearchStrategy {
-  Smem,      // smem: walk K upwards, each K grown from the last, with split-and-merge moves
-  Restarts,  // restarts: independent k-means++ restarts per candidate K
-};
-// The config name of a strategy ("smem", "restarts").
-const char* search_name(SearchStrategy s);
-// The strategy a config name stands for; nullopt when it names none.
-std::optional<SearchStrategy> search_strategy(const std::string& name);
-
-struct FitSection {
-  std::string output, report, search_report;
-  int k_min = 1, k_max = 32;
-  std::uint64_t seed = 1;
-  int restarts = 2, final_restarts = 4, iterations = 60, final_iterations = 300;
-  double tolerance = 1e-6;
-  int batch = 0;
-  double k_penalty = 0.004;
-  std::optional<double> error_target;
-  int search_pool = 1;
-  SearchStrategy search = SearchStrategy::Smem;
-  std::string refine = "l1";    // l1: the final fits refined toward the least L1 error; none: EM's fits
-  int refine_evaluations = 150;
-  double refine_kl = 5.0;       // weight of the KL divergence (EM's objective) beside the L1 error
-  double refine_rgb = 0.5;      // with colour: the R, G, B error's share of the refinement's L1 part; 0: luminance alone
-  // with colour: a slice whose RGB error exceeds this times its luminance error gets colour
-  // copies (docs/fitting.md, "Colour copies"); empty: none
-  std::optional<double> rgb_copies = 1.2;
-  std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
-};
+// The `fit` section is the sweep's settings value (sweep/fit_settings.hpp).
+using FitSection = FitSettings;
 
 struct ConvergeSection {
   std::vector<double> theta_o, phi_o;

@@ -5,20 +5,6 @@
 
 namespace bsdfmix {
 
-const char* search_name(SearchStrategy s) {
-  switch (s) {
-    case SearchStrategy::Smem: return "smem";
-    case SearchStrategy::Restarts: return "restarts";
-  }
-  return "smem";
-}
-
-std::optional<SearchStrategy> search_strategy(const std::string& name) {
-  for (SearchStrategy s : {SearchStrategy::Smem, SearchStrategy::Restarts})
-    if (name == search_name(s)) return s;
-  return std::nullopt;
-}
-
 FitSection parse_fit(const ConfigNode& n) {
   FitSection f;
   f.output = n.str("output");

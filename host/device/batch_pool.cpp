@@ -22,7 +22,8 @@ double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::d
 
 }  // namespace
 
-BatchPool::BatchPool(std::vector<Device> devices, int queues_per_device) : devices_(std::move(devices)) {
+BatchPool::BatchPool(std::vector<Device> devices, int queues_per_device, bool log)
+    : devices_(std::move(devices)), log_(log) {
   if (devices_.empty()) throw DeviceError("batch pool: no device given");
   if (queues_per_device < 1)
     throw ConfigError("queues per device must be at least 1, not " + std::to_string(queues_per_device));
@@ -52,7 +53,6 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
   const std::unique_ptr<std::atomic<bool>[]> done(new std::atomic<bool>[n]);
   for (std::size_t b = 0; b < n; ++b) done[b] = false;
   const bool several = devices_.size() > 1;
-  const bool log = std::getenv("BSDFMIX_POOL_LOG") != nullptr;
 
   // Hand-out state, under mutex_.
   std::vector<char> started(n, 0);
@@ -192,7 +192,7 @@ void BatchPool::run(const std::string& routine, const std::vector<double>& cost,
         return;
       }
       const double took = seconds(t0, Clock::now());
-      if (log)
+      if (log_)
         std::fprintf(stderr, "pool %s batch %zu/%zu dev %zu [%s] cost %.3g took %.4f s%s%s\n", routine.c_str(), b, n, d,
                      devices_[d].info().name.c_str(), cost[b], took, repeat ? " (repeat)" : "", run.won_ ? "" : " (lost)");
       if (several && cost[b] > 0) {

@@ -49,7 +49,8 @@ class BatchRun {
 // Seconds per unit of work kept per (routine, device) over the pool's life.
 class BatchPool {
  public:
-  BatchPool(std::vector<Device> devices, int queues_per_device);
+  // log: print every run (routine, batch, device, cost, seconds, kept or repeated).
+  BatchPool(std::vector<Device> devices, int queues_per_device, bool log = false);
 
   const std::vector<Device>& devices() const { return devices_; }
   std::size_t queue_count() const { return queues_.size(); }
@@ -70,6 +71,7 @@ class BatchPool {
 
  private:
   std::vector<Device> devices_;
+  bool log_ = false;
   std::vector<cl::CommandQueue> queues_;
   std::vector<std::size_t> queue_device_;
   mutable std::mutex mutex_;

@@ -56,6 +56,13 @@ std::vector<EmResult> em_fit_reference(const SliceSet& set, const std::vector<Em
 
 enum class EmPrecision { Auto, Fp32, Fp64 };  // Auto: fp64 where the device has it
 
+// How an engine runs; the command line fills it from the environment (BSDFMIX_PRECISION,
+// BSDFMIX_POOL_LOG; host/cli/environment.hpp).
+struct EngineOptions {
+  EmPrecision precision = EmPrecision::Auto;
+  bool pool_log = false;  // print every batch run of the work queues (device/batch_pool.hpp)
+};
+
 // Seconds spent by the last fit(): wall time, and per phase summed over batches.
 struct EmTiming {
   double seconds = 0, init_seconds = 0, iterate_seconds = 0, finish_seconds = 0;
@@ -71,6 +78,7 @@ class EmEngine {
  public:
   explicit EmEngine(std::vector<Device> devices, int queues_per_device = 1,
                     EmPrecision precision = EmPrecision::Auto);
+  EmEngine(std::vector<Device> devices, int queues_per_device, const EngineOptions& options);
 
   std::vector<EmResult> fit(const SliceSet& set, const std::vector<EmTask>& tasks,
                             Progress* progress = nullptr);
@@ -137,6 +145,7 @@ class EmEngine {
   std::vector<Device> devices_;
   std::shared_ptr<BatchPool> pool_;
   EmPrecision precision_;
+  bool pool_log_;
   std::uint64_t batch_budget_ = std::uint64_t(1) << 25;
   std::vector<KernelShape> shapes_;  // per device
   EmTiming timing_;

@@ -98,20 +98,14 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 EmEngine::EmEngine(std::vector<Device> devices, int queues_per_device, EmPrecision precision)
-    : devices_(std::move(devices)), precision_(precision) {
-  // BSDFMIX_PRECISION (auto, fp32, fp64) overrides an engine left at auto: the fp32 path
-  // of a device that has fp64, for checks and comparisons.
-  if (const char* env = std::getenv("BSDFMIX_PRECISION"); env && *env && precision_ == EmPrecision::Auto) {
-    try {
-      precision_ = parse_precision(env);
-    } catch (const ConfigError& e) {
-      throw ConfigError(std::string("BSDFMIX_PRECISION: ") + e.what());
-    }
-  }
+    : EmEngine(std::move(devices), queues_per_device, EngineOptions{precision, false}) {}
+
+EmEngine::EmEngine(std::vector<Device> devices, int queues_per_device, const EngineOptions& options)
+    : devices_(std::move(devices)), precision_(options.precision), pool_log_(options.pool_log) {
   if (devices_.empty()) throw DeviceError("EM engine: no device given");
   if (queues_per_device < 1)
     throw ConfigError("EM engine: queues per device must be at least 1, not " + std::to_string(queues_per_device));
-  pool_ = std::make_shared<BatchPool>(devices_, queues_per_device);
+  pool_ = std::make_shared<BatchPool>(devices_, queues_per_device, pool_log_);
   set_gpu_layout(false);
   if (precision_ == EmPrecision::Fp64)
     for (const auto& d : devices_)
@@ -161,7 +155,7 @@ void EmEngine::calibrate() {
   const double cost = static_cast<double>(ChunkLayout(set.grid).stride) * k_bucket(task.k) * task.settings.iterations;
   std::vector<double> rate(devices_.size());
   for (std::size_t d = 0; d < devices_.size(); ++d) {
-    EmEngine one({devices_[d]}, 1, precision_);
+    EmEngine one({devices_[d]}, 1, EngineOptions{precision_, pool_log_});
     one.set_shape(shapes_[d]);
     one.fit(set, {task});  // builds the program (kept by the device for the real work)
     const auto t0 = std::chrono::steady_clock::now();
@@ -208,7 +202,14 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
   std::vector<EmResult> results(problems.size());
 
   // Batches: problems of one K bucket and one set of settings, up to the budget.
-  using Key = std::tuple<int, int, double, double, double>;
+  struct Key {  // what a batch's problems share
+    int bucket, iterations;
+    double tolerance, cov_floor, min_weight;
+    bool operator<(const Key& o) const {
+      return std::tie(bucket, iterations, tolerance, cov_floor, min_weight) <
+             std::tie(o.bucket, o.iterations, o.tolerance, o.cov_floor, o.min_weight);
+    }
+  };
   std::map<Key, std::vector<std::size_t>> groups;
   for (std::size_t pi = 0; pi < problems.size(); ++pi) {
     const EmTask& t = tasks[problems[pi].task];
@@ -219,7 +220,7 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
   std::vector<double> cost;
   const std::uint64_t limit = device_limit();
   for (auto& [key, list] : groups) {
-    const int bucket = std::get<0>(key);
+    const int bucket = key.bucket;
     check_problem_fits(stride, bucket, 0, limit);
     for (auto& [b, items] : bucket_batches({{bucket, list}}, stride, 0, budget())) {
       const EmSettings& s = tasks[problems[items.front()].task].settings;

@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <vector>
 
-#include <mutex>
 
 #include "core/error.hpp"
 
@@ -29,10 +28,7 @@ void Handle::reset() {
   id_ = -1;
 }
 
-void quiet_errors() {
-  static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
-}
+void quiet_errors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
 namespace {
 

@@ -36,7 +36,8 @@ class Handle {
   hid_t id_ = -1;
 };
 
-// Silences HDF5's own error printing (once per process); we report errors ourselves.
+// Silences HDF5's own error printing; we report errors ourselves. Every file open and
+// create calls it (it only sets what it set before).
 void quiet_errors();
 
 Handle open_file(const std::string& path);    // read-only; InputError if missing or not HDF5

@@ -112,16 +112,22 @@ std::string describe_table(const std::string& path, bool check_cells) {
   return s.str();
 }
 
-std::string describe_generic(const std::string& path) {
-  h5::Handle f = h5::open_file(path);
-  std::ostringstream s;
-  std::vector<std::string> groups;
-  H5Literate(f.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
+// The names of the links in a file or group, in name order.
+std::vector<std::string> link_names(hid_t loc) {
+  std::vector<std::string> names;
+  H5Literate(loc, H5_INDEX_NAME, H5_ITER_INC, nullptr,
              [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
                static_cast<std::vector<std::string>*>(data)->push_back(name);
                return 0;
              },
-             &groups);
+             &names);
+  return names;
+}
+
+std::string describe_generic(const std::string& path) {
+  h5::Handle f = h5::open_file(path);
+  std::ostringstream s;
+  const std::vector<std::string> groups = link_names(f.get());
   const bool mixture = std::find(groups.begin(), groups.end(), "mixture") != groups.end();
   s << path << ": " << (mixture ? "mixture" : "HDF5 file (neither a table nor a mixture)") << "\n";
   for (const auto& gname : groups) {
@@ -135,13 +141,7 @@ std::string describe_generic(const std::string& path) {
     if (info.type != H5O_TYPE_GROUP) continue;
     h5::Handle g = h5::open_group(f.get(), gname, path);
     s << "  /" << gname << "\n";
-    std::vector<std::string> members;
-    H5Literate(g.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
-               [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
-                 static_cast<std::vector<std::string>*>(data)->push_back(name);
-                 return 0;
-               },
-               &members);
+    const std::vector<std::string> members = link_names(g.get());
     for (const auto& m : members) {
       h5::Handle d(H5Dopen2(g.get(), m.c_str(), H5P_DEFAULT));
       if (!d.valid()) continue;

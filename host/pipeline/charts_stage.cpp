@@ -31,7 +31,8 @@ std::vector<FittedSlice> fitted_slices(const std::string& mixture, const TableMe
   return slices;
 }
 
-void fit_charts(const Config& config, const std::string& device_selector, const std::string& dir) {
+void fit_charts(const Config& config, const std::string& device_selector, const EngineOptions& engine,
+                const std::string& dir) {
   const FitSection& fit = *config.fit;
   for (const auto* p : {&fit.output, &fit.report})
     if (!std::filesystem::exists(*p)) throw Error("charts: " + *p + " not found (run the fit stage first)");
@@ -48,7 +49,7 @@ void fit_charts(const Config& config, const std::string& device_selector, const 
       types.erase(types.begin() + long(i));
     }
   const std::string timing = dir + "/k_timing.csv";
-  write_k_timing_csv(timing, time_k(config.table, fit, device_selector, picks, types));
+  write_k_timing_csv(timing, time_k(config.table, fit, device_selector, picks, types, engine));
   run_script("plot_fit.py", {"--table", config.table, "--mixture", fit.output, "--report", fit.report, "--search",
                              fit.search_report, "--timing", timing, "-o", dir});
   log_line("charts: fit charts in " + dir + " (fit_speed_accuracy, fit_chosen_k, fit_slices; PNG and SVG)");
@@ -67,10 +68,10 @@ void converge_charts(const Config& config, const std::string& dir) {
 
 }  // namespace
 
-void stage_charts(const Config& config, const std::string& device_selector) {
+void stage_charts(const Config& config, const std::string& device_selector, const EngineOptions& engine) {
   const std::string dir = config.charts->dir;
   std::filesystem::create_directories(dir);
-  if (config.fit) fit_charts(config, device_selector, dir);
+  if (config.fit) fit_charts(config, device_selector, engine, dir);
   if (config.converge) converge_charts(config, dir);
 }
 

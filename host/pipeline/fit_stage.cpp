@@ -6,8 +6,8 @@
 
 namespace bsdfmix {
 
-void stage_fit(const Config& config, const std::string& device_selector, std::size_t max_batches) {
-  const SweepSummary s = run_sweep(config.table, *config.fit, device_selector, max_batches);
+void stage_fit(const Config& config, const std::string& device_selector, const SweepOptions& options) {
+  const SweepSummary s = run_sweep(config.table, *config.fit, device_selector, options);
   if (!s.complete) return;
   std::printf("fit %s -> %s, %s, %s\n%s", config.table.c_str(), config.fit->output.c_str(), config.fit->report.c_str(),
               config.fit->search_report.c_str(), s.text().c_str());

@@ -6,6 +6,8 @@
 #include <string>
 
 #include "config/config.hpp"
+#include "fit/em.hpp"
+#include "sweep/sweep.hpp"
 
 namespace bsdfmix {
 
@@ -13,17 +15,17 @@ namespace bsdfmix {
 // missing (or `force` is set); does nothing otherwise.
 void stage_table(const Config& config, const std::string& device_selector);
 
-// The fitting sweep of the `fit` section; with max_batches, stops after committing that
-// many batches (a later run resumes).
-void stage_fit(const Config& config, const std::string& device_selector, std::size_t max_batches = SIZE_MAX);
+// The fitting sweep of the `fit` section (options: sweep/sweep.hpp SweepOptions).
+void stage_fit(const Config& config, const std::string& device_selector, const SweepOptions& options = {});
 
 // The convergence study of the `converge` section.
 void stage_converge(const Config& config, const std::string& device_selector);
 
-// The charts of the stages that ran (matplotlib through /usr/bin/python3).
-void stage_charts(const Config& config, const std::string& device_selector);
+// The charts of the stages that ran (matplotlib through /usr/bin/python3); the fit
+// charts time fits with an engine run as `engine` says.
+void stage_charts(const Config& config, const std::string& device_selector, const EngineOptions& engine = {});
 
-// Every stage the config names, in order.
-void run_all(const Config& config, const std::string& device_selector);
+// Every stage the config names, in order; the fits' engines run as `engine` says.
+void run_all(const Config& config, const std::string& device_selector, const EngineOptions& engine = {});
 
 }  // namespace bsdfmix

@@ -8,15 +8,25 @@
 
 namespace bsdfmix {
 
+namespace {
+
+// A section's table grid (generate or import) into its tabulator's options.
+template <class Options, class Section>
+void set_grid(Options& opt, const Section& s) {
+  opt.n_theta_o = std::size_t(s.theta_o);
+  opt.n_theta_i = std::size_t(s.theta_i);
+  opt.n_phi_i = std::size_t(s.phi_i);
+}
+
+}  // namespace
+
 void stage_table(const Config& config, const std::string& device_selector) {
   const bool present = std::filesystem::exists(config.table);
   if (config.generate && (!present || config.generate->force)) {
     const GenerateSection& g = *config.generate;
     FiberGenerateOptions opt;
     opt.preset = g.preset;
-    opt.n_theta_o = std::size_t(g.theta_o);
-    opt.n_theta_i = std::size_t(g.theta_i);
-    opt.n_phi_i = std::size_t(g.phi_i);
+    set_grid(opt, g);
     opt.symmetry = g.symmetry;
     opt.n_phi_o = g.symmetry ? 0 : std::size_t(g.phi_o);
     opt.noise = g.noise;
@@ -27,9 +37,7 @@ void stage_table(const Config& config, const std::string& device_selector) {
     const ImportSection& s = *config.import;
     RglImportOptions opt;
     opt.file = s.rgl;
-    opt.n_theta_o = std::size_t(s.theta_o);
-    opt.n_theta_i = std::size_t(s.theta_i);
-    opt.n_phi_i = std::size_t(s.phi_i);
+    set_grid(opt, s);
     opt.resolve = s.resolve;
     parse_rgl_negative(s.negative, opt.negative);
     import_rgl_table(opt, config.table);

@@ -145,7 +145,7 @@ Catalog load_catalog(const std::string& path) {
   return parse_catalog(*text, path);
 }
 
-void run_catalog(const Catalog& cat, const std::string& device_selector, MpiFarm* farm) {
+void run_catalog(const Catalog& cat, const std::string& device_selector, MpiFarm* farm, const EngineOptions& engine) {
   const auto t0 = std::chrono::steady_clock::now();
   std::string csv = "table,slices,mean_k,l1_median,l1_p90,table_bytes,mixture_bytes,seconds\n";
   prepare_output(cat.summary, 1 << 16);
@@ -156,7 +156,9 @@ void run_catalog(const Catalog& cat, const std::string& device_selector, MpiFarm
     const auto t = std::chrono::steady_clock::now();
     stage_table(e.config, device_selector);
     if (farm) farm->set_job(i);
-    const SweepSummary s = run_sweep(e.config.table, *e.config.fit, device_selector);
+    const SweepSummary s =
+        run_sweep(e.config.table, *e.config.fit, device_selector,
+                  SweepOptions{SIZE_MAX, farm ? farm->batch_farm() : nullptr, engine});
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     std::size_t total_k = 0;
     for (auto [k, n] : s.k_histogram) total_k += std::size_t(k) * n;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "config/config.hpp"
+#include "fit/em.hpp"
 
 namespace bsdfmix::scale {
 
@@ -31,7 +32,9 @@ Catalog parse_catalog(const std::string& text, const std::string& name);
 
 // Makes the missing tables and fits every entry in order, then writes the summary CSV
 // (rewritten after each table). Under mpirun, rank 0 calls this with its farm, and the
-// other ranks serve the entries as jobs, in the same order.
-void run_catalog(const Catalog& catalog, const std::string& device_selector, MpiFarm* farm);
+// other ranks serve the entries as jobs, in the same order. The fits' engines run as
+// `engine` says.
+void run_catalog(const Catalog& catalog, const std::string& device_selector, MpiFarm* farm,
+                 const EngineOptions& engine = {});
 
 }  // namespace bsdfmix::scale

@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <thread>
@@ -78,18 +77,12 @@ T get(const std::vector<std::uint8_t>& in, std::size_t& at) {
 
 }  // namespace
 
-bool launched_by_mpi() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE"})
-    if (const char* e = std::getenv(v); e && *e) return true;
-  return false;
-}
-
 // Rank 0's side: the farm run_sweep calls.
 struct MpiFarm::Root : BatchFarm {
   int size = 1;
   std::size_t job = 0;
   FarmStats stats;
-  bool root_fits = true;
+  FarmOptions options;
 
   void run(const std::vector<std::vector<SliceRef>>& batches,
            const std::function<BatchPart(const std::vector<SliceRef>&)>& fit_here,
@@ -148,7 +141,7 @@ struct MpiFarm::Root : BatchFarm {
         handle(st);
         got = true;
       }
-      if (root_fits && !queue.empty()) {  // every worker holds kDepth batches: fit one here
+      if (options.root_fits && !queue.empty()) {  // every worker holds kDepth batches: fit one here
         const std::size_t b = queue.front();
         queue.pop_front();
         const auto t0 = std::chrono::steady_clock::now();
@@ -173,8 +166,8 @@ struct MpiFarm::Root : BatchFarm {
                   size, stats.batches, stats.local_batches, double(stats.task_bytes) / remote,
                   double(stats.part_bytes) / remote, stats.compute_seconds / n, stats.commit_seconds / n);
     log_line(line);
-    if (const char* path = std::getenv("BSDFMIX_MPI_STATS"); path && *path) {
-      if (std::FILE* f = std::fopen(path, "a")) {
+    if (!options.stats_path.empty()) {
+      if (std::FILE* f = std::fopen(options.stats_path.c_str(), "a")) {
         std::fprintf(f, "%d,%zu,%zu,%llu,%llu,%.6f,%.6f\n", size, stats.batches, stats.local_batches,
                      static_cast<unsigned long long>(stats.task_bytes), static_cast<unsigned long long>(stats.part_bytes),
                      stats.compute_seconds, stats.commit_seconds);
@@ -184,8 +177,8 @@ struct MpiFarm::Root : BatchFarm {
   }
 };
 
-MpiFarm::MpiFarm() {
-  if (!launched_by_mpi()) return;
+MpiFarm::MpiFarm(const FarmOptions& options) {
+  if (!options.launched) return;
   int already = 0;
   MPI_Initialized(&already);
   if (!already) {
@@ -210,8 +203,7 @@ MpiFarm::MpiFarm() {
   if (rank_ == 0) {
     root_ = std::make_unique<Root>();
     root_->size = size_;
-    if (const char* e = std::getenv("BSDFMIX_MPI_ROOT_FITS"); e && std::string(e) == "0") root_->root_fits = false;
-    set_batch_farm(root_.get());
+    root_->options = options;
   } else {
     Progress::set_enabled(false);  // rank 0 reports progress for the job
   }
@@ -222,7 +214,6 @@ MpiFarm::~MpiFarm() {
   try {
     if (active() && !stopped_) {
       if (rank_ == 0) {
-        set_batch_farm(nullptr);
         for (int w = 1; w < size_; ++w) MPI_Send(nullptr, 0, MPI_BYTE, w, kStop, MPI_COMM_WORLD);
         // Drain whatever workers still send (parts of an aborted job) until each says bye.
         for (int byes = 0; byes < size_ - 1;) {
@@ -244,6 +235,8 @@ MpiFarm::~MpiFarm() {
   MPI_Finalize();
 }
 
+BatchFarm* MpiFarm::batch_farm() const { return root_.get(); }
+
 void MpiFarm::set_job(std::size_t job) {
   if (root_) root_->job = job;
 }
@@ -253,7 +246,7 @@ const FarmStats& MpiFarm::stats() const {
   return root_ ? root_->stats : none;
 }
 
-void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_selector) {
+void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_selector, const EngineOptions& engine) {
   if (!worker()) return;
   std::unique_ptr<BatchWorker> fitter;
   std::size_t fitter_job = SIZE_MAX;
@@ -262,7 +255,7 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
   std::string failure;
   // Set up the first job's devices and kernels while rank 0 sets up its own.
   if (!jobs.empty() && jobs[0].table_ready) try {
-      fitter = std::make_unique<BatchWorker>(jobs[0].table, jobs[0].fit, device_selector);
+      fitter = std::make_unique<BatchWorker>(jobs[0].table, jobs[0].fit, device_selector, engine);
       fitter_job = 0;
     } catch (const std::exception&) {
       fitter.reset();  // tried again, and reported, at the first batch
@@ -289,7 +282,7 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
       }
       if (job != fitter_job) {
         fitter.reset();
-        fitter = std::make_unique<BatchWorker>(jobs[job].table, jobs[job].fit, device_selector);
+        fitter = std::make_unique<BatchWorker>(jobs[job].table, jobs[job].fit, device_selector, engine);
         fitter_job = job;
       }
       const auto t0 = std::chrono::steady_clock::now();

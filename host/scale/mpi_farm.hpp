@@ -13,19 +13,17 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "fit/em.hpp"
+#include "sweep/fit_settings.hpp"
+#include "sweep/sweep.hpp"
 
 namespace bsdfmix::scale {
-
-// True when a launcher started this process (mpirun/mpiexec of Open MPI, or any PMI or
-// PMIx launcher): OMPI_COMM_WORLD_SIZE, PMIX_RANK or PMI_SIZE is set.
-bool launched_by_mpi();
 
 // One fitting job a worker may be handed batches of: a table and its fit settings.
 // Every rank builds the same list from the same config, in the same order.
 struct FarmJob {
   std::string table;
-  FitSection fit;
+  FitSettings fit;
   bool table_ready = false;  // the table exists and rank 0 will not remake it: a worker may open it at once
 };
 
@@ -37,13 +35,23 @@ struct FarmStats {
   double commit_seconds = 0;                     // rank 0's time committing parts (decode and checkpoint write)
 };
 
-// MPI for the length of one command. Under a launcher with more than one rank, rank 0
-// installs the farm as run_sweep's BatchFarm (sweep/sweep.hpp) and every other rank
+// How the farm runs; the command line fills it from the environment
+// (host/cli/environment.hpp).
+struct FarmOptions {
+  // A launcher started this process (mpirun/mpiexec of Open MPI, or any PMI or PMIx
+  // launcher: OMPI_COMM_WORLD_SIZE, PMIX_RANK or PMI_SIZE set); else no MPI call is made.
+  bool launched = false;
+  bool root_fits = true;   // rank 0 fits batches while every worker is busy (BSDFMIX_MPI_ROOT_FITS=0: never)
+  std::string stats_path;  // "" or a CSV file each run_sweep appends its traffic to (BSDFMIX_MPI_STATS)
+};
+
+// MPI for the length of one command. Launched, with more than one rank, rank 0
+// hands batch_farm() to run_sweep (sweep/sweep.hpp SweepOptions) and every other rank
 // calls serve(). The destructor tells the workers to stop, waits for them, and ends MPI
 // (also when an error is on its way out of rank 0).
 class MpiFarm {
  public:
-  MpiFarm();
+  explicit MpiFarm(const FarmOptions& options = {});
   ~MpiFarm();
   MpiFarm(const MpiFarm&) = delete;
   MpiFarm& operator=(const MpiFarm&) = delete;
@@ -53,6 +61,8 @@ class MpiFarm {
   int rank() const { return rank_; }
   int size() const { return size_; }
 
+  // Rank 0 of more than one rank: the farm run_sweep fits its batches with; else nullptr.
+  BatchFarm* batch_farm() const;
   // Rank 0: the batches of the next run_sweep belong to jobs[job].
   void set_job(std::size_t job);
   // Rank 0: the traffic so far.
@@ -60,7 +70,7 @@ class MpiFarm {
 
   // Ranks > 0: fits the batches rank 0 hands out until it says stop. Throws what a fit
   // threw, after reporting it to rank 0.
-  void serve(const std::vector<FarmJob>& jobs, const std::string& device_selector);
+  void serve(const std::vector<FarmJob>& jobs, const std::string& device_selector, const EngineOptions& engine = {});
 
  private:
   struct Root;

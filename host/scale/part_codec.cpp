@@ -1,6 +1,7 @@
-// BatchPart <-> bytes: a versioned header, then every field in a fixed order, each
-// vector as its length followed by its raw elements, each list of report or search
-// rows as its length followed by every row's fields (strings: length, then bytes).
+// BatchPart <-> bytes: a versioned header, then every field in a fixed order (part_fields,
+// one list for both directions), each vector as its length followed by its raw elements,
+// each list of report or search rows as its length followed by every row's fields
+// (sweep/row_fields.hpp; strings: length, then bytes).
 #include "scale/part_codec.hpp"
 
 #include <algorithm>
@@ -8,18 +9,48 @@
 #include <type_traits>
 
 #include "core/error.hpp"
+#include "sweep/row_fields.hpp"
 
 namespace bsdfmix::scale {
 
 namespace {
 
 constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
-// The fewest bytes a report row (9 numbers, two string lengths) and a search row take.
-constexpr std::size_t kReportRowBytes = 8 + 8 + 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8 + 8 + 8;
-constexpr std::size_t kSearchRowBytes = 8 + 4 + 4 + 8 + 8 + 8 + 1;
 // 2: the report and search rows as fields, not CSV text; 3: rgb_scale and the rows' RGB errors;
 // 4: rgb_copies
 constexpr std::uint32_t kVersion = 4;
+
+// Calls visit(field) for every field of a row, as row_fields.hpp lists them.
+struct ReportFields {
+  template <class Row, class Visit>
+  void operator()(Row& r, Visit&& visit) const {
+    report_fields(r, [&](const char*, auto& v, CsvText) { visit(v); });
+  }
+};
+struct SearchFields {
+  template <class Row, class Visit>
+  void operator()(Row& r, Visit&& visit) const {
+    search_fields(r, [&](const char*, auto& v, CsvText) { visit(v); });
+  }
+};
+
+// The bytes a field of a row takes at the least (a string: its length alone).
+template <class T>
+constexpr std::size_t least_bytes() {
+  if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, std::size_t>) return 8;
+  else if constexpr (std::is_same_v<T, int>) return 4;
+  else if constexpr (std::is_same_v<T, bool>) return 1;
+  else return sizeof(T);
+}
+
+// The fewest bytes a row takes.
+template <class Row, class Fields>
+std::size_t least_row_bytes(Fields fields) {
+  std::size_t n = 0;
+  const Row row{};
+  fields(row, [&](const auto& v) { n += least_bytes<std::decay_t<decltype(v)>>(); });
+  return n;
+}
 
 class Writer {
  public:
@@ -29,16 +60,34 @@ class Writer {
     const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
     out.insert(out.end(), p, p + sizeof(T));
   }
+  // One field: std::size_t as uint64, int as int32, bool as uint8, a Domain as int32,
+  // other numbers as they are; strings and vectors as their length, then their contents.
   template <class T>
-  void vec(const std::vector<T>& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    pod(std::uint64_t(v.size()));
-    const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
-    out.insert(out.end(), p, p + v.size() * sizeof(T));
+  void field(const T& v) {
+    if constexpr (std::is_same_v<T, std::size_t>) pod(std::uint64_t(v));
+    else if constexpr (std::is_same_v<T, int> || std::is_enum_v<T>) pod(std::int32_t(v));
+    else if constexpr (std::is_same_v<T, bool>) pod(std::uint8_t(v));
+    else pod(v);
   }
-  void str(const std::string& s) {
+  void field(const std::string& s) {
     pod(std::uint64_t(s.size()));
     out.insert(out.end(), s.begin(), s.end());
+  }
+  template <class T>
+  void field(const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    pod(std::uint64_t(v.size()));
+    if constexpr (std::is_same_v<T, std::size_t>) {
+      for (std::size_t x : v) pod(std::uint64_t(x));
+    } else {
+      const auto* p = reinterpret_cast<const std::uint8_t*>(v.data());
+      out.insert(out.end(), p, p + v.size() * sizeof(T));
+    }
+  }
+  template <class Row, class Fields>
+  void rows(const std::vector<Row>& rows, Fields fields) {
+    pod(std::uint64_t(rows.size()));
+    for (const Row& r : rows) fields(r, [&](const auto& v) { field(v); });
   }
   std::vector<std::uint8_t> out;
 };
@@ -52,26 +101,41 @@ class Reader {
     take(&v, sizeof(T));
     return v;
   }
+  // One field, as Writer::field wrote it.
   template <class T>
-  std::vector<T> vec() {
-    const std::uint64_t n = pod<std::uint64_t>();
-    if (n > (size_ - at_) / sizeof(T)) fail();
-    std::vector<T> v(n);
-    take(v.data(), n * sizeof(T));
-    return v;
+  void field(T& v) {
+    if constexpr (std::is_same_v<T, std::size_t>) v = std::size_t(pod<std::uint64_t>());
+    else if constexpr (std::is_same_v<T, int> || std::is_enum_v<T>) v = static_cast<T>(pod<std::int32_t>());
+    else if constexpr (std::is_same_v<T, bool>) {
+      const std::uint8_t b = pod<std::uint8_t>();
+      if (b > 1) fail();
+      v = b != 0;
+    } else v = pod<T>();
   }
-  std::string str() {
+  void field(std::string& s) {
     const std::uint64_t n = pod<std::uint64_t>();
     if (n > size_ - at_) fail();
-    std::string s(reinterpret_cast<const char*>(data_ + at_), n);
+    s.assign(reinterpret_cast<const char*>(data_ + at_), n);
     at_ += n;
-    return s;
   }
-  // A count of records of at least `min_bytes` each: refused when the bytes left cannot hold them.
-  std::size_t count(std::size_t min_bytes) {
+  template <class T>
+  void field(std::vector<T>& v) {
     const std::uint64_t n = pod<std::uint64_t>();
-    if (n > (size_ - at_) / min_bytes) fail();
-    return std::size_t(n);
+    if (n > (size_ - at_) / sizeof(T)) fail();
+    v.resize(n);
+    if constexpr (std::is_same_v<T, std::size_t>) {
+      for (std::size_t& x : v) x = std::size_t(pod<std::uint64_t>());
+    } else {
+      take(v.data(), n * sizeof(T));
+    }
+  }
+  template <class Row, class Fields>
+  void rows(std::vector<Row>& rows, Fields fields) {
+    // Refused when the bytes left cannot hold the count of rows.
+    const std::uint64_t n = pod<std::uint64_t>();
+    if (n > (size_ - at_) / least_row_bytes<Row>(fields)) fail();
+    rows.resize(n);
+    for (Row& r : rows) fields(r, [&](auto& v) { field(v); });
   }
   bool done() const { return at_ == size_; }
   [[noreturn]] static void fail() { throw InputError("batch part message: truncated or malformed"); }
@@ -86,59 +150,33 @@ class Reader {
   std::size_t size_, at_ = 0;
 };
 
+// Every field of a part, in wire order: a Writer reads them, a Reader sets them.
+template <class Part, class Io>
+void part_fields(Part& p, Io& io) {
+  auto& m = p.mixture;
+  io.field(p.slice_index);
+  io.field(m.domain);
+  io.field(m.azimuthal);
+  io.field(m.table_source);
+  io.field(m.fit_settings);
+  for (auto* v : {&m.table_theta_o, &m.table_phi_o, &m.theta_o, &m.phi_o, &m.scale, &m.loglik, &m.l1_rel}) io.field(*v);
+  io.field(m.k);
+  io.field(m.kmax);
+  for (auto* v : {&m.weights, &m.means, &m.covariances}) io.field(*v);
+  io.field(m.rgb_scale);
+  io.field(m.rgb_copies);
+  io.rows(p.report, ReportFields{});
+  io.rows(p.search, SearchFields{});
+  io.field(p.slices_hash);
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encode_part(const BatchPart& p) {
   Writer w;
   w.pod(kMagic);
   w.pod(kVersion);
-  std::vector<std::uint64_t> idx(p.slice_index.begin(), p.slice_index.end());
-  w.vec(idx);
-  const MixtureFile& m = p.mixture;
-  w.pod(std::int32_t(m.domain));
-  w.pod(std::uint8_t(m.azimuthal));
-  w.str(m.table_source);
-  w.str(m.fit_settings);
-  w.vec(m.table_theta_o);
-  w.vec(m.table_phi_o);
-  w.vec(m.theta_o);
-  w.vec(m.phi_o);
-  w.vec(m.scale);
-  w.vec(m.loglik);
-  w.vec(m.l1_rel);
-  w.vec(m.k);
-  w.pod(std::int32_t(m.kmax));
-  w.vec(m.weights);
-  w.vec(m.means);
-  w.vec(m.covariances);
-  w.vec(m.rgb_scale);
-  w.vec(m.rgb_copies);
-  w.pod(std::uint64_t(p.report.size()));
-  for (const ReportRow& r : p.report) {
-    w.pod(std::uint64_t(r.slice));
-    w.pod(r.theta_o);
-    w.pod(r.phi_o);
-    w.pod(std::int32_t(r.k));
-    w.pod(std::int32_t(r.iterations));
-    w.pod(r.loglik);
-    w.pod(r.l1_rel);
-    w.pod(r.seconds);
-    w.str(r.device);
-    w.str(r.status);
-    w.pod(r.rgb_l1_rel);
-    w.pod(r.rgb_negative);
-  }
-  w.pod(std::uint64_t(p.search.size()));
-  for (const SearchRow& r : p.search) {
-    w.pod(std::uint64_t(r.slice));
-    w.pod(std::int32_t(r.k));
-    w.pod(std::int32_t(r.restart));
-    w.pod(r.loglik);
-    w.pod(r.l1_rel);
-    w.pod(r.score);
-    w.pod(std::uint8_t(r.chosen));
-  }
-  w.str(p.slices_hash);
+  part_fields(p, w);
   return std::move(w.out);
 }
 
@@ -146,54 +184,8 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   Reader r(data, size);
   if (r.pod<std::uint32_t>() != kMagic || r.pod<std::uint32_t>() != kVersion) Reader::fail();
   BatchPart p;
-  for (std::uint64_t i : r.vec<std::uint64_t>()) p.slice_index.push_back(std::size_t(i));
-  MixtureFile& m = p.mixture;
-  m.domain = static_cast<Domain>(r.pod<std::int32_t>());
-  m.azimuthal = r.pod<std::uint8_t>() != 0;
-  m.table_source = r.str();
-  m.fit_settings = r.str();
-  m.table_theta_o = r.vec<double>();
-  m.table_phi_o = r.vec<double>();
-  m.theta_o = r.vec<double>();
-  m.phi_o = r.vec<double>();
-  m.scale = r.vec<double>();
-  m.loglik = r.vec<double>();
-  m.l1_rel = r.vec<double>();
-  m.k = r.vec<std::int32_t>();
-  m.kmax = r.pod<std::int32_t>();
-  m.weights = r.vec<float>();
-  m.means = r.vec<float>();
-  m.covariances = r.vec<float>();
-  m.rgb_scale = r.vec<double>();
-  m.rgb_copies = r.vec<double>();
-  p.report.resize(r.count(kReportRowBytes));
-  for (ReportRow& row : p.report) {
-    row.slice = std::size_t(r.pod<std::uint64_t>());
-    row.theta_o = r.pod<double>();
-    row.phi_o = r.pod<double>();
-    row.k = r.pod<std::int32_t>();
-    row.iterations = r.pod<std::int32_t>();
-    row.loglik = r.pod<double>();
-    row.l1_rel = r.pod<double>();
-    row.seconds = r.pod<double>();
-    row.device = r.str();
-    row.status = r.str();
-    row.rgb_l1_rel = r.pod<double>();
-    row.rgb_negative = r.pod<double>();
-  }
-  p.search.resize(r.count(kSearchRowBytes));
-  for (SearchRow& row : p.search) {
-    row.slice = std::size_t(r.pod<std::uint64_t>());
-    row.k = r.pod<std::int32_t>();
-    row.restart = r.pod<std::int32_t>();
-    row.loglik = r.pod<double>();
-    row.l1_rel = r.pod<double>();
-    row.score = r.pod<double>();
-    const std::uint8_t chosen = r.pod<std::uint8_t>();
-    if (chosen > 1) Reader::fail();
-    row.chosen = chosen != 0;
-  }
-  p.slices_hash = r.str();
+  part_fields(p, r);
+  const MixtureFile& m = p.mixture;
   const std::size_t S = m.slices(), K = std::size_t(std::max(m.kmax, 0));
   if (!r.done() || p.slice_index.size() != S || m.phi_o.size() != S || m.scale.size() != S ||
       m.loglik.size() != S || m.l1_rel.size() != S || m.k.size() != S || m.weights.size() != S * K ||

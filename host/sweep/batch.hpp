@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "sweep/fit_settings.hpp"
 #include "fit/em.hpp"
 #include "sweep/fit_error.hpp"
 #include "sweep/fit_slices.hpp"
@@ -44,9 +44,9 @@ struct SliceWork {
 };
 
 struct Batch {
-  Batch(const FitSection& fit, EmEngine& engine, Domain domain);
+  Batch(const FitSettings& fit, EmEngine& engine, Domain domain);
 
-  const FitSection& fit;
+  const FitSettings& fit;
   EmEngine& engine;
   const Domain domain;
   const std::vector<int> ks;  // the candidate Ks (sweep/criterion.hpp)

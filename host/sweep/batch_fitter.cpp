@@ -87,7 +87,7 @@ Fitted evaluate(const EmResult& r, const WeightedSlice& full) {
   return f;
 }
 
-Batch::Batch(const FitSection& fit_, EmEngine& engine_, Domain domain_)
+Batch::Batch(const FitSettings& fit_, EmEngine& engine_, Domain domain_)
     : fit(fit_), engine(engine_), domain(domain_), ks(candidate_ks(fit_.k_min, fit_.k_max)) {}
 
 SliceSet Batch::pooled_set() const { return make_set(domain, work, true); }
@@ -187,7 +187,7 @@ void Batch::reduce_k() {
   run(tasks);
 }
 
-BatchFitter::BatchFitter(const SliceSource& source, const FitSection& fit, EmEngine& engine, std::string device_names)
+BatchFitter::BatchFitter(const SliceSource& source, const FitSettings& fit, EmEngine& engine, std::string device_names)
     : source_(source), fit_(fit), engine_(engine), devices_(std::move(device_names)) {}
 
 BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {
@@ -299,7 +299,7 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
   }
 }
 
-std::size_t batch_size(std::size_t planned, const FitSection& fit) {
+std::size_t batch_size(std::size_t planned, const FitSettings& fit) {
   return fit.batch > 0 ? std::size_t(fit.batch) : std::clamp<std::size_t>(planned / 32, 4, 64);
 }
 
@@ -327,7 +327,7 @@ std::string slices_hash(const SliceSource& source, const std::vector<const Slice
   return content.hex();
 }
 
-SweepResult empty_result(const TableMeta& meta, const FitSection& fit) {
+SweepResult empty_result(const TableMeta& meta, const FitSettings& fit) {
   SweepResult r;
   r.mixture.domain = meta.domain;
   r.mixture.azimuthal = meta.azimuthal;

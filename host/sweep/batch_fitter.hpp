@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "sweep/fit_settings.hpp"
 #include "core/hash.hpp"
 #include "device/device.hpp"
 #include "fit/em.hpp"
@@ -24,7 +24,7 @@ class BatchFitter {
  public:
   // `source`, `fit` and `engine` must outlive the fitter; `device_names` fills the
   // report's `device` column.
-  BatchFitter(const SliceSource& source, const FitSection& fit, EmEngine& engine, std::string device_names);
+  BatchFitter(const SliceSource& source, const FitSettings& fit, EmEngine& engine, std::string device_names);
 
   // Searches the Gaussian count of every slice of `refs` (fit.search), fits the chosen K
   // thoroughly, stands a moment-matched Gaussian in where every fit failed; the part
@@ -36,14 +36,14 @@ class BatchFitter {
   void finish(Batch& b, double seconds, BatchPart& part) const;
 
   const SliceSource& source_;
-  const FitSection& fit_;
+  const FitSettings& fit_;
   EmEngine& engine_;
   const std::string devices_;
 };
 
 // Slices per batch of a sweep of `planned` slices: fit.batch, or by default 1/32 of
 // the plan within [4, 64].
-std::size_t batch_size(std::size_t planned, const FitSection& fit);
+std::size_t batch_size(std::size_t planned, const FitSettings& fit);
 
 // The batches of a plan: fixed ranges of `batch` slices, so that a resumed sweep
 // rebuilds exactly the batches it did not commit.
@@ -59,7 +59,7 @@ void hash_weights(Hash64& content, const std::vector<double>& w);
 std::string slices_hash(const SliceSource& source, const std::vector<const SliceRef*>& refs);
 
 // A sweep result of `meta` under `fit` with no slices yet: the mixture's header set.
-SweepResult empty_result(const TableMeta& meta, const FitSection& fit);
+SweepResult empty_result(const TableMeta& meta, const FitSettings& fit);
 // Appends a part's slices and rows (parts in slice order make the result in slice order).
 void append_part(SweepResult& result, const BatchPart& part);
 

@@ -2,14 +2,17 @@
 #include "sweep/checkpoint.hpp"
 
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <type_traits>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "io/h5.hpp"
+#include "sweep/row_fields.hpp"
 
 namespace bsdfmix {
 
@@ -17,24 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kFingerprintFile = "fingerprint.txt";
-
-// The rows of a part travel as compound datasets of /mixture, one record per row.
-struct ReportRecord {
-  std::uint64_t slice;
-  double theta_o, phi_o;
-  std::int32_t k, iterations;
-  double loglik, l1_rel, seconds;
-  const char* device;
-  const char* status;
-  double rgb_l1_rel, rgb_negative;
-};
-struct SearchRecord {
-  std::uint64_t slice;
-  std::int32_t k, restart;
-  double loglik, l1_rel, score;
-  std::uint8_t chosen;
-};
+constexpr const char* kFingerprintFile = "fingerprint.txt";
 
 h5::Handle string_type() {
   h5::Handle t(H5Tcopy(H5T_C_S1));
@@ -43,70 +29,136 @@ h5::Handle string_type() {
   return t;
 }
 
-h5::Handle report_type(hid_t str) {
-  h5::Handle t(H5Tcreate(H5T_COMPOUND, sizeof(ReportRecord)));
-  H5Tinsert(t.get(), "slice", HOFFSET(ReportRecord, slice), H5T_NATIVE_UINT64);
-  H5Tinsert(t.get(), "theta_o", HOFFSET(ReportRecord, theta_o), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "phi_o", HOFFSET(ReportRecord, phi_o), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "k", HOFFSET(ReportRecord, k), H5T_NATIVE_INT32);
-  H5Tinsert(t.get(), "iterations", HOFFSET(ReportRecord, iterations), H5T_NATIVE_INT32);
-  H5Tinsert(t.get(), "loglik", HOFFSET(ReportRecord, loglik), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "l1_rel", HOFFSET(ReportRecord, l1_rel), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "seconds", HOFFSET(ReportRecord, seconds), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "device", HOFFSET(ReportRecord, device), str);
-  H5Tinsert(t.get(), "status", HOFFSET(ReportRecord, status), str);
-  H5Tinsert(t.get(), "rgb_l1_rel", HOFFSET(ReportRecord, rgb_l1_rel), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "rgb_negative", HOFFSET(ReportRecord, rgb_negative), H5T_NATIVE_DOUBLE);
-  return t;
-}
+// The rows of a part travel as compound datasets of /mixture, one record per row: the
+// fields of sweep/row_fields.hpp under their names, each at its natural alignment (as
+// a C struct lays them out), strings as variable-length UTF-8.
+template <class Row, class Fields>
+class RowRecords {
+ public:
+  explicit RowRecords(Fields fields) : fields_(fields), str_(string_type()) {
+    const Row row{};
+    std::vector<std::pair<const char*, hid_t>> members;
+    fields_(row, [&](const char* name, const auto& v) {
+      const std::size_t size = member_size(v);
+      size_ = (size_ + size - 1) / size * size;
+      offsets_.push_back(size_);
+      members.emplace_back(name, member_type(v));
+      size_ += size;
+    });
+    size_ = (size_ + 7) / 8 * 8;
+    type_ = h5::Handle(H5Tcreate(H5T_COMPOUND, size_));
+    for (std::size_t i = 0; i < members.size(); ++i)
+      H5Tinsert(type_.get(), members[i].first, offsets_[i], members[i].second);
+  }
 
-h5::Handle search_type() {
-  h5::Handle t(H5Tcreate(H5T_COMPOUND, sizeof(SearchRecord)));
-  H5Tinsert(t.get(), "slice", HOFFSET(SearchRecord, slice), H5T_NATIVE_UINT64);
-  H5Tinsert(t.get(), "k", HOFFSET(SearchRecord, k), H5T_NATIVE_INT32);
-  H5Tinsert(t.get(), "restart", HOFFSET(SearchRecord, restart), H5T_NATIVE_INT32);
-  H5Tinsert(t.get(), "loglik", HOFFSET(SearchRecord, loglik), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "l1_rel", HOFFSET(SearchRecord, l1_rel), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "score", HOFFSET(SearchRecord, score), H5T_NATIVE_DOUBLE);
-  H5Tinsert(t.get(), "chosen", HOFFSET(SearchRecord, chosen), H5T_NATIVE_UINT8);
-  return t;
-}
-
-template <class Record>
-void write_records(hid_t loc, const char* name, hid_t type, const std::vector<Record>& records,
-                   const std::string& path) {
-  const hsize_t n = records.size();
-  h5::Handle space(H5Screate_simple(1, &n, nullptr));
-  h5::Handle d(H5Dcreate2(loc, name, type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-  if (!d.valid() || (n > 0 && H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, records.data()) < 0))
-    throw IoError(path + ": cannot write /mixture/" + name);
-}
-
-// Reads the records of a dataset and hands them to `take` (which copies what it keeps:
-// the strings are freed after).
-template <class Record, class Take>
-void read_records(hid_t loc, const char* name, hid_t type, const std::string& path, Take take) {
-  h5::Handle d = h5::open_dataset(loc, name, path);
-  h5::Handle space(H5Dget_space(d.get()));
-  const hssize_t n = space.valid() ? H5Sget_simple_extent_npoints(space.get()) : -1;
-  if (n < 0) throw InputError(path + ": /mixture/" + name + " is unreadable");
-  std::vector<Record> records(static_cast<std::size_t>(n));
-  if (n == 0) return;
-  if (H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, records.data()) < 0)
-    throw InputError(path + ": /mixture/" + name + " is not a table of rows");
-  struct Reclaim {  // frees the strings HDF5 allocated, also when `take` throws
-    hid_t type, space;
-    void* data;
-    ~Reclaim() {
-#if H5_VERSION_GE(1, 12, 0)
-      H5Treclaim(type, space, H5P_DEFAULT, data);
-#else
-      H5Dvlen_reclaim(type, space, H5P_DEFAULT, data);
-#endif
+  void write(hid_t loc, const char* name, const std::vector<Row>& rows, const std::string& path) const {
+    std::vector<std::uint64_t> buf(rows.size() * size_ / 8);  // 8-byte aligned records
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      std::uint8_t* record = reinterpret_cast<std::uint8_t*>(buf.data()) + i * size_;
+      std::size_t f = 0;
+      fields_(rows[i], [&](const char*, const auto& v) { put(record + offsets_[f++], v); });
     }
-  } reclaim{type, space.get(), records.data()};
-  for (const Record& r : records) take(r);
-}
+    const hsize_t n = rows.size();
+    h5::Handle space(H5Screate_simple(1, &n, nullptr));
+    h5::Handle d(H5Dcreate2(loc, name, type_.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    if (!d.valid() || (n > 0 && H5Dwrite(d.get(), type_.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0))
+      throw IoError(path + ": cannot write /mixture/" + name);
+  }
+
+  std::vector<Row> read(hid_t loc, const char* name, const std::string& path) const {
+    h5::Handle d = h5::open_dataset(loc, name, path);
+    h5::Handle space(H5Dget_space(d.get()));
+    const hssize_t n = space.valid() ? H5Sget_simple_extent_npoints(space.get()) : -1;
+    if (n < 0) throw InputError(path + ": /mixture/" + name + " is unreadable");
+    std::vector<Row> rows(static_cast<std::size_t>(n));
+    if (n == 0) return rows;
+    std::vector<std::uint64_t> buf(rows.size() * size_ / 8);
+    if (H5Dread(d.get(), type_.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0)
+      throw InputError(path + ": /mixture/" + name + " is not a table of rows");
+    struct Reclaim {  // frees the strings HDF5 allocated, also when copying them throws
+      hid_t type, space;
+      void* data;
+      ~Reclaim() {
+#if H5_VERSION_GE(1, 12, 0)
+        H5Treclaim(type, space, H5P_DEFAULT, data);
+#else
+        H5Dvlen_reclaim(type, space, H5P_DEFAULT, data);
+#endif
+      }
+    } reclaim{type_.get(), space.get(), buf.data()};
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const std::uint8_t* record = reinterpret_cast<const std::uint8_t*>(buf.data()) + i * size_;
+      std::size_t f = 0;
+      fields_(rows[i], [&](const char*, auto& v) { get(record + offsets_[f++], v); });
+    }
+    return rows;
+  }
+
+ private:
+  // std::size_t as uint64, int as int32, bool as uint8, strings as their C string.
+  template <class T>
+  static std::size_t member_size(const T&) {
+    if constexpr (std::is_same_v<T, std::string>) return sizeof(const char*);
+    else if constexpr (std::is_same_v<T, int>) return 4;
+    else if constexpr (std::is_same_v<T, bool>) return 1;
+    else return 8;
+  }
+  template <class T>
+  hid_t member_type(const T&) const {
+    if constexpr (std::is_same_v<T, std::string>) return str_.get();
+    else if constexpr (std::is_same_v<T, int>) return H5T_NATIVE_INT32;
+    else if constexpr (std::is_same_v<T, bool>) return H5T_NATIVE_UINT8;
+    else if constexpr (std::is_same_v<T, double>) return H5T_NATIVE_DOUBLE;
+    else return H5T_NATIVE_UINT64;
+  }
+  template <class T>
+  static void put(std::uint8_t* at, const T& v) {
+    if constexpr (std::is_same_v<T, std::string>) store(at, v.c_str());
+    else if constexpr (std::is_same_v<T, int>) store(at, std::int32_t(v));
+    else if constexpr (std::is_same_v<T, bool>) store(at, std::uint8_t(v));
+    else if constexpr (std::is_same_v<T, double>) store(at, v);
+    else store(at, std::uint64_t(v));
+  }
+  template <class T>
+  static void get(const std::uint8_t* at, T& v) {
+    if constexpr (std::is_same_v<T, std::string>) {
+      const char* s = load<const char*>(at);
+      v = s ? s : "";
+    } else if constexpr (std::is_same_v<T, int>) v = load<std::int32_t>(at);
+    else if constexpr (std::is_same_v<T, bool>) v = load<std::uint8_t>(at) != 0;
+    else if constexpr (std::is_same_v<T, double>) v = load<double>(at);
+    else v = T(load<std::uint64_t>(at));
+  }
+  template <class T>
+  static void store(std::uint8_t* at, T v) { std::memcpy(at, &v, sizeof v); }
+  template <class T>
+  static T load(const std::uint8_t* at) {
+    T v;
+    std::memcpy(&v, at, sizeof v);
+    return v;
+  }
+
+  Fields fields_;
+  h5::Handle str_, type_;
+  std::size_t size_ = 0;
+  std::vector<std::size_t> offsets_;
+};
+
+// The fields of each row, without their CSV text (sweep/row_fields.hpp).
+struct ReportFields {
+  template <class Row, class Visit>
+  void operator()(Row& r, Visit&& visit) const {
+    report_fields(r, [&](const char* name, auto& v, CsvText) { visit(name, v); });
+  }
+};
+struct SearchFields {
+  template <class Row, class Visit>
+  void operator()(Row& r, Visit&& visit) const {
+    search_fields(r, [&](const char* name, auto& v, CsvText) { visit(name, v); });
+  }
+};
+using ReportRecords = RowRecords<ReportRow, ReportFields>;
+using SearchRecords = RowRecords<SearchRow, SearchFields>;
 
 // A part is a mixture file with three more attributes and two row datasets on /mixture.
 BatchPart read_part(const std::string& path) {
@@ -120,27 +172,14 @@ BatchPart read_part(const std::string& path) {
   while (idx >> s) part.slice_index.push_back(s);
   if (part.slice_index.size() != part.mixture.slices())
     throw InputError(path + ": slice_index does not match the slices held");
-  const h5::Handle str = string_type(), report = report_type(str.get()), search = search_type();
-  read_records<ReportRecord>(g.get(), "report_rows", report.get(), path, [&](const ReportRecord& r) {
-    part.report.push_back({std::size_t(r.slice), r.theta_o, r.phi_o, r.k, r.iterations, r.loglik, r.l1_rel,
-                           r.seconds, r.device ? r.device : "", r.status ? r.status : "", r.rgb_l1_rel, r.rgb_negative});
-  });
-  read_records<SearchRecord>(g.get(), "search_rows", search.get(), path, [&](const SearchRecord& r) {
-    part.search.push_back({std::size_t(r.slice), r.k, r.restart, r.loglik, r.l1_rel, r.score, r.chosen != 0});
-  });
+  part.report = ReportRecords(ReportFields{}).read(g.get(), "report_rows", path);
+  part.search = SearchRecords(SearchFields{}).read(g.get(), "search_rows", path);
   if (part.report.size() != part.slice_index.size())
     throw InputError(path + ": report_rows does not match the slices held");
   return part;
 }
 
 void write_part(const std::string& path, const BatchPart& part) {
-  std::vector<ReportRecord> report;
-  for (const ReportRow& r : part.report)
-    report.push_back({r.slice, r.theta_o, r.phi_o, r.k, r.iterations, r.loglik, r.l1_rel, r.seconds,
-                      r.device.c_str(), r.status.c_str(), r.rgb_l1_rel, r.rgb_negative});
-  std::vector<SearchRecord> search;
-  for (const SearchRow& r : part.search)
-    search.push_back({r.slice, r.k, r.restart, r.loglik, r.l1_rel, r.score, std::uint8_t(r.chosen)});
   AtomicOutput out(path);
   {
     h5::Handle f = h5::create_file(out.temp_path());
@@ -150,9 +189,8 @@ void write_part(const std::string& path, const BatchPart& part) {
     for (std::size_t s : part.slice_index) idx << s << ' ';
     h5::write_string_attr(g.get(), "slice_index", idx.str(), path);
     h5::write_string_attr(g.get(), "slices_hash", part.slices_hash, path);
-    const h5::Handle str = string_type(), report_t = report_type(str.get()), search_t = search_type();
-    write_records(g.get(), "report_rows", report_t.get(), report, path);
-    write_records(g.get(), "search_rows", search_t.get(), search, path);
+    ReportRecords(ReportFields{}).write(g.get(), "report_rows", part.report, path);
+    SearchRecords(SearchFields{}).write(g.get(), "search_rows", part.search, path);
     if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0) throw IoError(path + ": flush failed (disk full?)");
   }
   out.commit();

@@ -15,8 +15,8 @@ std::size_t SweepResult::failed() const {
   return std::size_t(std::count_if(report.begin(), report.end(), [](const ReportRow& r) { return r.failed(); }));
 }
 
-SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSection& fit,
-                       const std::vector<Device>& devices, const std::string& what) {
+SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSettings& fit,
+                       const std::vector<Device>& devices, const std::string& what, const EngineOptions& engine_options) {
   const TableMeta& meta = source.meta();
   for (std::size_t i = 0; i < slices.size(); ++i) {
     const SliceRef& r = slices[i];
@@ -26,7 +26,7 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
     if (i > 0 && !(slices[i - 1].index < r.index))
       throw Error(what + ": the slices to fit must be sorted by index, without repeats");
   }
-  EmEngine engine(devices);
+  EmEngine engine(devices, 1, engine_options);
   BatchFitter fitter(source, fit, engine, joined_names(devices));
   SweepResult result = empty_result(meta, fit);
   Progress progress(what, slices.size(), "slices");

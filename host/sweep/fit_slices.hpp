@@ -8,8 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "sweep/fit_settings.hpp"
 #include "device/device.hpp"
+#include "fit/em.hpp"
 #include "io/mixture_file.hpp"
 #include "sweep/slice_plan.hpp"
 #include "sweep/slice_source.hpp"
@@ -48,7 +49,7 @@ struct SweepResult {
 // Fits `slices` of `source` (sorted, unique) with the settings of `fit` (its output paths,
 // theta_o and phi_o are not read) on `devices`, in the same batches as run_sweep, so the
 // mixtures are the same as the file sweep's. Prints a progress line labelled `what`.
-SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSection& fit,
-                       const std::vector<Device>& devices, const std::string& what);
+SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSettings& fit,
+                       const std::vector<Device>& devices, const std::string& what, const EngineOptions& engine = {});
 
 }  // namespace bsdfmix

@@ -15,8 +15,9 @@
 
 namespace bsdfmix {
 
-std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
-                               const std::vector<std::size_t>& slices, const std::vector<std::string>& types) {
+std::vector<KTimingRow> time_k(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+                               const std::vector<std::size_t>& slices, const std::vector<std::string>& types,
+                               const EngineOptions& engine) {
   TableReader reader(table_path);
   const TableMeta& meta = reader.meta();
   const TableSlices source(reader);
@@ -36,9 +37,9 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& 
       while (bucket < k) bucket *= 2;
       if (bucket <= warmed) continue;
       warmed = bucket;
-      FitSection pinned = fit;
+      FitSettings pinned = fit;
       pinned.k_min = pinned.k_max = k;
-      fit_slices(source, {SliceRef{s, s / meta.phi_o.size(), s % meta.phi_o.size()}}, pinned, devices, "warm K");
+      fit_slices(source, {SliceRef{s, s / meta.phi_o.size(), s % meta.phi_o.size()}}, pinned, devices, "warm K", engine);
     }
     Progress::set_enabled(!quiet);
   }
@@ -49,11 +50,11 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& 
       // The sweep's own fit of this slice with K pinned: what the search's final fits do
       // at that K (k-means++ and split-and-merge, final restarts and iterations, the L1
       // refinement when `refine: l1`).
-      FitSection pinned = fit;
+      FitSettings pinned = fit;
       pinned.k_min = pinned.k_max = k;
       Progress::set_enabled(false);
       const auto t0 = std::chrono::steady_clock::now();
-      const SweepResult r = fit_slices(source, {SliceRef{s, t_o, p_o}}, pinned, devices, "time K");
+      const SweepResult r = fit_slices(source, {SliceRef{s, t_o, p_o}}, pinned, devices, "time K", engine);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       Progress::set_enabled(!quiet);
       KTimingRow row;

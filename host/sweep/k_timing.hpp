@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "fit/em.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 
@@ -22,8 +23,9 @@ struct KTimingRow {
 
 // Times every candidate K of fit.k_min..fit.k_max on each listed slice (table slice
 // indices, with their type labels).
-std::vector<KTimingRow> time_k(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
-                               const std::vector<std::size_t>& slices, const std::vector<std::string>& types);
+std::vector<KTimingRow> time_k(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+                               const std::vector<std::size_t>& slices, const std::vector<std::string>& types,
+                               const EngineOptions& engine = {});
 
 // Writes the rows as CSV `slice,type,theta_o,k,seconds,iterations,l1_rel` (atomically).
 void write_k_timing_csv(const std::string& path, const std::vector<KTimingRow>& rows);

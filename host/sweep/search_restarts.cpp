@@ -9,7 +9,7 @@ namespace bsdfmix {
 // picks each slice's K, and the best restart of that K is its fit so far. The final
 // fits (Batch::final_fits) then fit the chosen K again, longer and from more restarts.
 void search_restarts(Batch& b) {
-  const FitSection& fit = b.fit;
+  const FitSettings& fit = b.fit;
   std::vector<EmTask> tasks;
   for (std::size_t s = 0; s < b.size(); ++s) {
     if (b.zero(s)) continue;

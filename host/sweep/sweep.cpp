@@ -21,17 +21,12 @@
 
 namespace bsdfmix {
 
-namespace {
-BatchFarm* g_batch_farm = nullptr;
-}  // namespace
-
-void set_batch_farm(BatchFarm* farm) { g_batch_farm = farm; }
-
 struct BatchWorker::Impl {
-  Impl(const std::string& table_path, const FitSection& fit, const std::string& device_selector)
+  Impl(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+       const EngineOptions& engine_options)
       : fit_settings(fit), reader(table_path), slices(reader), devices(select_devices(device_selector)),
-        engine(devices), fitter(slices, fit_settings, engine, joined_names(devices)) {}
-  const FitSection fit_settings;
+        engine(devices, 1, engine_options), fitter(slices, fit_settings, engine, joined_names(devices)) {}
+  const FitSettings fit_settings;
   TableReader reader;
   TableSlices slices;
   const std::vector<Device> devices;
@@ -39,13 +34,14 @@ struct BatchWorker::Impl {
   BatchFitter fitter;
 };
 
-BatchWorker::BatchWorker(const std::string& table_path, const FitSection& fit, const std::string& device_selector)
-    : impl_(std::make_unique<Impl>(table_path, fit, device_selector)) {}
+BatchWorker::BatchWorker(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+                         const EngineOptions& engine)
+    : impl_(std::make_unique<Impl>(table_path, fit, device_selector, engine)) {}
 BatchWorker::~BatchWorker() = default;
 BatchPart BatchWorker::fit(const std::vector<SliceRef>& batch) { return impl_->fitter.fit(batch); }
 
-SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
-                       std::size_t max_batches) {
+SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+                       const SweepOptions& options) {
   const auto t_start = std::chrono::steady_clock::now();
   const OutputLock lock(fit.output);  // a second run on the same output fails here, at once
   TableReader reader(table_path);
@@ -56,7 +52,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
 
   const std::vector<Device> devices = select_devices(device_selector);
   const std::string device_names = joined_names(devices);
-  EmEngine engine(devices);
+  EmEngine engine(devices, 1, options.engine);
 
   const std::size_t batch = batch_size(plan.size(), fit);
   Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices));
@@ -93,15 +89,15 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
 
   BatchFitter fitter(source, fit, engine, device_names);
   std::size_t committed = resumed;
-  const bool stops = max_batches < batches.size();
-  if (stops) batches.resize(max_batches);
+  const bool stops = options.max_batches < batches.size();
+  if (stops) batches.resize(options.max_batches);
   const auto fit_here = [&](const std::vector<SliceRef>& b) { return fitter.fit(b); };
   const auto commit = [&](BatchPart&& part) {
     checkpoint.commit(part);
     committed += part.slice_index.size();
     progress.advance(part.slice_index.size());
   };
-  if (g_batch_farm) g_batch_farm->run(batches, fit_here, commit);
+  if (options.farm) options.farm->run(batches, fit_here, commit);
   else for (const auto& b : batches) commit(fit_here(b));
   if (stops) {
     SweepSummary partial;
@@ -109,7 +105,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, con
     partial.resumed = resumed;
     partial.slices = committed;
     partial.devices = device_names;
-    log_line("fit " + table_path + ": stopped after " + std::to_string(max_batches) + " batch(es); rerun to resume");
+    log_line("fit " + table_path + ": stopped after " + std::to_string(options.max_batches) + " batch(es); rerun to resume");
     return partial;
   }
   progress.finish();

@@ -12,7 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "sweep/fit_settings.hpp"
+#include "fit/em.hpp"
 #include "sweep/checkpoint.hpp"
 #include "sweep/slice_plan.hpp"
 
@@ -38,13 +39,7 @@ struct SweepSummary {
 
 // The fit settings that make a result, as JSON (the mixture file's `fit_settings`
 // attribute, docs/formats.md): every key of the `fit:` section but the paths and slices.
-std::string fit_settings_json(const FitSection& fit);
-
-// Fits the slices `fit` asks for. With `max_batches`, stops after committing that many
-// batches (the summary's `complete` is false and no final file is written): a later run
-// resumes from the checkpoint.
-SweepSummary run_sweep(const std::string& table_path, const FitSection& fit, const std::string& device_selector,
-                       std::size_t max_batches = SIZE_MAX);
+std::string fit_settings_json(const FitSettings& fit);
 
 // How run_sweep fits its batches. Without a farm, one after the other in this process.
 // A farm (the MPI task farm, scale/mpi_farm.hpp) fits them wherever it likes: it calls
@@ -58,14 +53,27 @@ class BatchFarm {
                    const std::function<BatchPart(const std::vector<SliceRef>&)>& fit_here,
                    const std::function<void(BatchPart&&)>& commit) = 0;
 };
-// Installs the farm every later run_sweep uses (nullptr: none); not owned.
-void set_batch_farm(BatchFarm* farm);
+
+// How run_sweep runs, beside the fit settings: where it stops, where its batches are
+// fitted, and how its engine runs (the fingerprint records the precision in force).
+struct SweepOptions {
+  // Stop after committing this many batches (the summary's `complete` is false and no
+  // final file is written): a later run resumes from the checkpoint.
+  std::size_t max_batches = SIZE_MAX;
+  BatchFarm* farm = nullptr;  // not owned; nullptr: every batch fitted here
+  EngineOptions engine;       // the EM engine's precision and log
+};
+
+// Fits the slices `fit` asks for.
+SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+                       const SweepOptions& options = {});
 
 // The fitting half of a sweep, without checkpoint or outputs: what a remote worker of a
 // farm runs. Fits batches of `table_path` exactly as run_sweep does.
 class BatchWorker {
  public:
-  BatchWorker(const std::string& table_path, const FitSection& fit, const std::string& device_selector);
+  BatchWorker(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
+              const EngineOptions& engine = {});
   ~BatchWorker();
   BatchPart fit(const std::vector<SliceRef>& batch);
 

@@ -6,11 +6,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+#include <type_traits>
 
 #include "core/atomic_file.hpp"
 #include "core/format.hpp"
 #include "core/hash.hpp"
 #include "device/program.hpp"
+#include "sweep/row_fields.hpp"
 
 namespace bsdfmix {
 
@@ -21,29 +23,47 @@ std::string num(double v, const char* f = "%.9g") { return format_number(std::is
 
 }  // namespace
 
-std::string report_csv(const std::vector<ReportRow>& rows) {
+namespace {
+
+// A CSV of rows whose fields `fields` visits (sweep/row_fields.hpp): the names, then
+// one line per row.
+template <class Row, class Fields>
+std::string rows_csv(const std::vector<Row>& rows, Fields fields) {
   std::ostringstream s;
-  s << "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status,rgb_l1_rel,rgb_negative\n";
-  // The colour columns are empty for a table without rgb (NaN in the rows).
-  auto colour = [](double v) { return std::isnan(v) ? std::string() : num(v); };
-  for (const ReportRow& r : rows)
-    s << r.slice << "," << num(r.theta_o) << "," << num(r.phi_o) << "," << r.k << "," << r.iterations << ","
-      << num(r.loglik) << "," << num(r.l1_rel) << "," << num(r.seconds, "%.6f") << "," << r.device << "," << r.status
-      << "," << colour(r.rgb_l1_rel) << "," << colour(r.rgb_negative) << "\n";
+  bool first = true;
+  fields(Row{}, [&](const char* name, const auto&, CsvText) {
+    s << (first ? "" : ",") << name;
+    first = false;
+  });
+  s << "\n";
+  for (const Row& row : rows) {
+    first = true;
+    fields(row, [&](const char*, const auto& v, CsvText text) {
+      using T = std::decay_t<decltype(v)>;
+      if (!first) s << ",";
+      first = false;
+      if constexpr (std::is_same_v<T, std::string>) s << v;
+      else if constexpr (std::is_same_v<T, bool>) s << (v ? "1" : "0");
+      else if constexpr (std::is_floating_point_v<T>) s << (text.nan_empty && std::isnan(v) ? "" : num(v, text.format));
+      else s << v;
+    });
+    s << "\n";
+  }
   return s.str();
+}
+
+}  // namespace
+
+std::string report_csv(const std::vector<ReportRow>& rows) {
+  return rows_csv(rows, [](const ReportRow& r, auto&& visit) { report_fields(r, visit); });
 }
 
 std::string search_csv(const std::vector<SearchRow>& rows) {
-  std::ostringstream s;
-  s << "slice,k,restart,loglik,l1_rel,score,chosen\n";
-  for (const SearchRow& r : rows)
-    s << r.slice << "," << r.k << "," << r.restart << "," << num(r.loglik) << "," << num(r.l1_rel) << ","
-      << num(r.score) << "," << (r.chosen ? "1" : "0") << "\n";
-  return s.str();
+  return rows_csv(rows, [](const SearchRow& r, auto&& visit) { search_fields(r, visit); });
 }
 
 SweepSummary write_outputs(const SweepResult& result, const std::string& table_path, const TableMeta& meta,
-                           const FitSection& fit) {
+                           const FitSettings& fit) {
   const MixtureFile& out = result.mixture;
   write_mixture_file(fit.output, out);
   write_text_atomic(fit.report, report_csv(result.report));
@@ -71,7 +91,7 @@ SweepSummary write_outputs(const SweepResult& result, const std::string& table_p
 }
 
 std::string sweep_fingerprint(const std::string& table_path, const TableMeta& meta, const std::vector<SliceRef>& plan,
-                              const FitSection& fit, std::size_t batch, const EmEngine& engine,
+                              const FitSettings& fit, std::size_t batch, const EmEngine& engine,
                               const std::vector<Device>& devices) {
   static const std::string executable = hex64(hash_file("/proc/self/exe"));
   std::string fit_sources;  // every program a fit runs
@@ -91,7 +111,7 @@ std::string sweep_fingerprint(const std::string& table_path, const TableMeta& me
   return fp.str();
 }
 
-std::string fit_settings_json(const FitSection& f) {
+std::string fit_settings_json(const FitSettings& f) {
   std::ostringstream s;
   s << "{\"k_min\": " << f.k_min << ", \"k_max\": " << f.k_max << ", \"seed\": " << f.seed
     << ", \"restarts\": " << f.restarts << ", \"final_restarts\": " << f.final_restarts

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "sweep/fit_settings.hpp"
 #include "device/device.hpp"
 #include "fit/em.hpp"
 #include "io/table.hpp"
@@ -23,14 +23,14 @@ std::string search_csv(const std::vector<SearchRow>& rows);
 // sums them up (sizes against the table at `table_path`); resumed, seconds and devices
 // are left to the caller.
 SweepSummary write_outputs(const SweepResult& result, const std::string& table_path, const TableMeta& meta,
-                           const FitSection& fit);
+                           const FitSettings& fit);
 
 // What makes a checkpoint reusable: the table (path, size, source; its content is
 // checked part by part), the slices planned and the batching, every fit setting, the
 // build (the executable's and the EM kernel's bytes) and the numeric path (devices,
 // drivers, precision).
 std::string sweep_fingerprint(const std::string& table_path, const TableMeta& meta, const std::vector<SliceRef>& plan,
-                              const FitSection& fit, std::size_t batch, const EmEngine& engine,
+                              const FitSettings& fit, std::size_t batch, const EmEngine& engine,
                               const std::vector<Device>& devices);
 
 }  // namespace bsdfmix
