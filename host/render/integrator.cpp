@@ -26,22 +26,7 @@ struct Rng {
   }
 };
 
-BsdfSampler sampler_of(PathEstimator e) {
-  switch (e) {
-    case PathEstimator::Uniform: return BsdfSampler::Uniform;
-    case PathEstimator::MisTab:
-    case PathEstimator::MisLightGmm:
-    case PathEstimator::MisProduct:
-    case PathEstimator::Guided:
-    case PathEstimator::GuidedProduct: return BsdfSampler::Mixture;
-    case PathEstimator::CdfTab:
-    case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
-    case PathEstimator::IsRgl:
-    case PathEstimator::MisLightRgl: return BsdfSampler::Rgl;
-  }
-  return BsdfSampler::Uniform;
-}
-
+BsdfSampler sampler_of(PathEstimator e) { return path_strategy(e).technique; }
 double power_weight(double a, double b) { return a * a / (a * a + b * b); }
 
 // The light sample's density per steradian: light sampling alone, or at a fiber or a
@@ -96,7 +81,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
                std::uint64_t& vertices, std::vector<double>* theta_out, std::vector<guide::Sample>* train,
                PathScratch& scratch) {
   const BsdfSampler fs = sampler_of(est);
-  const bool product = est == PathEstimator::MisProduct && scratch.carry && !scratch.carry->empty();
+  const bool product = path_strategy(est).product && scratch.carry && !scratch.carry->empty();
   FastProduct *cur = &scratch.prod[0], *prev = &scratch.prod[1];
   const bool nee = uses_light_sampling(est);
   const bool guided = is_guided(est) && v.guide;
@@ -178,7 +163,7 @@ Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, co
     double a_prod = 0, a_guide = 0;
     if (leaf) {
       a_guide = leaf->share;
-      if (est == PathEstimator::GuidedProduct && (fiber || surface) && !leaf->compact.empty() && a_guide > 0) {
+      if (path_strategy(est).guided_product && (fiber || surface) && !leaf->compact.empty() && a_guide > 0) {
         axes = fiber ? frame.axes() : sframe.axes();
         try {
           gprod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(leaf->compact, axes, kGuideAxes),

@@ -2,7 +2,6 @@
 #include "render/render_settings.hpp"
 
 #include <cmath>
-#include <iterator>
 #include <set>
 
 #include "config/node.hpp"
@@ -14,17 +13,11 @@ namespace render {
 
 namespace {
 
-// in the order of PathEstimator
-const char* kNames[] = {"uniform", "mis_tab",        "cdf_tab", "mis_light_cdf", "mis_light_gmm",
-                        "mis_product", "guided", "guided_product", "is_rgl",     "mis_light_rgl"};
-
 PathEstimator parse_estimator_name(const ConfigNode& n, const std::string& key, const std::string& name) {
-  std::string expected;
-  for (int i = 0; i < int(std::size(kNames)); ++i) {
-    if (name == kNames[i]) return PathEstimator(i);
-    expected += std::string(i ? (i + 1 == int(std::size(kNames)) ? " or " : ", ") : "") + kNames[i];
-  }
-  n.fail(key, "unknown estimator '" + name + "' (expected " + expected + ")");
+  const EstimatorInfo* e = find_estimator(name);
+  if (e == nullptr || !e->render.renders)
+    n.fail(key, "unknown estimator '" + name + "' (expected " + path_estimator_list() + ")");
+  return e->id;
 }
 
 // A nested mapping with its defaults merged under it and unknown keys rejected.
@@ -48,17 +41,6 @@ Vec3 vec3(const ConfigNode& n, const std::string& key) {
 }
 
 }  // namespace
-
-const char* path_estimator_name(PathEstimator e) { return kNames[int(e)]; }
-
-bool is_guided(PathEstimator e) { return e == PathEstimator::Guided || e == PathEstimator::GuidedProduct; }
-
-bool uses_rgl(PathEstimator e) { return e == PathEstimator::IsRgl || e == PathEstimator::MisLightRgl; }
-
-bool uses_light_sampling(PathEstimator e) {
-  return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm || e == PathEstimator::MisProduct ||
-         e == PathEstimator::MisLightRgl || is_guided(e);
-}
 
 RenderSettings parse_render(const RenderSection& section) {
   const ConfigNode n(section.file, "render", section.node);

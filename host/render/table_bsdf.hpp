@@ -32,7 +32,7 @@ class RglBrdf;
 namespace render {
 
 enum class FSource { Table, StandIn };
-enum class BsdfSampler { Uniform, Mixture, TableCdf, Rgl };
+// BsdfSampler: the material's techniques (sampling/estimator.hpp)
 
 class TableBsdf {
  public:
