@@ -7,44 +7,18 @@
 namespace bsdfmix {
 namespace render {
 
+template <>
 Rgb FiberBsdf::f(const Vec3& wi) const {
   double th, ph;
   frame_.to_local(wi, th, ph);
   return bxdf_->f(frame_.theta_o, th, ph);
 }
 
-double FiberBsdf::pdf(const Vec3& wi) const {
-  double th, ph;
-  frame_.to_local(wi, th, ph);
-  return bxdf_->pdf(frame_.theta_o, th, ph);
-}
-
-bool FiberBsdf::sample(const double u[4], Vec3& wi, double& pdf) const {
-  double th, ph;
-  bxdf_->sample(frame_.theta_o, u, th, ph, pdf);
-  if (!(pdf > 0)) return false;
-  wi = frame_.to_world(th, ph);
-  return true;
-}
-
+template <>
 Rgb SurfaceBsdf::f(const Vec3& wi) const {
   double th, ph;
   frame_.to_local(wi, th, ph);
   return th < kPi / 2 ? bxdf_->f(frame_.theta_o, th, ph) * std::cos(th) : Rgb();
-}
-
-double SurfaceBsdf::pdf(const Vec3& wi) const {
-  double th, ph;
-  frame_.to_local(wi, th, ph);
-  return bxdf_->pdf(frame_.theta_o, th, ph);
-}
-
-bool SurfaceBsdf::sample(const double u[4], Vec3& wi, double& pdf) const {
-  double th, ph;
-  bxdf_->sample(frame_.theta_o, u, th, ph, pdf);
-  if (!(pdf > 0)) return false;
-  wi = frame_.to_world(th, ph);
-  return true;
 }
 
 Lambertian::Lambertian(double albedo, const Vec3& normal) : albedo_(albedo), n_(normal) {

@@ -31,37 +31,40 @@ class Bsdf {
   virtual double theta_o() const { return 0; }
 };
 
-// A fiber: the BxDF in the fiber's frame (tangent, the plane of omega_o).
-class FiberBsdf : public Bsdf {
+// A tabulated material: the BxDF in the hit's frame. FiberBsdf: a fiber's frame (tangent,
+// the plane of omega_o), f as it is. SurfaceBsdf: a measured surface's (the shading
+// normal), f cos(theta_i) over the upper hemisphere.
+template <Domain D>
+class TabulatedBsdf : public Bsdf {
  public:
-  FiberBsdf(const SampledBxdf& bxdf, const Vec3& tangent, const Vec3& wo) : bxdf_(&bxdf), frame_(tangent, wo) {}
+  TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo) : bxdf_(&bxdf), frame_(axis, wo, D) {}
   Rgb f(const Vec3& wi) const override;
-  double pdf(const Vec3& wi) const override;
-  bool sample(const double u[4], Vec3& wi, double& pdf) const override;
+  double pdf(const Vec3& wi) const override {
+    double th, ph;
+    frame_.to_local(wi, th, ph);
+    return bxdf_->pdf(frame_.theta_o, th, ph);
+  }
+  bool sample(const double u[4], Vec3& wi, double& pdf) const override {
+    double th, ph;
+    bxdf_->sample(frame_.theta_o, u, th, ph, pdf);
+    if (!(pdf > 0)) return false;
+    wi = frame_.to_world(th, ph);
+    return true;
+  }
   bool tabulated() const override { return true; }
   LocalAxes axes() const override { return frame_.axes(); }
   double theta_o() const override { return frame_.theta_o; }
 
  private:
   const SampledBxdf* bxdf_;
-  FiberFrame frame_;
+  HitFrame frame_;
 };
-
-// A measured surface: the BxDF in the frame of the shading normal, times cos(theta_i).
-class SurfaceBsdf : public Bsdf {
- public:
-  SurfaceBsdf(const SampledBxdf& bxdf, const Vec3& normal, const Vec3& wo) : bxdf_(&bxdf), frame_(normal, wo) {}
-  Rgb f(const Vec3& wi) const override;
-  double pdf(const Vec3& wi) const override;
-  bool sample(const double u[4], Vec3& wi, double& pdf) const override;
-  bool tabulated() const override { return true; }
-  LocalAxes axes() const override { return frame_.axes(); }
-  double theta_o() const override { return frame_.theta_o; }
-
- private:
-  const SampledBxdf* bxdf_;
-  SurfaceFrame frame_;
-};
+using FiberBsdf = TabulatedBsdf<Domain::Fiber>;
+using SurfaceBsdf = TabulatedBsdf<Domain::Hemisphere>;
+template <>
+Rgb FiberBsdf::f(const Vec3& wi) const;
+template <>
+Rgb SurfaceBsdf::f(const Vec3& wi) const;
 
 // The ground and the room: albedo / pi cos+, drawn cosine-weighted about the normal.
 class Lambertian : public Bsdf {

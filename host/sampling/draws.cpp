@@ -86,6 +86,39 @@ double rgl_pdf(const Problem& p, double th, double ph) {
   return rgl_of(p).pdf(rgl_view(p), {st * std::cos(pl), st * std::sin(pl), std::cos(th)});
 }
 
+double uniform_estimate(const Problem& p, const double u[4], FOf f_of) {
+  const Domain d = p.table.domain;
+  double th, ph;
+  uniform_draw(d, u[2], u[3], th, ph);
+  const double f = f_of(p, th, ph);
+  if (f == 0) return 0;
+  return p.light.radiance(th, ph) * f * cos_factor(d, th) / uniform_pdf(d);
+}
+
+double uniform_density(const Problem& p, double, double) { return uniform_pdf(p.table.domain); }
+
+bool uniform_direction(const Problem& p, const double u[4], double& th, double& ph) {
+  uniform_draw(p.table.domain, u[2], u[3], th, ph);
+  return true;
+}
+
+double mixture_estimate(const Problem& p, const double u[4], FOf f_of) {
+  const mix::Sample s = p.set->sample(p.theta_o, p.phi_o, u[0], u[1], u[2], u[3]);
+  if (!s.valid) return 0;
+  const double f = f_of(p, s.theta, s.phi);
+  if (f == 0) return 0;
+  return p.light.radiance(s.theta, s.phi) * f * cos_factor(p.table.domain, s.theta) / s.pdf_omega;
+}
+
+double mixture_density(const Problem& p, double th, double ph) { return p.set->pdf_omega(p.theta_o, p.phi_o, th, ph); }
+
+bool mixture_direction(const Problem& p, const double u[4], double& th, double& ph) {
+  const mix::Sample s = p.set->sample(p.theta_o, p.phi_o, u[0], u[1], u[2], u[3]);
+  th = s.theta;
+  ph = s.phi;
+  return s.valid;
+}
+
 double mis_estimate(const Problem& p, const MisTechniques& t, const double u[4]) {
   const Domain d = p.table.domain;
   int k = 0;

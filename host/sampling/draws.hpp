@@ -35,6 +35,20 @@ void light_draw(const Problem& p, double u0, double u1, double u2, double u3, do
 bool rgl_draw(const Problem& p, double u1, double u2, double& th, double& ph, double* pdf = nullptr);
 double rgl_pdf(const Problem& p, double th, double ph);
 
+// f of the table and of the stand-in at (th, ph) (world phi).
+using FOf = double (*)(const Problem& p, double th, double ph);
+inline double table_f(const Problem& p, double th, double ph) { return p.table.f_at(th, ph); }
+inline double stand_in_f(const Problem& p, double th, double ph) { return p.set->eval_f(p.theta_o, p.phi_o, th, ph); }
+
+// Uniform sampling with f: one estimate, the density, the draw (StudyStrategy's).
+double uniform_estimate(const Problem& p, const double u[4], FOf f);
+double uniform_density(const Problem& p, double th, double ph);
+bool uniform_direction(const Problem& p, const double u[4], double& th, double& ph);
+// The mixture's own sampler (MixtureSet::sample, pdf_omega) with f.
+double mixture_estimate(const Problem& p, const double u[4], FOf f);
+double mixture_density(const Problem& p, double th, double ph);
+bool mixture_direction(const Problem& p, const double u[4], double& th, double& ph);
+
 // L_i f c / pdf at a drawn direction with the table's f; 0 where f or the density is.
 inline double table_weight(const Problem& p, double th, double ph, double pdf) {
   const double f = p.table.f_at(th, ph);
@@ -56,6 +70,15 @@ struct MisTechniques {
 double mis_estimate(const Problem& p, const MisTechniques& t, const double u[4]);
 // The combined density: sum of c[k] pdf[k].
 double mis_pdf(const Problem& p, const MisTechniques& t, double th, double ph);
+// The two as StudyStrategy's estimate and pdf of the techniques T gives a problem.
+template <MisTechniques (*T)(const Problem&)>
+double mis_estimate_of(const Problem& p, const double u[4]) {
+  return mis_estimate(p, T(p), u);
+}
+template <MisTechniques (*T)(const Problem&)>
+double mis_pdf_of(const Problem& p, double th, double ph) {
+  return mis_pdf(p, T(p), th, ph);
+}
 
 }  // namespace draws
 }  // namespace bsdfmix

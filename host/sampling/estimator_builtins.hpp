@@ -7,6 +7,28 @@
 namespace bsdfmix {
 namespace builtin {
 
+// A study estimator's entry; `kernel`: kernels/sample.cl implements it (ESTIMATOR = its id).
+inline EstimatorInfo study_entry(Estimator id, const char* name, const char* draws, unsigned needs,
+                                 StudyStrategy study, bool kernel) {
+  EstimatorInfo e;
+  e.id = id;
+  e.name = name;
+  e.draws = draws;
+  e.needs = needs;
+  e.device_id = kernel ? int(id) : -1;
+  e.study = study;
+  return e;
+}
+
+// The renderer's part: the material's technique draws, light samples joining it or not.
+inline PathStrategy path_part(BsdfSampler technique, bool light_sampling) {
+  PathStrategy r;
+  r.renders = true;
+  r.technique = technique;
+  r.light_sampling = light_sampling;
+  return r;
+}
+
 EstimatorInfo us_tab();
 EstimatorInfo us_gmm();
 EstimatorInfo is_tab();

@@ -26,14 +26,8 @@ bool draw(const Problem& p, const double u[4], double& th, double& ph) {
 }  // namespace
 
 EstimatorInfo builtin::cdf_tab() {
-  EstimatorInfo e;
-  e.name = "cdf_tab";
-  e.draws = "table CDF";
-  e.device_id = int(Estimator::CdfTab);
-  e.study = {estimate, cdf_pdf, draw};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::TableCdf;
-  e.id = Estimator::CdfTab;
+  EstimatorInfo e = study_entry(Estimator::CdfTab, "cdf_tab", "table CDF", 0, {estimate, draws::cdf_pdf, draw}, true);
+  e.render = path_part(BsdfSampler::TableCdf, false);
   return e;
 }
 

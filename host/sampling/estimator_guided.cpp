@@ -6,14 +6,12 @@ namespace bsdfmix {
 
 EstimatorInfo builtin::guided() {
   EstimatorInfo e;
+  e.id = Estimator::Guided;
   e.name = "guided";
   e.draws = "guide + mixture + uniform, light";
   e.needs = kNeedsLighting | kNeedsGuide;
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Mixture;
-  e.render.light_sampling = true;
+  e.render = builtin::path_part(BsdfSampler::Mixture, true);
   e.render.guided = true;
-  e.id = Estimator::Guided;
   return e;
 }
 

@@ -6,15 +6,13 @@ namespace bsdfmix {
 
 EstimatorInfo builtin::guided_product() {
   EstimatorInfo e;
+  e.id = Estimator::GuidedProduct;
   e.name = "guided_product";
   e.draws = "guide + guide x mixture + mixture + uniform, light";
   e.needs = kNeedsLighting | kNeedsGuide;
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Mixture;
-  e.render.light_sampling = true;
+  e.render = builtin::path_part(BsdfSampler::Mixture, true);
   e.render.guided = true;
   e.render.guided_product = true;
-  e.id = Estimator::GuidedProduct;
   return e;
 }
 

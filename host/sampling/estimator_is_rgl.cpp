@@ -19,14 +19,8 @@ bool draw(const Problem& p, const double u[4], double& th, double& ph) { return 
 }  // namespace
 
 EstimatorInfo builtin::is_rgl() {
-  EstimatorInfo e;
-  e.name = "is_rgl";
-  e.draws = "RGL warps";
-  e.needs = kNeedsRgl;
-  e.study = {estimate, rgl_pdf, draw};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Rgl;
-  e.id = Estimator::IsRgl;
+  EstimatorInfo e = study_entry(Estimator::IsRgl, "is_rgl", "RGL warps", kNeedsRgl, {estimate, draws::rgl_pdf, draw}, false);
+  e.render = path_part(BsdfSampler::Rgl, false);
   return e;
 }
 

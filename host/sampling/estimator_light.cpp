@@ -26,14 +26,7 @@ bool draw(const Problem& p, const double u[4], double& th, double& ph) {
 }  // namespace
 
 EstimatorInfo builtin::light() {
-  EstimatorInfo e;
-  e.name = "light";
-  e.draws = "light";
-  e.needs = kNeedsLighting;
-  e.device_id = int(Estimator::Light);
-  e.study = {estimate, light_pdf, draw};
-  e.id = Estimator::Light;
-  return e;
+  return study_entry(Estimator::Light, "light", "light", kNeedsLighting, {estimate, draws::light_pdf, draw}, true);
 }
 
 }  // namespace bsdfmix

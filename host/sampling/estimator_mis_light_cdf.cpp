@@ -23,31 +23,15 @@ void pdfs(const Problem& p, double th, double ph, double* pdf) {
 }
 
 MisTechniques techniques(const Problem& p) {
-  MisTechniques t;
-  t.n = 2;
-  t.c[0] = p.mis.light_fraction;
-  t.c[1] = 1 - p.mis.light_fraction;
-  t.draw = draw_k;
-  t.pdfs = pdfs;
-  return t;
+  return {2, {p.mis.light_fraction, 1 - p.mis.light_fraction, 0}, draw_k, pdfs};
 }
-
-double estimate(const Problem& p, const double u[4]) { return mis_estimate(p, techniques(p), u); }
-double pdf(const Problem& p, double th, double ph) { return mis_pdf(p, techniques(p), th, ph); }
 
 }  // namespace
 
 EstimatorInfo builtin::mis_light_cdf() {
-  EstimatorInfo e;
-  e.name = "mis_light_cdf";
-  e.draws = "light + table CDF";
-  e.needs = kNeedsLighting;
-  e.device_id = int(Estimator::MisLightCdf);
-  e.study = {estimate, pdf, nullptr};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::TableCdf;
-  e.render.light_sampling = true;
-  e.id = Estimator::MisLightCdf;
+  EstimatorInfo e = study_entry(Estimator::MisLightCdf, "mis_light_cdf", "light + table CDF", kNeedsLighting,
+                                {draws::mis_estimate_of<techniques>, draws::mis_pdf_of<techniques>, nullptr}, true);
+  e.render = path_part(BsdfSampler::TableCdf, true);
   return e;
 }
 

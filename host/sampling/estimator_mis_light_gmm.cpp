@@ -33,32 +33,16 @@ void pdfs(const Problem& p, double th, double ph, double* pdf) {
 
 MisTechniques techniques(const Problem& p) {
   const MisOptions& m = p.mis;
-  MisTechniques t;
-  t.n = 3;
-  t.c[0] = m.light_fraction;
-  t.c[1] = (1 - m.light_fraction) * (1 - m.uniform_fraction);
-  t.c[2] = (1 - m.light_fraction) * m.uniform_fraction;
-  t.draw = draw_k;
-  t.pdfs = pdfs;
-  return t;
+  return {3, {m.light_fraction, (1 - m.light_fraction) * (1 - m.uniform_fraction), (1 - m.light_fraction) * m.uniform_fraction},
+          draw_k, pdfs};
 }
-
-double estimate(const Problem& p, const double u[4]) { return mis_estimate(p, techniques(p), u); }
-double pdf(const Problem& p, double th, double ph) { return mis_pdf(p, techniques(p), th, ph); }
 
 }  // namespace
 
 EstimatorInfo builtin::mis_light_gmm() {
-  EstimatorInfo e;
-  e.name = "mis_light_gmm";
-  e.draws = "light + mixture + uniform";
-  e.needs = kNeedsLighting;
-  e.device_id = int(Estimator::MisLightGmm);
-  e.study = {estimate, pdf, nullptr};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Mixture;
-  e.render.light_sampling = true;
-  e.id = Estimator::MisLightGmm;
+  EstimatorInfo e = study_entry(Estimator::MisLightGmm, "mis_light_gmm", "light + mixture + uniform", kNeedsLighting,
+                                {draws::mis_estimate_of<techniques>, draws::mis_pdf_of<techniques>, nullptr}, true);
+  e.render = path_part(BsdfSampler::Mixture, true);
   return e;
 }
 

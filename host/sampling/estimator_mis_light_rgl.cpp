@@ -23,30 +23,15 @@ void pdfs(const Problem& p, double th, double ph, double* pdf) {
 }
 
 MisTechniques techniques(const Problem& p) {
-  MisTechniques t;
-  t.n = 2;
-  t.c[0] = p.mis.light_fraction;
-  t.c[1] = 1 - p.mis.light_fraction;
-  t.draw = draw_k;
-  t.pdfs = pdfs;
-  return t;
+  return {2, {p.mis.light_fraction, 1 - p.mis.light_fraction, 0}, draw_k, pdfs};
 }
-
-double estimate(const Problem& p, const double u[4]) { return mis_estimate(p, techniques(p), u); }
-double pdf(const Problem& p, double th, double ph) { return mis_pdf(p, techniques(p), th, ph); }
 
 }  // namespace
 
 EstimatorInfo builtin::mis_light_rgl() {
-  EstimatorInfo e;
-  e.name = "mis_light_rgl";
-  e.draws = "light + RGL warps";
-  e.needs = kNeedsLighting | kNeedsRgl;
-  e.study = {estimate, pdf, nullptr};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Rgl;
-  e.render.light_sampling = true;
-  e.id = Estimator::MisLightRgl;
+  EstimatorInfo e = study_entry(Estimator::MisLightRgl, "mis_light_rgl", "light + RGL warps", kNeedsLighting | kNeedsRgl,
+                                {draws::mis_estimate_of<techniques>, draws::mis_pdf_of<techniques>, nullptr}, false);
+  e.render = path_part(BsdfSampler::Rgl, true);
   return e;
 }
 

@@ -34,36 +34,18 @@ void pdfs(const Problem& p, double th, double ph, double* pdf) {
 
 MisTechniques techniques(const Problem& p) {
   const MisOptions& m = p.mis;
-  MisTechniques t;
-  t.n = 3;
-  t.c[0] = m.product_fraction;
-  t.c[1] = m.product_light;
-  t.c[2] = 1 - m.product_fraction - m.product_light;
-  t.draw = draw_k;
-  t.pdfs = pdfs;
-  return t;
+  return {3, {m.product_fraction, m.product_light, 1 - m.product_fraction - m.product_light}, draw_k, pdfs};
 }
 
-double estimate(const Problem& p, const double u[4]) {
-  if (!p.has_product) return 0;
-  return mis_estimate(p, techniques(p), u);
-}
-double pdf(const Problem& p, double th, double ph) { return mis_pdf(p, techniques(p), th, ph); }
+double estimate(const Problem& p, const double u[4]) { return p.has_product ? mis_estimate(p, techniques(p), u) : 0; }
 
 }  // namespace
 
 EstimatorInfo builtin::mis_product() {
-  EstimatorInfo e;
-  e.name = "mis_product";
-  e.draws = "product + light + uniform";
-  e.needs = kNeedsLighting | kNeedsProduct;
-  e.device_id = int(Estimator::MisProduct);
-  e.study = {estimate, pdf, nullptr};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Mixture;
-  e.render.light_sampling = true;
+  EstimatorInfo e = study_entry(Estimator::MisProduct, "mis_product", "product + light + uniform",
+                                kNeedsLighting | kNeedsProduct, {estimate, draws::mis_pdf_of<techniques>, nullptr}, true);
+  e.render = path_part(BsdfSampler::Mixture, true);
   e.render.product = true;
-  e.id = Estimator::MisProduct;
   return e;
 }
 

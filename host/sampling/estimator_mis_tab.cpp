@@ -48,14 +48,8 @@ bool draw(const Problem& p, const double u[4], double& th, double& ph) {
 }  // namespace
 
 EstimatorInfo builtin::mis_tab() {
-  EstimatorInfo e;
-  e.name = "mis_tab";
-  e.draws = "mixture + uniform";
-  e.device_id = int(Estimator::MisTab);
-  e.study = {estimate, pdf, draw};
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Mixture;
-  e.id = Estimator::MisTab;
+  EstimatorInfo e = study_entry(Estimator::MisTab, "mis_tab", "mixture + uniform", 0, {estimate, pdf, draw}, true);
+  e.render = path_part(BsdfSampler::Mixture, false);
   return e;
 }
 

@@ -32,14 +32,8 @@ bool draw(const Problem& p, const double u[4], double& th, double& ph) {
 }  // namespace
 
 EstimatorInfo builtin::product() {
-  EstimatorInfo e;
-  e.name = "product";
-  e.draws = "product";
-  e.needs = kNeedsLighting | kNeedsProduct;
-  e.device_id = int(Estimator::Product);
-  e.study = {estimate, pdf, draw};
-  e.id = Estimator::Product;
-  return e;
+  return study_entry(Estimator::Product, "product", "product", kNeedsLighting | kNeedsProduct, {estimate, pdf, draw},
+                     true);
 }
 
 }  // namespace bsdfmix

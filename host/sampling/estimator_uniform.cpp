@@ -5,11 +5,10 @@ namespace bsdfmix {
 
 EstimatorInfo builtin::uniform() {
   EstimatorInfo e;
+  e.id = Estimator::Uniform;
   e.name = "uniform";
   e.draws = "uniform";
-  e.render.renders = true;
-  e.render.technique = BsdfSampler::Uniform;
-  e.id = Estimator::Uniform;
+  e.render = builtin::path_part(BsdfSampler::Uniform, false);
   return e;
 }
 

@@ -3,37 +3,11 @@
 #include "sampling/estimator_builtins.hpp"
 
 namespace bsdfmix {
-namespace {
-
-using namespace draws;
-
-double estimate(const Problem& p, const double u[4]) {
-  const Domain d = p.table.domain;
-  double th, ph;
-  uniform_draw(d, u[2], u[3], th, ph);
-  const double f = p.set->eval_f(p.theta_o, p.phi_o, th, ph);
-  if (f == 0) return 0;
-  return p.light.radiance(th, ph) * f * cos_factor(d, th) / uniform_pdf(d);
-}
-
-double pdf(const Problem& p, double, double) { return uniform_pdf(p.table.domain); }
-
-bool draw(const Problem& p, const double u[4], double& th, double& ph) {
-  uniform_draw(p.table.domain, u[2], u[3], th, ph);
-  return true;
-}
-
-}  // namespace
 
 EstimatorInfo builtin::us_gmm() {
-  EstimatorInfo e;
-  e.name = "us_gmm";
-  e.draws = "uniform";
-  e.needs = kStandInF;
-  e.device_id = int(Estimator::UsGmm);
-  e.study = {estimate, pdf, draw};
-  e.id = Estimator::UsGmm;
-  return e;
+  const auto estimate = [](const Problem& p, const double u[4]) { return draws::uniform_estimate(p, u, draws::stand_in_f); };
+  return builtin::study_entry(Estimator::UsGmm, "us_gmm", "uniform", kStandInF,
+                              {estimate, draws::uniform_density, draws::uniform_direction}, true);
 }
 
 }  // namespace bsdfmix
