@@ -119,6 +119,47 @@ bool mixture_direction(const Problem& p, const double u[4], double& th, double& 
   return s.valid;
 }
 
+const Technique kLightTechnique = {
+    [](const Problem& p, double r0, const double u[4], double& th, double& ph) {
+      light_draw(p, r0, u[1], u[2], u[3], th, ph);
+      return true;
+    },
+    light_pdf};
+const Technique kUniformTechnique = {
+    [](const Problem& p, double, const double u[4], double& th, double& ph) {
+      uniform_draw(p.table.domain, u[2], u[3], th, ph);
+      return true;
+    },
+    [](const Problem& p, double th, double) { return inside(p.table.domain, th) ? uniform_pdf(p.table.domain) : 0; }};
+const Technique kCdfTechnique = {
+    [](const Problem& p, double r0, const double u[4], double& th, double& ph) {
+      return cdf_draw(p, r0, u[1], u[2], u[3], th, ph);
+    },
+    cdf_pdf};
+const Technique kMixtureTechnique = {
+    [](const Problem& p, double r0, const double u[4], double& th, double& ph) {
+      const mix::Sample s = p.set->sample(p.theta_o, p.phi_o, r0, u[1], u[2], u[3]);
+      th = s.theta;
+      ph = s.phi;
+      return true;
+    },
+    [](const Problem& p, double th, double ph) {
+      return inside(p.table.domain, th) ? p.set->pdf_omega(p.theta_o, p.phi_o, th, ph) : 0;
+    }};
+const Technique kProductTechnique = {
+    [](const Problem& p, double, const double u[4], double& th, double& ph) {
+      const mix::Sample s = p.product.sample(p.table.domain, u[1], u[2], u[3]);
+      th = s.theta;
+      ph = s.phi;
+      return true;
+    },
+    [](const Problem& p, double th, double ph) {
+      return inside(p.table.domain, th) ? p.product.pdf_omega(p.table.domain, th, ph) : 0;
+    }};
+const Technique kRglTechnique = {
+    [](const Problem& p, double, const double u[4], double& th, double& ph) { return rgl_draw(p, u[1], u[2], th, ph); },
+    rgl_pdf};
+
 double mis_estimate(const Problem& p, const MisTechniques& t, const double u[4]) {
   const Domain d = p.table.domain;
   int k = 0;
@@ -126,18 +167,18 @@ double mis_estimate(const Problem& p, const MisTechniques& t, const double u[4])
   while (k + 1 < t.n && u[0] >= lo + t.c[k]) lo += t.c[k++];
   const double r0 = std::clamp((u[0] - lo) / t.c[k], 0.0, 1.0 - 1e-17);
   double th = 0, ph = 0, pdf[3];
-  if (!t.draw(p, k, r0, u, th, ph)) return 0;
+  if (!t.t[k]->draw(p, r0, u, th, ph)) return 0;
   if (!inside(d, th)) return 0;
   const double f = p.table.f_at(th, ph);
   if (f == 0) return 0;
-  t.pdfs(p, th, ph, pdf);
+  for (int j = 0; j < t.n; ++j) pdf[j] = t.t[j]->pdf(p, th, ph);
   const double w = mis_weight(t.c, pdf, t.n, k, p.mis.power);
   return w > 0 ? p.light.radiance(th, ph) * f * cos_factor(d, th) * w : 0;
 }
 
 double mis_pdf(const Problem& p, const MisTechniques& t, double th, double ph) {
   double pdf[3];
-  t.pdfs(p, th, ph, pdf);
+  for (int k = 0; k < t.n; ++k) pdf[k] = t.t[k]->pdf(p, th, ph);
   double s = 0;
   for (int k = 0; k < t.n; ++k) s += t.c[k] * pdf[k];
   return s;

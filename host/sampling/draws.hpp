@@ -56,16 +56,26 @@ inline double table_weight(const Problem& p, double th, double ph, double pdf) {
   return p.light.radiance(th, ph) * f * cos_factor(p.table.domain, th) / pdf;
 }
 
+// A technique of one-sample MIS: its draw from (r0, u[1..3]) (false: none) and its density
+// per steradian (0 outside the domain).
+struct Technique {
+  bool (*draw)(const Problem& p, double r0, const double u[4], double& th, double& ph);
+  double (*pdf)(const Problem& p, double th, double ph);
+};
+extern const Technique kLightTechnique;    // the light sampler
+extern const Technique kUniformTechnique;  // uniform over the domain
+extern const Technique kCdfTechnique;      // the table's CDF
+extern const Technique kMixtureTechnique;  // the mixture's own sampler
+extern const Technique kProductTechnique;  // the product of the mixture and the lighting's
+extern const Technique kRglTechnique;      // the RGL file's warps
+
 // One-sample MIS (docs/sampling.md, "Sampling with the lighting"): techniques with
 // fractions c[k], the point drawn by one of them picked by u0 (its remainder reused as the
 // technique's u0), weighted by the balance or the power heuristic, f the table's.
 struct MisTechniques {
   int n = 0;
   double c[3] = {0, 0, 0};
-  // Technique k's draw from (r0, u[1..3]); false: none.
-  bool (*draw)(const Problem& p, int k, double r0, const double u[4], double& th, double& ph) = nullptr;
-  // The techniques' densities at (th, ph), in order.
-  void (*pdfs)(const Problem& p, double th, double ph, double* pdf) = nullptr;
+  const Technique* t[3] = {nullptr, nullptr, nullptr};
 };
 double mis_estimate(const Problem& p, const MisTechniques& t, const double u[4]);
 // The combined density: sum of c[k] pdf[k].

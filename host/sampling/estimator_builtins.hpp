@@ -7,14 +7,22 @@
 namespace bsdfmix {
 namespace builtin {
 
-// A study estimator's entry; `kernel`: kernels/sample.cl implements it (ESTIMATOR = its id).
-inline EstimatorInfo study_entry(Estimator id, const char* name, const char* draws, unsigned needs,
-                                 StudyStrategy study, bool kernel) {
+// An entry with its renderer part (none in the study).
+inline EstimatorInfo render_entry(Estimator id, const char* name, const char* draws, unsigned needs,
+                                  const PathStrategy& render) {
   EstimatorInfo e;
   e.id = id;
   e.name = name;
   e.draws = draws;
   e.needs = needs;
+  e.render = render;
+  return e;
+}
+
+// A study estimator's entry; `kernel`: kernels/sample.cl implements it (ESTIMATOR = its id).
+inline EstimatorInfo study_entry(Estimator id, const char* name, const char* draws, unsigned needs,
+                                 StudyStrategy study, bool kernel) {
+  EstimatorInfo e = render_entry(id, name, draws, needs, PathStrategy{});
   e.device_id = kernel ? int(id) : -1;
   e.study = study;
   return e;

@@ -1,19 +1,16 @@
-// guided_product: the renderer's guided paths (docs/render.md, "Guided paths"): the guide's mixture and its product with the BSDF mixture draw shares of the directions, the
-// BSDF mixture the rest, with light samples by MIS; without a guide, as mis_light_gmm.
+// guided_product: guided, and the product of the leaf's compact part carried into the
+// hit's frame with the BSDF mixture draws a share of the guide's directions (docs/render.md,
+// "Guided paths").
 #include "sampling/estimator_builtins.hpp"
 
 namespace bsdfmix {
 
 EstimatorInfo builtin::guided_product() {
-  EstimatorInfo e;
-  e.id = Estimator::GuidedProduct;
-  e.name = "guided_product";
-  e.draws = "guide + guide x mixture + mixture + uniform, light";
-  e.needs = kNeedsLighting | kNeedsGuide;
-  e.render = builtin::path_part(BsdfSampler::Mixture, true);
-  e.render.guided = true;
-  e.render.guided_product = true;
-  return e;
+  PathStrategy r = path_part(BsdfSampler::Mixture, true);
+  r.guided = true;
+  r.guided_product = true;
+  return render_entry(Estimator::GuidedProduct, "guided_product", "guide + guide x mixture + mixture + uniform, light",
+                      kNeedsLighting | kNeedsGuide, r);
 }
 
 }  // namespace bsdfmix

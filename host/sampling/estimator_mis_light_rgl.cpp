@@ -9,21 +9,8 @@ namespace {
 using namespace draws;
 
 // light, the RGL file's warps
-bool draw_k(const Problem& p, int k, double r0, const double u[4], double& th, double& ph) {
-  if (k == 0) {
-    light_draw(p, r0, u[1], u[2], u[3], th, ph);
-    return true;
-  }
-  return rgl_draw(p, u[1], u[2], th, ph);
-}
-
-void pdfs(const Problem& p, double th, double ph, double* pdf) {
-  pdf[0] = light_pdf(p, th, ph);
-  pdf[1] = rgl_pdf(p, th, ph);
-}
-
 MisTechniques techniques(const Problem& p) {
-  return {2, {p.mis.light_fraction, 1 - p.mis.light_fraction, 0}, draw_k, pdfs};
+  return {2, {p.mis.light_fraction, 1 - p.mis.light_fraction, 0}, {&kLightTechnique, &kRglTechnique, nullptr}};
 }
 
 }  // namespace

@@ -11,30 +11,10 @@ namespace {
 using namespace draws;
 
 // product, light, uniform
-bool draw_k(const Problem& p, int k, double r0, const double u[4], double& th, double& ph) {
-  if (k == 1) {
-    light_draw(p, r0, u[1], u[2], u[3], th, ph);
-  } else if (k == 2) {
-    uniform_draw(p.table.domain, u[2], u[3], th, ph);
-  } else {
-    const mix::Sample s = p.product.sample(p.table.domain, u[1], u[2], u[3]);
-    th = s.theta;
-    ph = s.phi;
-  }
-  return true;
-}
-
-void pdfs(const Problem& p, double th, double ph, double* pdf) {
-  const Domain d = p.table.domain;
-  const bool in = inside(d, th);
-  pdf[0] = in ? p.product.pdf_omega(d, th, ph) : 0;
-  pdf[1] = light_pdf(p, th, ph);
-  pdf[2] = in ? uniform_pdf(d) : 0;
-}
-
 MisTechniques techniques(const Problem& p) {
   const MisOptions& m = p.mis;
-  return {3, {m.product_fraction, m.product_light, 1 - m.product_fraction - m.product_light}, draw_k, pdfs};
+  return {3, {m.product_fraction, m.product_light, 1 - m.product_fraction - m.product_light},
+          {&kProductTechnique, &kLightTechnique, &kUniformTechnique}};
 }
 
 double estimate(const Problem& p, const double u[4]) { return p.has_product ? mis_estimate(p, techniques(p), u) : 0; }

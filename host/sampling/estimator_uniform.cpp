@@ -4,12 +4,7 @@
 namespace bsdfmix {
 
 EstimatorInfo builtin::uniform() {
-  EstimatorInfo e;
-  e.id = Estimator::Uniform;
-  e.name = "uniform";
-  e.draws = "uniform";
-  e.render = builtin::path_part(BsdfSampler::Uniform, false);
-  return e;
+  return builtin::render_entry(Estimator::Uniform, "uniform", "uniform", 0, builtin::path_part(BsdfSampler::Uniform, false));
 }
 
 }  // namespace bsdfmix
