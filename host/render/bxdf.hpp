@@ -51,26 +51,37 @@ struct StandInBxdf : TechniqueBxdf {
 struct RglBxdf : TechniqueBxdf {
   explicit RglBxdf(const TableBsdf& m) : TechniqueBxdf(m, FSource::Table, BsdfSampler::Rgl) {}
 };
+// Uniform over the material's domain.
+struct UniformBxdf : TechniqueBxdf {
+  explicit UniformBxdf(const TableBsdf& m) : TechniqueBxdf(m, FSource::Table, BsdfSampler::Uniform) {}
+};
 
-// The BxDF a path vertex integrates: f of one BxDF (the table or the stand-in), drawn as
-// the estimator draws: by a technique of the material or by its own VertexSampler.
+// The BxDF a path vertex integrates: f of the table or of the stand-in, drawn as the
+// estimator's strategy has it (sampling/estimator.hpp, PathStrategy): by the BxDF of its
+// technique (uniform, the stand-in's mixture, the table's CDF, the RGL file's warps) or by
+// its own VertexSampler.
 class SampledBxdf : public Bxdf {
  public:
-  SampledBxdf(const TableBsdf& m, FSource f, const PathStrategy& s)
-      : m_(&m), f_(m, f, s.technique), own_(s.sampler) {}
-  Rgb f(double theta_o, double theta, double phi) const override { return f_.f(theta_o, theta, phi); }
+  SampledBxdf(const TableBsdf& m, FSource f, const PathStrategy& s);
+  Rgb f(double theta_o, double theta, double phi) const override {
+    return (f_ == FSource::Table ? table_.f(theta_o, theta, phi) : stand_in_.f(theta_o, theta, phi));
+  }
   void sample(double theta_o, const double u[4], double& theta, double& phi, double& pdf) const override {
     if (own_) own_->sample(*m_, theta_o, u, theta, phi, pdf);
-    else f_.sample(theta_o, u, theta, phi, pdf);
+    else draw_->sample(theta_o, u, theta, phi, pdf);
   }
   double pdf(double theta_o, double theta, double phi) const override {
-    return own_ ? own_->pdf(*m_, theta_o, theta, phi) : f_.pdf(theta_o, theta, phi);
+    return own_ ? own_->pdf(*m_, theta_o, theta, phi) : draw_->pdf(theta_o, theta, phi);
   }
-  const TableBsdf& material() const { return *m_; }
 
  private:
   const TableBsdf* m_;
-  TechniqueBxdf f_;
+  FSource f_;
+  TableBxdf table_;
+  StandInBxdf stand_in_;
+  RglBxdf rgl_;
+  UniformBxdf uniform_;
+  const Bxdf* draw_ = nullptr;
   const VertexSampler* own_;
 };
 
