@@ -10,11 +10,13 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "config/config.hpp"
 #include "converge/study.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 #include "render/integrator.hpp"
+#include "render/render_settings.hpp"
 #include "render/surface.hpp"
 #include "sampling/sampling.hpp"
 
@@ -128,6 +130,11 @@ TEST_CASE("a registered estimator is one list entry, named in both the study's a
   CHECK(estimator_list().find("half_cdf") != std::string::npos);
   CHECK(render::path_strategy(kHalf).sampler == &kHalfSampler);
   CHECK_THROWS(register_estimator(e));  // its name is taken
+  // the configs name it as they name the built-in ones
+  const Config c = parse_config("table: " + glossy().table + "\nrender:\n  estimators: [half_cdf, mis_light_cdf]\n",
+                                "plugin.yaml");
+  CHECK(render::parse_render(*c.render).estimators == std::vector<Estimator>{kHalf, Estimator::MisLightCdf});
+  CHECK(path_estimator_list().find("half_cdf") != std::string::npos);
 }
 
 TEST_CASE("the convergence study runs a registered estimator on its CPU path: it converges as cdf_tab does",
