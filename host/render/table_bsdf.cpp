@@ -1,4 +1,4 @@
-// The renderer's fiber BCSDF: the table in memory, its CDFs, the stand-in and the samplers.
+// A tabulated BSDF in memory: the table, its CDFs, the stand-in, the samplers; a hit's frame.
 #include "render/table_bsdf.hpp"
 
 #include <algorithm>
