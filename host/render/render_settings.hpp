@@ -26,7 +26,7 @@ inline const PathStrategy& path_strategy(PathEstimator e) { return estimator_inf
 inline bool uses_light_sampling(PathEstimator e) { return path_strategy(e).light_sampling; }
 // guided, guided_product: the estimators that learn the incident radiance (docs/render.md, "Guided paths").
 inline bool is_guided(PathEstimator e) { return path_strategy(e).guided; }
-// is_rgl, mis_light_rgl: the estimators that need the RGL file the table was imported from.
+// The estimators that need the RGL file the table was imported from (kNeedsRgl).
 inline bool uses_rgl(PathEstimator e) { return has_need(e, kNeedsRgl); }
 
 struct Camera {

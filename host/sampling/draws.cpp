@@ -51,7 +51,7 @@ void light_draw(const Problem& p, double u0, double u1, double u2, double u3, do
 namespace {
 
 const RglBrdf& rgl_of(const Problem& p) {
-  if (!p.rgl) throw std::invalid_argument("is_rgl, mis_light_rgl: the problem has no RGL file (Problem::rgl)");
+  if (!p.rgl) throw std::invalid_argument("the RGL file's warps: the problem has no RGL file (Problem::rgl)");
   return *p.rgl;
 }
 

@@ -1,7 +1,7 @@
 // CPU references of kernels/sample.cl in double: sampling through the renderer-facing
 // header (include/bsdfmix/mixture.hpp), and the convergence study's estimators run by
-// their strategies (sampling/estimator.hpp; is_rgl and mis_light_rgl, the RGL file's own
-// warps, and registered estimators exist on the CPU alone).
+// their strategies (sampling/estimator.hpp; those that draw with the RGL file's own warps,
+// and registered estimators, exist on the CPU alone).
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -124,8 +124,9 @@ struct Problem {
   QueryMixture product_query;
   double product_kept = 1;
   MisOptions mis;
-  // is_rgl, mis_light_rgl: the RGL file the table was imported from (its warps draw the
-  // light direction for the view omega_o; f stays the table's). Not owned; nullptr: none.
+  // The estimators that need it (kNeedsRgl): the RGL file the table was imported from (its
+  // warps draw the light direction for the view omega_o; f stays the table's). Not owned;
+  // nullptr: none.
   const RglBrdf* rgl = nullptr;
   std::vector<float> geometry() const;
 };
