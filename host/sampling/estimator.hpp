@@ -86,7 +86,9 @@ struct EstimatorInfo {
   bool in_study() const { return study.estimate != nullptr; }
 };
 
-// Adds an estimator (its name must be new) and returns its id.
+// Adds an estimator (its name must be new; no device_id: kernels/sample.cl implements the
+// built-in ones alone) and returns its id. Register before a study or a render starts: the
+// list is read without a lock.
 Estimator register_estimator(EstimatorInfo info);
 // Every estimator, the built-in ones in their listing order, then the registered ones (a
 // deque: the references it hands out stay valid as estimators are added).
