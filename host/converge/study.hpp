@@ -29,8 +29,8 @@ struct StudySpec {
   // cached in light_cache_dir (scene/light_mixture.hpp)
   FitSection light_fit;
   std::string light_cache_dir;
-  // is_rgl, mis_light_rgl: the RGL file (.bsdf) the table was imported from (its source's
-  // sha256 must match); "" when no estimator needs one
+  // The estimators that need one (kNeedsRgl): the RGL file (.bsdf) the table was imported
+  // from (its source's sha256 must match); "" when no estimator needs one
   std::string rgl;
   std::string device;  // selector
   bool cpu = false;    // the CPU reference instead of the device kernels

@@ -1,4 +1,4 @@
-// The path tracer: camera rays, fiber and ground vertices, next-event estimation, MIS.
+// The path tracer: camera rays, vertices asked of their Bsdf, next-event estimation, MIS.
 #include "render/integrator.hpp"
 
 #include <algorithm>
@@ -6,6 +6,8 @@
 #include <cmath>
 #include <mutex>
 #include <thread>
+
+#include "render/bsdf.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -25,22 +27,6 @@ struct Rng {
     for (int i = 0; i < 4; ++i) u[i] = mix::to_uniform(r.v[i]);
   }
 };
-
-BsdfSampler sampler_of(PathEstimator e) {
-  switch (e) {
-    case PathEstimator::Uniform: return BsdfSampler::Uniform;
-    case PathEstimator::MisTab:
-    case PathEstimator::MisLightGmm:
-    case PathEstimator::MisProduct:
-    case PathEstimator::Guided:
-    case PathEstimator::GuidedProduct: return BsdfSampler::Mixture;
-    case PathEstimator::CdfTab:
-    case PathEstimator::MisLightCdf: return BsdfSampler::TableCdf;
-    case PathEstimator::IsRgl:
-    case PathEstimator::MisLightRgl: return BsdfSampler::Rgl;
-  }
-  return BsdfSampler::Uniform;
-}
 
 double power_weight(double a, double b) { return a * a / (a * a + b * b); }
 
@@ -81,245 +67,242 @@ struct TrainVertex {
   double pdf, beta, mark, f, pdf_bsdf;
 };
 
+// A path's training samples for the guide (guide/radiance_field.hpp), while it learns.
+struct TrainPath {
+  TrainVertex path[64];
+  int recorded = 0, max_record = 0;
+  // A vertex at `depth`: the rest is filled when the path continues.
+  void start(int depth, const Vec3& position) {
+    if (depth >= max_record) return;
+    TrainVertex& tv = path[recorded++];
+    for (int i = 0; i < 3; ++i) tv.position[i] = float(position[std::size_t(i)]);
+    tv.theta = tv.phi = 0;
+    tv.pdf = tv.beta = tv.mark = tv.f = tv.pdf_bsdf = 0;
+  }
+  void continued(int depth, const Vec3& wi, double pdf, const Rgb& fv, double pdf_bsdf, const Rgb& beta, const Rgb& L) {
+    if (depth >= max_record) return;
+    TrainVertex& tv = path[recorded - 1];
+    double th, ph;
+    guide::guide_angles(wi, th, ph);
+    tv.theta = float(th);
+    tv.phi = float(ph);
+    tv.pdf = pdf;
+    tv.f = fv.luminance();
+    tv.pdf_bsdf = pdf_bsdf;
+    tv.beta = beta.luminance();
+    tv.mark = L.luminance();
+  }
+  // Each recorded vertex's sample: the luminance that arrived along its direction (all the
+  // path gathered after it, over the throughput there) over the direction's density.
+  void emit(const Rgb& L, std::vector<guide::Sample>& train) const {
+    const double end = L.luminance();
+    for (int i = 0; i < recorded; ++i) {
+      const TrainVertex& tv = path[i];
+      guide::Sample s;
+      std::copy(tv.position, tv.position + 3, s.position);
+      s.theta = tv.theta;
+      s.phi = tv.phi;
+      s.radiance = tv.beta > 0 ? float((end - tv.mark) / tv.beta) : 0.f;
+      s.pdf = float(tv.pdf);
+      s.f = float(tv.f);
+      s.pdf_bsdf = float(tv.pdf_bsdf);
+      train.push_back(s);
+    }
+  }
+};
+
 int thread_count(int asked) {
   if (asked > 0) return asked;
   const unsigned n = std::thread::hardware_concurrency();
   return n > 0 ? int(n) : 1;
 }
 
+// The guide at a vertex: its leaf's mixture over world directions (share a_guide) and,
+// under guided_product at a fiber or surface, the product of its compact part carried
+// into the hit's frame with the BSDF mixture (share a_prod); the BSDF's draw has the rest.
+struct Guiding {
+  const guide::Leaf* leaf = nullptr;
+  LocalAxes axes;  // the hit's frame, where guided_product carries the leaf
+  mix::SliceMixture gprod;
+  double a_prod = 0, a_guide = 0;
+  // The density of the next direction, whoever draws it.
+  double pdf(const Bsdf& b, const Vec3& w) const {
+    if (!leaf) return b.pdf(w);
+    double p = (1 - a_guide - a_prod) * b.pdf(w), th, ph;
+    if (a_guide > 0) {
+      guide::guide_angles(w, th, ph);
+      p += a_guide * leaf->mixture.pdf_omega(Domain::Fiber, th, ph);
+    }
+    if (a_prod > 0) {
+      local_angles(axes, w, th, ph);
+      p += a_prod * gprod.pdf_omega(axes.domain, th, ph);
+    }
+    return p;
+  }
+};
+
+Guiding guiding_at(const SceneView& v, const PathStrategy& st, int depth, const Vec3& position, const Bsdf& b) {
+  Guiding g;
+  g.leaf = st.guided && v.guide && depth < v.guide_depth ? v.guide->at(position) : nullptr;
+  if (!g.leaf) return g;
+  g.a_guide = g.leaf->share;
+  if (st.guided_product && b.tabulated() && !g.leaf->compact.empty() && g.a_guide > 0) {
+    g.axes = b.axes();
+    try {
+      g.gprod = v.bsdf->product(b.theta_o(), carry_lighting(g.leaf->compact, g.axes, kGuideAxes), v.product);
+      g.a_prod = g.a_guide * g.leaf->compact_share;
+      g.a_guide -= g.a_prod;
+    } catch (const std::invalid_argument&) {
+      // no overlap: the leaf's mixture alone
+    }
+  }
+  return g;
+}
+
+// The radiance and throughput of a path so far, and what its next vertex needs of the
+// last: the density of its direction, whether light samples were taken there, and the
+// light sample's density at this vertex and at the one before (with mis_product's two
+// products: this vertex's and the one before's, whose density the escaped ray needs).
+struct PathState {
+  Rgb L, beta{1.0};
+  double prev_pdf = 0;
+  bool prev_nee = false;
+  LightPdf lp, prev_lp;
+  FastProduct *cur = nullptr, *prev = nullptr;
+};
+
+// The ray leaving a hit: off a fiber past its own radius, off a surface's float triangles.
+Ray spawn_ray(const Hit& hit, double fiber_radius) {
+  Ray next;
+  next.org = hit.position;
+  if (hit.kind == HitKind::Fiber) {
+    next.from_fiber = hit.fiber;
+    next.skip = 4 * fiber_radius;
+  } else {
+    next.tnear = hit.kind == HitKind::Surface ? 1e-4 : 1e-6;
+  }
+  return next;
+}
+
+// Next-event estimation: a light sample (from the lighting, or under mis_product at a
+// tabulated material from the product with the lighting carried into the hit's frame),
+// combined with the vertex's own draw by the power heuristic.
+void next_event(const SceneView& v, bool product, const CarrySource& carry, const Rng& rng, std::uint32_t dim,
+                const Bsdf& b, const Guiding& g, const Ray& next, PathState& s, std::uint64_t& rays) {
+  double u[4];
+  rng.draw(dim + 1, u);
+  LightPdf& lp = s.lp;
+  lp.product = false;
+  if (product && b.tabulated()) {
+    lp.axes = b.axes();
+    // no overlap: light sampling alone
+    lp.product = s.cur->build(v.bsdf->product_factor(b.theta_o()), carry, lp.axes, v.product);
+    lp.prod = s.cur;
+  }
+  Vec3 wl;
+  bool drawn = true;
+  if (lp.product && u[0] < lp.share) {
+    const mix::Sample m = lp.prod->sample(lp.axes.domain, u[0] / lp.share, u[1], u[2]);
+    drawn = m.valid;
+    if (drawn) wl = local_direction(lp.axes, m.theta, m.phi);
+  } else {
+    const double u0 = lp.product ? (u[0] - lp.share) / (1 - lp.share) : u[0];
+    wl = v.light->sample(std::min(u0, 1 - 1e-12), u[1], u[2], u[3]);
+  }
+  const double pl = drawn ? lp(wl) : 0.0;
+  const Rgb fv = pl > 0 ? b.f(wl) : Rgb();
+  if (fv.max() > 0) {
+    Ray shadow = next;
+    shadow.dir = wl;
+    ++rays;
+    if (!v.tracer->occluded(shadow))
+      s.L += s.beta * fv * v.lighting->radiance_world(wl) * power_weight(pl, g.pdf(b, wl)) / pl;
+  }
+}
+
+// The next direction and its density (the guide's draw or the vertex's own); ur[0] the
+// Russian roulette's uniform, ur[1] the guide's technique (drawn where either is needed).
+// False: the path ends.
+bool next_direction(const Rng& rng, std::uint32_t dim, bool roulette, const Bsdf& b, const Guiding& g, Vec3& wi,
+                    double& pdf, double ur[4]) {
+  double u[4];
+  rng.draw(dim + 2, u);
+  if (g.leaf || roulette) rng.draw(dim + 3, ur);
+  if (g.leaf && ur[1] < g.a_guide + g.a_prod) {
+    const bool from_product = ur[1] < g.a_prod;
+    const mix::Sample m = from_product ? g.gprod.sample(g.axes.domain, u[0], u[1], u[2])
+                                       : g.leaf->mixture.sample(Domain::Fiber, u[0], u[1], u[2]);
+    if (!m.valid) return false;
+    wi = from_product ? local_direction(g.axes, m.theta, m.phi) : guide::guide_direction(m.theta, m.phi);
+    pdf = g.pdf(b, wi);
+    return pdf > 0;
+  }
+  if (!b.sample(u, wi, pdf)) return false;
+  if (g.leaf) pdf = g.pdf(b, wi);
+  return true;
+}
+
 // One path: the RGB radiance arriving at the camera along `ray`, the throughput carried
 // per channel (directions are drawn by the luminance samplers; every decision reads the
-// largest channel, so a grey path is exactly the luminance path). `theta_out`, when
-// given, receives theta_o of every fiber vertex (the pre-pass); `train`, when given, the
-// path's training samples for the guide (guide/radiance_field.hpp).
+// largest channel, so a grey path is exactly the luminance path). At each vertex the hit's
+// Bsdf (render/bsdf.hpp) gives f, the draw and its density, as the estimator's strategy
+// (sampling/estimator.hpp) has it drawn. `theta_out`, when given, receives theta_o of
+// every fiber or surface vertex (the pre-pass); `train`, when given, the path's training
+// samples for the guide (guide/radiance_field.hpp).
 Rgb trace_path(const SceneView& v, PathEstimator est, FSource which, Ray ray, const Rng& rng, std::uint64_t& rays,
                std::uint64_t& vertices, std::vector<double>* theta_out, std::vector<guide::Sample>* train,
                PathScratch& scratch) {
-  const BsdfSampler fs = sampler_of(est);
-  const bool product = est == PathEstimator::MisProduct && scratch.carry && !scratch.carry->empty();
-  FastProduct *cur = &scratch.prod[0], *prev = &scratch.prod[1];
-  const bool nee = uses_light_sampling(est);
-  const bool guided = is_guided(est) && v.guide;
-  TrainVertex path[64];
-  int recorded = 0;
-  const int max_record = train ? std::min(v.max_depth, 64) : 0;
-  Rgb L, beta(1.0);
-  double prev_pdf = 0;
-  bool prev_nee = false;
-  LightPdf lp, prev_lp;  // the light sample's density at this vertex and at the one before
-  lp.light = prev_lp.light = v.light;
-  lp.share = prev_lp.share = v.product_share;
+  const PathStrategy& st = path_strategy(est);
+  const SampledBxdf material(*v.bsdf, which, st);
+  const bool product = st.product && scratch.carry && !scratch.carry->empty();
+  VertexBsdf held;
+  TrainPath tp;
+  tp.max_record = train ? std::min(v.max_depth, 64) : 0;
+  PathState s;
+  s.cur = &scratch.prod[0];
+  s.prev = &scratch.prod[1];
+  s.lp.light = s.prev_lp.light = v.light;
+  s.lp.share = s.prev_lp.share = v.product_share;
   for (int depth = 0; depth < v.max_depth; ++depth) {
     const Hit hit = v.tracer->intersect(ray);
     ++rays;
     if (hit.kind == HitKind::None) {
       const double Le = v.lighting->radiance_world(ray.dir);  // the lighting is grey
-      if (!prev_nee) L += beta * Le;
-      else if (prev_pdf > 0) L += beta * Le * power_weight(prev_pdf, prev_lp(ray.dir));
+      if (!s.prev_nee) s.L += s.beta * Le;
+      else if (s.prev_pdf > 0) s.L += s.beta * Le * power_weight(s.prev_pdf, s.prev_lp(ray.dir));
       break;
     }
-    if (depth < max_record) {  // the rest is filled when the path continues
-      TrainVertex& tv = path[recorded++];
-      for (int i = 0; i < 3; ++i) tv.position[i] = float(hit.position[std::size_t(i)]);
-      tv.theta = tv.phi = 0;
-      tv.pdf = tv.beta = tv.mark = tv.f = tv.pdf_bsdf = 0;
-    }
+    tp.start(depth, hit.position);
     ++vertices;
-    const Vec3 wo = neg(ray.dir);
-    double u[4];
     const std::uint32_t dim = std::uint32_t(depth) * 4;
-    // The vertex: value(w) = f c per channel (fiber: f; ground: albedo / pi cos+), sample, pdf.
-    const bool fiber = hit.kind == HitKind::Fiber, surface = hit.kind == HitKind::Surface;
-    FiberFrame frame = fiber ? FiberFrame(hit.tangent, wo) : FiberFrame({1, 0, 0}, {0, 0, 1});
-    // a measured surface: its BRDF in the frame of its shading normal, f cos(theta_i)
-    const SurfaceFrame sframe = surface ? SurfaceFrame(hit.normal, wo) : SurfaceFrame({0, 0, 1}, {0, 0, 1});
-    Vec3 gn = hit.normal, g1{1, 0, 0}, g2{0, 1, 0};
-    if (!fiber && !surface) {
-      g1 = normalized(std::abs(gn[0]) < 0.9 ? cross(gn, {1, 0, 0}) : cross(gn, {0, 1, 0}));
-      g2 = cross(gn, g1);
-    }
-    if (fiber && theta_out) theta_out->push_back(frame.theta_o);
-    if (surface && theta_out) theta_out->push_back(sframe.theta_o);
-    auto value = [&](const Vec3& w) {
-      if (fiber) {
-        double th, ph;
-        frame.to_local(w, th, ph);
-        return v.bsdf->f_rgb(which, frame.theta_o, th, ph);
-      }
-      if (surface) {
-        double th, ph;
-        sframe.to_local(w, th, ph);
-        return th < kPi / 2 ? v.bsdf->f_rgb(which, sframe.theta_o, th, ph) * std::cos(th) : Rgb();
-      }
-      const double c = dot(w, gn);
-      return Rgb(c > 0 ? v.ground_albedo / kPi * c : 0.0);
-    };
-    auto pdf_of = [&](const Vec3& w) {
-      if (fiber) {
-        double th, ph;
-        frame.to_local(w, th, ph);
-        return v.bsdf->pdf(fs, frame.theta_o, th, ph);
-      }
-      if (surface) {
-        double th, ph;
-        sframe.to_local(w, th, ph);
-        return v.bsdf->pdf(fs, sframe.theta_o, th, ph);
-      }
-      const double c = dot(w, gn);
-      return c > 0 ? c / kPi : 0.0;
-    };
-    // The guide at this vertex: its leaf's mixture over world directions (share a_guide)
-    // and, under guided_product at a fiber or surface, the product of its compact part
-    // carried into the hit's frame with the BSDF mixture (share a_prod); the BSDF sampler
-    // has the rest. dir_pdf is the density of the next direction, whoever draws it.
-    const guide::Leaf* leaf = guided && depth < v.guide_depth ? v.guide->at(hit.position) : nullptr;
-    LocalAxes axes;  // the hit's frame, where guided_product carries the leaf
-    mix::SliceMixture gprod;
-    double a_prod = 0, a_guide = 0;
-    if (leaf) {
-      a_guide = leaf->share;
-      if (est == PathEstimator::GuidedProduct && (fiber || surface) && !leaf->compact.empty() && a_guide > 0) {
-        axes = fiber ? frame.axes() : sframe.axes();
-        try {
-          gprod = v.bsdf->product(fiber ? frame.theta_o : sframe.theta_o, carry_lighting(leaf->compact, axes, kGuideAxes),
-                                   v.product);
-          a_prod = a_guide * leaf->compact_share;
-          a_guide -= a_prod;
-        } catch (const std::invalid_argument&) {
-          // no overlap: the leaf's mixture alone
-        }
-      }
-    }
-    auto dir_pdf = [&](const Vec3& w) {
-      if (!leaf) return pdf_of(w);
-      double p = (1 - a_guide - a_prod) * pdf_of(w), th, ph;
-      if (a_guide > 0) {
-        guide::guide_angles(w, th, ph);
-        p += a_guide * leaf->mixture.pdf_omega(Domain::Fiber, th, ph);
-      }
-      if (a_prod > 0) {
-        local_angles(axes, w, th, ph);
-        p += a_prod * gprod.pdf_omega(axes.domain, th, ph);
-      }
-      return p;
-    };
-    Ray next;
-    next.org = hit.position;
-    if (fiber) {
-      next.from_fiber = hit.fiber;
-      next.skip = 4 * v.fiber_radius;
-    } else {
-      next.tnear = surface ? 1e-4 : 1e-6;  // the surface's facets are float triangles
-    }
-    // next-event estimation
-    if (nee) {
-      rng.draw(dim + 1, u);
-      lp.product = false;
-      if (product && (fiber || surface)) {
-        // the lighting carried into the hit's frame, times the BSDF mixture at theta_o
-        lp.axes = fiber ? frame.axes() : sframe.axes();
-        // no overlap: light sampling alone
-        lp.product = cur->build(v.bsdf->product_factor(fiber ? frame.theta_o : sframe.theta_o), *scratch.carry, lp.axes,
-                                v.product);
-        lp.prod = cur;
-      }
-      Vec3 wl;
-      bool drawn = true;
-      if (lp.product && u[0] < lp.share) {
-        const mix::Sample m = lp.prod->sample(lp.axes.domain, u[0] / lp.share, u[1], u[2]);
-        drawn = m.valid;
-        if (drawn) wl = local_direction(lp.axes, m.theta, m.phi);
-      } else {
-        const double u0 = lp.product ? (u[0] - lp.share) / (1 - lp.share) : u[0];
-        wl = v.light->sample(std::min(u0, 1 - 1e-12), u[1], u[2], u[3]);
-      }
-      const double pl = drawn ? lp(wl) : 0.0;
-      const Rgb fv = pl > 0 ? value(wl) : Rgb();
-      if (fv.max() > 0) {
-        Ray shadow = next;
-        shadow.dir = wl;
-        ++rays;
-        if (!v.tracer->occluded(shadow))
-          L += beta * fv * v.lighting->radiance_world(wl) * power_weight(pl, dir_pdf(wl)) / pl;
-      }
-    }
-    // the next direction
-    rng.draw(dim + 2, u);
-    double ur[4] = {0, 0, 0, 0};  // ur[0]: Russian roulette; ur[1]: the guide's technique (drawn where either is needed)
-    if (leaf || depth + 1 >= v.rr_depth) rng.draw(dim + 3, ur);
+    const Bsdf& b = held.at(hit, neg(ray.dir), material, v.ground_albedo);
+    if (b.tabulated() && theta_out) theta_out->push_back(b.theta_o());
+    const Guiding g = guiding_at(v, st, depth, hit.position, b);
+    Ray next = spawn_ray(hit, v.fiber_radius);
+    if (st.light_sampling) next_event(v, product, *scratch.carry, rng, dim, b, g, next, s, rays);
     Vec3 wi;
-    double pdf = 0;
-    if (leaf && ur[1] < a_guide + a_prod) {
-      const bool from_product = ur[1] < a_prod;
-      const mix::Sample m = from_product ? gprod.sample(axes.domain, u[0], u[1], u[2])
-                                         : leaf->mixture.sample(Domain::Fiber, u[0], u[1], u[2]);
-      if (!m.valid) break;
-      wi = from_product ? local_direction(axes, m.theta, m.phi) : guide::guide_direction(m.theta, m.phi);
-      pdf = dir_pdf(wi);
-      if (!(pdf > 0)) break;
-    } else if (fiber) {
-      double th, ph;
-      v.bsdf->sample(fs, frame.theta_o, u, th, ph, pdf);
-      if (!(pdf > 0)) break;
-      wi = frame.to_world(th, ph);
-    } else if (surface) {
-      double th, ph;
-      v.bsdf->sample(fs, sframe.theta_o, u, th, ph, pdf);
-      if (!(pdf > 0)) break;
-      wi = sframe.to_world(th, ph);
-    } else {
-      const double r = std::sqrt(u[2]), a = 2 * kPi * u[3];
-      const double x = r * std::cos(a), y = r * std::sin(a), z = std::sqrt(std::max(0.0, 1 - u[2]));
-      for (int i = 0; i < 3; ++i) wi[i] = x * g1[i] + y * g2[i] + z * gn[i];
-      pdf = z / kPi;
-      if (!(pdf > 0)) break;
-    }
-    if (leaf && !(ur[1] < a_guide + a_prod)) pdf = dir_pdf(wi);
-    const Rgb fv = value(wi);
+    double pdf = 0, ur[4] = {0, 0, 0, 0};
+    if (!next_direction(rng, dim, depth + 1 >= v.rr_depth, b, g, wi, pdf, ur)) break;
+    const Rgb fv = b.f(wi);
     if (!(fv.max() > 0)) break;
-    beta *= fv / pdf;
-    if (depth < max_record) {
-      TrainVertex& tv = path[recorded - 1];
-      double th, ph;
-      guide::guide_angles(wi, th, ph);
-      tv.theta = float(th);
-      tv.phi = float(ph);
-      tv.pdf = pdf;
-      tv.f = fv.luminance();
-      tv.pdf_bsdf = leaf ? pdf_of(wi) : pdf;
-      tv.beta = beta.luminance();
-      tv.mark = L.luminance();
-    }
+    s.beta *= fv / pdf;
+    if (depth < tp.max_record) tp.continued(depth, wi, pdf, fv, g.leaf ? b.pdf(wi) : pdf, s.beta, s.L);
     if (depth + 1 >= v.rr_depth) {
-      const double q = std::min(0.95, beta.max());
+      const double q = std::min(0.95, s.beta.max());
       if (ur[0] >= q) break;
-      beta /= q;
+      s.beta /= q;
     }
-    prev_pdf = pdf;
-    prev_nee = nee;
-    if (nee) {  // the product this vertex built stays with prev_lp; the next one builds into the other buffer
-      std::swap(prev_lp, lp);
-      std::swap(cur, prev);
+    s.prev_pdf = pdf;
+    s.prev_nee = st.light_sampling;
+    if (st.light_sampling) {  // the product this vertex built stays with prev_lp; the next one builds into the other buffer
+      std::swap(s.prev_lp, s.lp);
+      std::swap(s.cur, s.prev);
     }
     next.dir = wi;
     ray = next;
   }
-  // Each recorded vertex's sample: the luminance that arrived along its direction (all the
-  // path gathered after it, over the throughput there) over the direction's density.
-  const double end = L.luminance();
-  for (int i = 0; i < recorded; ++i) {
-    const TrainVertex& tv = path[i];
-    guide::Sample s;
-    std::copy(tv.position, tv.position + 3, s.position);
-    s.theta = tv.theta;
-    s.phi = tv.phi;
-    s.radiance = tv.beta > 0 ? float((end - tv.mark) / tv.beta) : 0.f;
-    s.pdf = float(tv.pdf);
-    s.f = float(tv.f);
-    s.pdf_bsdf = float(tv.pdf_bsdf);
-    train->push_back(s);
-  }
-  return L;
+  if (train) tp.emit(s.L, *train);
+  return s.L;
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 // The path tracer (docs/render.md, "Light transport"): unidirectional, bounded depth,
-// Russian roulette; at a fiber the BCSDF of render/table_bsdf.hpp, at the ground a diffuse
-// BRDF; the lighting an environment (sun, sky, map). Estimators that sample the light add
-// next-event estimation combined with the BSDF sample by MIS (power heuristic, beta 2: the
-// two-sample model pbrt uses for direct lighting). Reproducible for a seed: pixel p's
+// Russian roulette; at every vertex the hit's Bsdf (render/bsdf.hpp: a fiber's BCSDF, a
+// measured surface's BRDF, the ground's Lambertian) drawn as the estimator's strategy has
+// it (sampling/estimator.hpp, PathStrategy); the lighting an environment (sun, sky, map).
+// Estimators that sample the light add next-event estimation combined with the BSDF sample
+// by MIS (power heuristic, beta 2: the two-sample model pbrt uses for direct lighting). Reproducible for a seed: pixel p's
 // sample s draws its uniforms from Philox counter {p, s, dimension, 0} under the seed,
 // whatever the threads.
 #pragma once

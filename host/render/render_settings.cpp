@@ -2,7 +2,6 @@
 #include "render/render_settings.hpp"
 
 #include <cmath>
-#include <iterator>
 #include <set>
 
 #include "config/node.hpp"
@@ -14,17 +13,11 @@ namespace render {
 
 namespace {
 
-// in the order of PathEstimator
-const char* kNames[] = {"uniform", "mis_tab",        "cdf_tab", "mis_light_cdf", "mis_light_gmm",
-                        "mis_product", "guided", "guided_product", "is_rgl",     "mis_light_rgl"};
-
 PathEstimator parse_estimator_name(const ConfigNode& n, const std::string& key, const std::string& name) {
-  std::string expected;
-  for (int i = 0; i < int(std::size(kNames)); ++i) {
-    if (name == kNames[i]) return PathEstimator(i);
-    expected += std::string(i ? (i + 1 == int(std::size(kNames)) ? " or " : ", ") : "") + kNames[i];
-  }
-  n.fail(key, "unknown estimator '" + name + "' (expected " + expected + ")");
+  const EstimatorInfo* e = find_estimator(name);
+  if (e == nullptr || !e->render.renders)
+    n.fail(key, "unknown estimator '" + name + "' (expected " + path_estimator_list() + ")");
+  return e->id;
 }
 
 // A nested mapping with its defaults merged under it and unknown keys rejected.
@@ -47,18 +40,62 @@ Vec3 vec3(const ConfigNode& n, const std::string& key) {
   return {v[0], v[1], v[2]};
 }
 
-}  // namespace
-
-const char* path_estimator_name(PathEstimator e) { return kNames[int(e)]; }
-
-bool is_guided(PathEstimator e) { return e == PathEstimator::Guided || e == PathEstimator::GuidedProduct; }
-
-bool uses_rgl(PathEstimator e) { return e == PathEstimator::IsRgl || e == PathEstimator::MisLightRgl; }
-
-bool uses_light_sampling(PathEstimator e) {
-  return e == PathEstimator::MisLightCdf || e == PathEstimator::MisLightGmm || e == PathEstimator::MisProduct ||
-         e == PathEstimator::MisLightRgl || is_guided(e);
+// guided, guided_product: the `guide` mapping (docs/render.md, "Guided paths").
+void parse_guide(const ConfigNode& gd, RenderSettings& r) {
+  r.guide.share = gd.number("share", 0, 1);
+  if (!(r.guide.share > 0 && r.guide.share < 1))
+    gd.fail("share", "expected a share strictly between 0 and 1 (the rest of the directions go to the BSDF sampler)");
+  r.guide_iterations = int(gd.integer("iterations", 0, 20));
+  r.guide_depth = int(gd.integer("depth", 1, 1000));
+  r.guide_k_max = int(gd.integer("k_max", 1, 64));
+  r.guide.leaf_samples = std::size_t(gd.integer("leaf_vertices", 16, INT64_MAX));
+  r.guide.min_vertices = std::size_t(gd.integer("min_vertices", 1, INT64_MAX));
+  const char* grid_shape = "[theta cells, phi cells], integers in [2, 256] and [2, 512]";
+  const std::vector<double> grid = gd.numbers("grid", 2, grid_shape);
+  if (!(grid[0] >= 2 && grid[0] <= 256 && grid[1] >= 2 && grid[1] <= 512) ||
+      grid[0] != std::floor(grid[0]) || grid[1] != std::floor(grid[1]))
+    gd.fail("grid", std::string("expected ") + grid_shape);
+  r.guide.grid_theta = int(grid[0]);
+  r.guide.grid_phi = int(grid[1]);
 }
+
+void parse_cloth(const ConfigNode& cl, ClothParams& c) {
+  c.weave = cl.str("weave");
+  c.size = cl.number("size", 1e-9, 1e9);
+  c.yarn_spacing = cl.number("yarn_spacing", 1e-9, 1e9);
+  c.yarn_radius = cl.number("yarn_radius", 1e-9, 1e9);
+  c.plies = int(cl.integer("plies", 1, 64));
+  c.ply_twist = cl.number("ply_twist", -1e6, 1e6);
+  c.fibers_per_ply = int(cl.integer("fibers_per_ply", 1, 10000));
+  c.fiber_twist = cl.number("fiber_twist", -1e6, 1e6);
+  c.fiber_radius = cl.number("fiber_radius", 1e-12, 1e9);
+  c.jitter = cl.number("jitter", 0, 1);
+  c.segments_per_spacing = int(cl.integer("segments_per_spacing", 1, 1000));
+  c.seed = std::uint64_t(cl.integer("seed", 0, INT64_MAX));
+  c.drape = cl.str("drape");
+  c.drape_radius = cl.number("drape_radius", 1e-9, 1e9);
+}
+
+// The lighting, in world space: the `scene` (a file or a mapping), else a constant 1.
+Lighting parse_lighting(const RenderSection& section, const ConfigNode& n) {
+  Lighting l = default_lighting(Domain::Hemisphere, 1.0);
+  l.name = "constant";
+  if (n.has("scene")) {
+    const YAML::Node sc = n.raw("scene");
+    if (sc.IsScalar()) {
+      const std::string path = sc.Scalar();
+      if (!exists_quiet(path)) n.fail("scene", "file '" + path + "' not found");
+      l = parse_scene(YAML::LoadFile(path), path, "", Domain::Hemisphere);
+    } else if (sc.IsMap()) {
+      l = parse_scene(sc, section.file, "render.scene", Domain::Hemisphere);
+    } else {
+      n.fail("scene", "expected a scene file or an inline scene mapping");
+    }
+  }
+  return l;
+}
+
+}  // namespace
 
 RenderSettings parse_render(const RenderSection& section) {
   const ConfigNode n(section.file, "render", section.node);
@@ -88,22 +125,7 @@ RenderSettings parse_render(const RenderSection& section) {
   for (const auto& [key, e] : {std::pair<const char*, PathEstimator>{"reference_estimator", r.reference_estimator},
                                 {"stand_in_estimator", r.stand_in_estimator}})
     if (is_guided(e)) n.fail(key, "a guided estimator learns within each render; expected one that does not");
-  const ConfigNode gd = nested(section, n, "guide");
-  r.guide.share = gd.number("share", 0, 1);
-  if (!(r.guide.share > 0 && r.guide.share < 1))
-    gd.fail("share", "expected a share strictly between 0 and 1 (the rest of the directions go to the BSDF sampler)");
-  r.guide_iterations = int(gd.integer("iterations", 0, 20));
-  r.guide_depth = int(gd.integer("depth", 1, 1000));
-  r.guide_k_max = int(gd.integer("k_max", 1, 64));
-  r.guide.leaf_samples = std::size_t(gd.integer("leaf_vertices", 16, INT64_MAX));
-  r.guide.min_vertices = std::size_t(gd.integer("min_vertices", 1, INT64_MAX));
-  const char* grid_shape = "[theta cells, phi cells], integers in [2, 256] and [2, 512]";
-  const std::vector<double> grid = gd.numbers("grid", 2, grid_shape);
-  if (!(grid[0] >= 2 && grid[0] <= 256 && grid[1] >= 2 && grid[1] <= 512) ||
-      grid[0] != std::floor(grid[0]) || grid[1] != std::floor(grid[1]))
-    gd.fail("grid", std::string("expected ") + grid_shape);
-  r.guide.grid_theta = int(grid[0]);
-  r.guide.grid_phi = int(grid[1]);
+  parse_guide(nested(section, n, "guide"), r);
   r.max_depth = int(n.integer("max_depth", 1, 1000));
   r.rr_depth = int(n.integer("rr_depth", 1, 1000));
   r.seed = std::uint64_t(n.integer("seed", 0, INT64_MAX));
@@ -113,21 +135,7 @@ RenderSettings parse_render(const RenderSection& section) {
   r.prepass_depth = int(n.integer("prepass_depth", 0, 1000));
   if (r.prepass_depth == 0) r.prepass_depth = r.max_depth;
 
-  // the lighting, in world space
-  r.lighting = default_lighting(Domain::Hemisphere, 1.0);
-  r.lighting.name = "constant";
-  if (n.has("scene")) {
-    const YAML::Node sc = n.raw("scene");
-    if (sc.IsScalar()) {
-      const std::string path = sc.Scalar();
-      if (!exists_quiet(path)) n.fail("scene", "file '" + path + "' not found");
-      r.lighting = parse_scene(YAML::LoadFile(path), path, "", Domain::Hemisphere);
-    } else if (sc.IsMap()) {
-      r.lighting = parse_scene(sc, section.file, "render.scene", Domain::Hemisphere);
-    } else {
-      n.fail("scene", "expected a scene file or an inline scene mapping");
-    }
-  }
+  r.lighting = parse_lighting(section, n);
 
   const ConfigNode cam = nested(section, n, "camera");
   r.camera.position = vec3(cam, "position");
@@ -135,22 +143,7 @@ RenderSettings parse_render(const RenderSection& section) {
   r.camera.up = vec3(cam, "up");
   r.camera.fov_deg = cam.number("fov_deg", 1, 170);
 
-  const ConfigNode cl = nested(section, n, "cloth");
-  ClothParams& c = r.cloth;
-  c.weave = cl.str("weave");
-  c.size = cl.number("size", 1e-9, 1e9);
-  c.yarn_spacing = cl.number("yarn_spacing", 1e-9, 1e9);
-  c.yarn_radius = cl.number("yarn_radius", 1e-9, 1e9);
-  c.plies = int(cl.integer("plies", 1, 64));
-  c.ply_twist = cl.number("ply_twist", -1e6, 1e6);
-  c.fibers_per_ply = int(cl.integer("fibers_per_ply", 1, 10000));
-  c.fiber_twist = cl.number("fiber_twist", -1e6, 1e6);
-  c.fiber_radius = cl.number("fiber_radius", 1e-12, 1e9);
-  c.jitter = cl.number("jitter", 0, 1);
-  c.segments_per_spacing = int(cl.integer("segments_per_spacing", 1, 1000));
-  c.seed = std::uint64_t(cl.integer("seed", 0, INT64_MAX));
-  c.drape = cl.str("drape");
-  c.drape_radius = cl.number("drape_radius", 1e-9, 1e9);
+  parse_cloth(nested(section, n, "cloth"), r.cloth);
 
   const ConfigNode g = nested(section, n, "ground");
   r.ground.enabled = g.boolean("enabled");

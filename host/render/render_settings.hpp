@@ -11,33 +11,23 @@
 #include "render/cloth.hpp"
 #include "render/room.hpp"
 #include "render/tracer.hpp"
+#include "sampling/estimator.hpp"
 #include "sampling/lighting.hpp"
 
 namespace bsdfmix {
 namespace render {
 
-// How a path's next direction at a fiber is drawn (docs/render.md, "Estimators").
-// is_rgl and mis_light_rgl sample a measured surface with its RGL file's own warps
-// (render/table_bsdf.hpp): alone, and with light sampling as mis_light_cdf combines the
-// table CDF with it.
-enum class PathEstimator {
-  Uniform,
-  MisTab,
-  CdfTab,
-  MisLightCdf,
-  MisLightGmm,
-  MisProduct,
-  Guided,
-  GuidedProduct,
-  IsRgl,
-  MisLightRgl
-};
-const char* path_estimator_name(PathEstimator e);
-bool uses_light_sampling(PathEstimator e);
+// How a path's next direction at a fiber or a measured surface is drawn (docs/render.md,
+// "Estimators"): the estimators of sampling/estimator.hpp that the renderer offers
+// (PathStrategy::renders).
+using PathEstimator = Estimator;
+inline const char* path_estimator_name(PathEstimator e) { return estimator_name(e); }
+inline const PathStrategy& path_strategy(PathEstimator e) { return estimator_info(e).render; }
+inline bool uses_light_sampling(PathEstimator e) { return path_strategy(e).light_sampling; }
 // guided, guided_product: the estimators that learn the incident radiance (docs/render.md, "Guided paths").
-bool is_guided(PathEstimator e);
-// is_rgl, mis_light_rgl: the estimators that need the RGL file the table was imported from.
-bool uses_rgl(PathEstimator e);
+inline bool is_guided(PathEstimator e) { return path_strategy(e).guided; }
+// The estimators that need the RGL file the table was imported from (kNeedsRgl).
+inline bool uses_rgl(PathEstimator e) { return has_need(e, kNeedsRgl); }
 
 struct Camera {
   Vec3 position{0, -1.3, 1.1}, look_at{0, 0, 0}, up{0, 0, 1};

@@ -1,4 +1,4 @@
-// The renderer's fiber BCSDF: the table in memory, its CDFs, the stand-in and the samplers.
+// A tabulated BSDF in memory: the table, its CDFs, the stand-in, the samplers; a hit's frame.
 #include "render/table_bsdf.hpp"
 
 #include <algorithm>
@@ -24,20 +24,13 @@ Vec3 phi_zero(const Vec3& axis, const Vec3& wo, double c) {
 
 }  // namespace
 
-FiberFrame::FiberFrame(const Vec3& tangent, const Vec3& wo) {
-  t = normalized(tangent);
-  const double s = std::clamp(dot(wo, t), -1.0, 1.0);
-  theta_o = std::asin(s);
-  n = phi_zero(t, wo, s);
-  b = cross(t, n);
-}
-
-SurfaceFrame::SurfaceFrame(const Vec3& normal, const Vec3& wo) {
-  n = normalized(normal);
-  const double c = std::clamp(dot(wo, n), -1.0, 1.0);
-  theta_o = std::acos(c);
-  x = phi_zero(n, wo, c);
-  y = cross(n, x);
+HitFrame::HitFrame(const Vec3& axis, const Vec3& wo, Domain domain) {
+  a.axis = normalized(axis);
+  a.domain = domain;
+  const double c = std::clamp(dot(wo, a.axis), -1.0, 1.0);
+  theta_o = domain == Domain::Fiber ? std::asin(c) : std::acos(c);
+  a.e1 = phi_zero(a.axis, wo, c);
+  a.e2 = cross(a.axis, a.e1);
 }
 
 TableBsdf::TableBsdf(const std::string& table_path) {

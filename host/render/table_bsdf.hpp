@@ -32,7 +32,7 @@ class RglBrdf;
 namespace render {
 
 enum class FSource { Table, StandIn };
-enum class BsdfSampler { Uniform, Mixture, TableCdf, Rgl };
+// BsdfSampler: the material's techniques (sampling/estimator.hpp)
 
 class TableBsdf {
  public:
@@ -100,24 +100,17 @@ class TableBsdf {
   const RglBrdf* rgl_ = nullptr;  // BsdfSampler::Rgl's warps
 };
 
-// Surface frame at a hit: normal n, and the plane of omega_o (phi = 0 along x).
-struct SurfaceFrame {
-  Vec3 n, x, y;
+// A hit's frame for a tabulated material: the axis (a fiber's tangent: sin(theta) =
+// dot(w, axis); a surface's shading normal: cos(theta) = dot(w, axis)) and the plane of
+// omega_o (phi = 0 along its part across the axis), omega_o's theta in the domain's
+// convention.
+struct HitFrame {
+  LocalAxes a;
   double theta_o = 0;
-  SurfaceFrame(const Vec3& normal, const Vec3& wo);
-  LocalAxes axes() const { return {n, x, y, Domain::Hemisphere}; }
-  void to_local(const Vec3& w, double& theta, double& phi) const { local_angles(axes(), w, theta, phi); }  // theta in [0, pi]
-  Vec3 to_world(double theta, double phi) const { return local_direction(axes(), theta, phi); }
-};
-
-// Fiber frame at a hit: tangent t and the plane of omega_o (phi = 0 along n).
-struct FiberFrame {
-  Vec3 t, n, b;
-  double theta_o = 0;
-  FiberFrame(const Vec3& tangent, const Vec3& wo);
-  LocalAxes axes() const { return {t, n, b, Domain::Fiber}; }
-  void to_local(const Vec3& w, double& theta, double& phi) const { local_angles(axes(), w, theta, phi); }
-  Vec3 to_world(double theta, double phi) const { return local_direction(axes(), theta, phi); }
+  HitFrame(const Vec3& axis, const Vec3& wo, Domain domain);
+  const LocalAxes& axes() const { return a; }
+  void to_local(const Vec3& w, double& theta, double& phi) const { local_angles(a, w, theta, phi); }
+  Vec3 to_world(double theta, double phi) const { return local_direction(a, theta, phi); }
 };
 
 }  // namespace render

@@ -14,7 +14,7 @@ namespace render {
 TableMeta world_lighting_grid() { return make_grid(Domain::Fiber, 1, 1, 90, 180, true); }
 
 bool needs_world_lighting(const RenderSettings& s) {
-  const auto is = [](PathEstimator e) { return e == PathEstimator::MisProduct; };
+  const auto is = [](PathEstimator e) { return path_strategy(e).product; };
   return std::any_of(s.estimators.begin(), s.estimators.end(), is) || is(s.reference_estimator) ||
          (s.stand_in && is(s.stand_in_estimator));
 }

@@ -9,24 +9,6 @@ namespace bsdfmix {
 
 std::uint32_t estimator_stream(int estimator) { return 0x65737430u + std::uint32_t(estimator); }  // "est0".."est:"
 
-const char* estimator_name(Estimator e) {
-  const int i = int(e);
-  return i >= 0 && i < kEstimatorCount ? kEstimatorNames[i] : "?";
-}
-
-Estimator parse_estimator(const std::string& name, const std::string& where) {
-  for (int i = 0; i < kEstimators; ++i)
-    if (name == estimator_name(Estimator(i))) return Estimator(i);
-  throw ConfigError(where + ": unknown estimator '" + name + "' (expected " + estimator_list() + ")");
-}
-
-bool uses_table(Estimator e) { return e != Estimator::UsGmm && e != Estimator::IsGmm; }
-bool uses_product(Estimator e) { return e == Estimator::Product || e == Estimator::MisProduct; }
-bool rgl_estimator(Estimator e) { return e == Estimator::IsRgl || e == Estimator::MisLightRgl; }
-bool uses_lighting(Estimator e) {
-  return (int(e) >= kClassicEstimators && int(e) < kDeviceEstimators) || e == Estimator::MisLightRgl;
-}
-
 static int block_images(double sigma_c) {
   // Offsets from the conditional mean of the images beyond the nearest (|u0| <= pi), nearest
   // first: j = 2n - 1 at u0 -+ 2 pi n (the other side), j = 2n at u0 +- 2 pi n (the same

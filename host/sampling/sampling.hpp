@@ -15,7 +15,7 @@
 #include "core/domain.hpp"
 #include "device/device.hpp"
 #include "io/table.hpp"
-#include "sampling/estimator_names.hpp"
+#include "sampling/estimator.hpp"
 #include "sampling/light_sampler.hpp"
 #include "sampling/lighting.hpp"
 
@@ -65,31 +65,9 @@ std::vector<std::pair<double, double>> eval_device(const Device& device, const m
 
 // ---- estimators ------------------------------------------------------------------------
 
-// kernels/sample.cl numbers the estimators it implements as this enum does (ESTIMATOR):
-// new ones go at the end.
-enum class Estimator {
-  UsTab = 0, UsGmm = 1, IsTab = 2, IsGmm = 3, MisTab = 4, CdfTab = 5,
-  Light = 6, MisLightCdf = 7, MisLightGmm = 8, Product = 9, MisProduct = 10,
-  IsRgl = 11, MisLightRgl = 12
-};
-constexpr int kEstimators = 13;
-static_assert(kEstimators == kEstimatorCount, "estimator names");
-constexpr int kClassicEstimators = 6;  // us_tab .. cdf_tab: the ones that ignore the lighting
-// us_tab .. mis_product (0 .. 10): the estimators kernels/sample.cl implements. The others
-// (is_rgl, mis_light_rgl: the RGL file's warps) run on the CPU alone (integrate_cpu).
+// us_tab .. mis_product (0 .. 10): the estimators kernels/sample.cl implements (their
+// device_id, sampling/estimator.hpp). The others run on the CPU alone (integrate_cpu).
 constexpr int kDeviceEstimators = 11;
-static_assert(int(Estimator::MisProduct) + 1 == kDeviceEstimators, "the kernel's estimators come first");
-inline bool on_device(Estimator e) { return int(e) < kDeviceEstimators; }
-// The estimators that sample by the lighting mixture's product (they need one fitted).
-bool uses_product(Estimator e);
-// The estimators that draw with the RGL file's own warps (Problem::rgl).
-bool rgl_estimator(Estimator e);
-// The estimators whose draw depends on the lighting (light sampling, the product).
-bool uses_lighting(Estimator e);
-const char* estimator_name(Estimator e);
-// Throws ConfigError naming `where` for an unknown name.
-Estimator parse_estimator(const std::string& name, const std::string& where);
-bool uses_table(Estimator e);
 
 // The table as f for one omega_o: the blend of the table slices serving omega_o with
 // the mixture's bilinear weights, piecewise constant over its cells (phi in the slice
@@ -146,8 +124,9 @@ struct Problem {
   QueryMixture product_query;
   double product_kept = 1;
   MisOptions mis;
-  // is_rgl, mis_light_rgl: the RGL file the table was imported from (its warps draw the
-  // light direction for the view omega_o; f stays the table's). Not owned; nullptr: none.
+  // The estimators that need it (kNeedsRgl): the RGL file the table was imported from (its
+  // warps draw the light direction for the view omega_o; f stays the table's). Not owned;
+  // nullptr: none.
   const RglBrdf* rgl = nullptr;
   std::vector<float> geometry() const;
 };
