@@ -52,18 +52,16 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
   for (int j = 0; j < k; ++j) A0(j) = A1(j) = A2(j) = A3(j) = A4(j) = A5(j) = (floatv)0.f;
   floatv ll = (floatv)0.f;
 
-  const uint base = g * (WG * CPW * VEC);
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = base + (it * WG + lid) * VEC;
+    const uint c = chunk_cell(g, it, lid);
     const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
     cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
     floatv m = (floatv)(-INFINITY);
     for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
-      const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                            fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+      floatv dt, dp;
+      component_offsets(cp, j, t, ph, &dt, &dp);
+      const floatv ej = component_log2(cp, j, dt, dp);
       E(j) = ej;
       m = select(m, ej, ej > m);
     }
@@ -76,8 +74,8 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
     const floatv f = wv / s;
     ll = fma(wv, m + log2_fast(s), ll);
     for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
+      floatv dt, dp;
+      component_offsets(cp, j, t, ph, &dt, &dp);
       const floatv rw = f * E(j);
       const floatv rwt = rw * dt, rwp = rw * dp;
       A0(j) += rw;
@@ -133,6 +131,70 @@ inline void floor_covariance(real_t* a, real_t* b, real_t* c, const real_t f) {
   *c = m1 * vy * vy + m2 * vx * vx;
 }
 
+// Marks problem p failed after iteration iter - 1.
+inline void fail_problem(__global int* status, uint p, int iter) {
+  status[2 * p] = 2;
+  status[2 * p + 1] = iter - 1;
+}
+
+// The M-step of component j from problem p's chunk statistics (`total`: the responsibility
+// mass of every component): weight, mean (phi wrapped) and covariance (floored). False,
+// the state untouched, when the component is empty (mass at most min_weight * total).
+inline bool update_component(__global real_t* st, __global const real_t* partials, uint p, uint G, int j,
+                             const real_t total, const real_t cov_floor, const real_t min_weight) {
+  const real_t s0 = sum_chunks(partials, p, G, 0 * K_MAX + j);
+  if (!(s0 > min_weight * total)) return false;
+  const real_t dt = sum_chunks(partials, p, G, 1 * K_MAX + j) / s0;
+  const real_t dp = sum_chunks(partials, p, G, 2 * K_MAX + j) / s0;
+  real_t ctt = sum_chunks(partials, p, G, 3 * K_MAX + j) / s0 - dt * dt;
+  real_t ctp = sum_chunks(partials, p, G, 4 * K_MAX + j) / s0 - dt * dp;
+  real_t cpp = sum_chunks(partials, p, G, 5 * K_MAX + j) / s0 - dp * dp;
+  ctt = fmax(ctt, R(0.0));
+  cpp = fmax(cpp, R(0.0));
+  const real_t lim = sqrt(ctt * cpp);
+  ctp = fmin(fmax(ctp, -lim), lim);
+  st[0 * K_MAX + j] = s0 / total;
+  st[1 * K_MAX + j] += dt;
+  st[2 * K_MAX + j] = wrap_phi_r(st[2 * K_MAX + j] + dp);
+  floor_covariance(&ctt, &ctp, &cpp, cov_floor);
+  st[3 * K_MAX + j] = ctt;
+  st[4 * K_MAX + j] = ctp;
+  st[5 * K_MAX + j] = cpp;
+  return true;
+}
+
+// Re-seeds the empty component j by splitting component h along its principal axis:
+// means +- half a standard deviation, weight halved, covariance kept.
+inline void split_component(__global real_t* st, int j, int h) {
+  const real_t a = st[3 * K_MAX + h], b = st[4 * K_MAX + h], c = st[5 * K_MAX + h];
+  const real_t half_tr = R(0.5) * (a + c);
+  const real_t disc = sqrt(R(0.25) * (a - c) * (a - c) + b * b);
+  const real_t lambda = half_tr + disc;
+  real_t vx, vy;
+  if (fabs(b) > R(0.0)) {
+    vx = lambda - c;
+    vy = b;
+  } else if (a >= c) {
+    vx = R(1.0);
+    vy = R(0.0);
+  } else {
+    vx = R(0.0);
+    vy = R(1.0);
+  }
+  const real_t norm = sqrt(vx * vx + vy * vy);
+  const real_t step = R(0.5) * sqrt(lambda) / norm;
+  const real_t mt = st[1 * K_MAX + h], mp = st[2 * K_MAX + h];
+  st[1 * K_MAX + j] = mt + step * vx;
+  st[2 * K_MAX + j] = wrap_phi_r(mp + step * vy);
+  st[1 * K_MAX + h] = mt - step * vx;
+  st[2 * K_MAX + h] = wrap_phi_r(mp - step * vy);
+  st[0 * K_MAX + h] *= R(0.5);
+  st[0 * K_MAX + j] = st[0 * K_MAX + h];
+  st[3 * K_MAX + j] = a;
+  st[4 * K_MAX + j] = b;
+  st[5 * K_MAX + j] = c;
+}
+
 // M-step, one work-item per problem: reduces the chunk statistics, tests
 // convergence on the log-likelihood of the current state, updates the state
 // (weights, means with phi wrapped, covariances floored), re-seeds empty
@@ -150,8 +212,7 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
 
   const real_t L = LN2_R * sum_chunks(partials, p, G, LL_INDEX);
   if (!isfinite(L)) {
-    status[2 * p] = 2;
-    status[2 * p + 1] = iter - 1;
+    fail_problem(status, p, iter);
     return;
   }
   if (iter >= 2 && tol > R(0.0) && fabs(L - lprev[p]) <= tol * fmax(R(1.0), fabs(L))) {
@@ -165,72 +226,22 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
   real_t total = R(0.0);
   for (int j = 0; j < k; ++j) total += sum_chunks(partials, p, G, 0 * K_MAX + j);
   if (!(total > R(0.0)) || !isfinite(total)) {
-    status[2 * p] = 2;
-    status[2 * p + 1] = iter - 1;
+    fail_problem(status, p, iter);
     return;
   }
   bool empty[K_MAX];
-  for (int j = 0; j < k; ++j) {
-    const real_t s0 = sum_chunks(partials, p, G, 0 * K_MAX + j);
-    empty[j] = !(s0 > min_weight * total);
-    if (empty[j]) continue;
-    const real_t dt = sum_chunks(partials, p, G, 1 * K_MAX + j) / s0;
-    const real_t dp = sum_chunks(partials, p, G, 2 * K_MAX + j) / s0;
-    real_t ctt = sum_chunks(partials, p, G, 3 * K_MAX + j) / s0 - dt * dt;
-    real_t ctp = sum_chunks(partials, p, G, 4 * K_MAX + j) / s0 - dt * dp;
-    real_t cpp = sum_chunks(partials, p, G, 5 * K_MAX + j) / s0 - dp * dp;
-    ctt = fmax(ctt, R(0.0));
-    cpp = fmax(cpp, R(0.0));
-    const real_t lim = sqrt(ctt * cpp);
-    ctp = fmin(fmax(ctp, -lim), lim);
-    st[0 * K_MAX + j] = s0 / total;
-    st[1 * K_MAX + j] += dt;
-    st[2 * K_MAX + j] = wrap_phi_r(st[2 * K_MAX + j] + dp);
-    floor_covariance(&ctt, &ctp, &cpp, cov_floor);
-    st[3 * K_MAX + j] = ctt;
-    st[4 * K_MAX + j] = ctp;
-    st[5 * K_MAX + j] = cpp;
-  }
-  // Re-seed each empty component (in index order) by splitting the heaviest
-  // non-empty one along its principal axis: means +- half a standard deviation,
-  // weight halved, covariance kept.
+  for (int j = 0; j < k; ++j) empty[j] = !update_component(st, partials, p, G, j, total, cov_floor, min_weight);
+  // Each empty component (in index order) splits the heaviest non-empty one.
   for (int j = 0; j < k; ++j) {
     if (!empty[j]) continue;
     int h = -1;
     for (int i = 0; i < k; ++i)
       if (!empty[i] && (h < 0 || st[0 * K_MAX + i] > st[0 * K_MAX + h])) h = i;
     if (h < 0) {
-      status[2 * p] = 2;
-      status[2 * p + 1] = iter - 1;
+      fail_problem(status, p, iter);
       return;
     }
-    const real_t a = st[3 * K_MAX + h], b = st[4 * K_MAX + h], c = st[5 * K_MAX + h];
-    const real_t half_tr = R(0.5) * (a + c);
-    const real_t disc = sqrt(R(0.25) * (a - c) * (a - c) + b * b);
-    const real_t lambda = half_tr + disc;
-    real_t vx, vy;
-    if (fabs(b) > R(0.0)) {
-      vx = lambda - c;
-      vy = b;
-    } else if (a >= c) {
-      vx = R(1.0);
-      vy = R(0.0);
-    } else {
-      vx = R(0.0);
-      vy = R(1.0);
-    }
-    const real_t norm = sqrt(vx * vx + vy * vy);
-    const real_t step = R(0.5) * sqrt(lambda) / norm;
-    const real_t mt = st[1 * K_MAX + h], mp = st[2 * K_MAX + h];
-    st[1 * K_MAX + j] = mt + step * vx;
-    st[2 * K_MAX + j] = wrap_phi_r(mp + step * vy);
-    st[1 * K_MAX + h] = mt - step * vx;
-    st[2 * K_MAX + h] = wrap_phi_r(mp - step * vy);
-    st[0 * K_MAX + h] *= R(0.5);
-    st[0 * K_MAX + j] = st[0 * K_MAX + h];
-    st[3 * K_MAX + j] = a;
-    st[4 * K_MAX + j] = b;
-    st[5 * K_MAX + j] = c;
+    split_component(st, j, h);
     empty[j] = false;
   }
   real_t wsum = R(0.0);
@@ -260,33 +271,22 @@ void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
   const float nphi = (float)n_phi;
   floatv ll = (floatv)0.f;
-  const uint base = g * (WG * CPW * VEC);
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = base + (it * WG + lid) * VEC;
+    const uint c = chunk_cell(g, it, lid);
     const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
     cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
     floatv m = (floatv)(-INFINITY);
     for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
-      for (int img = -1; img <= 1; ++img) {
-        const floatv dp = d0 + (float)img * TWO_PI_F;
-        const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                              fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
-        m = fmax(m, ej);
-      }
+      floatv dt, d0;
+      component_offsets(cp, j, t, ph, &dt, &d0);
+      for (int img = -1; img <= 1; ++img) m = fmax(m, component_log2(cp, j, dt, image_offset(d0, img)));
     }
     floatv s = (floatv)0.f;
     for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
-      for (int img = -1; img <= 1; ++img) {
-        const floatv dp = d0 + (float)img * TWO_PI_F;
-        const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                              fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
-        s += exp2(ej - m);
-      }
+      floatv dt, d0;
+      component_offsets(cp, j, t, ph, &dt, &d0);
+      for (int img = -1; img <= 1; ++img) s += exp2(component_log2(cp, j, dt, image_offset(d0, img)) - m);
     }
     ll += wv * (m + log2(s));
   }
@@ -294,12 +294,7 @@ void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
   partials[p * G + g] = LN2_R * hsum(ll);
 #else
   __local real_t scratch[WG];
-  scratch[lid] = hsum(ll);
-  barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint span = WG / 2; span > 0; span >>= 1) {
-    if (lid < span) scratch[lid] += scratch[lid + span];
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-  if (lid == 0) partials[p * G + g] = LN2_R * scratch[0];
+  const real_t total = group_sum(hsum(ll), scratch);
+  if (lid == 0) partials[p * G + g] = LN2_R * total;
 #endif
 }
