@@ -33,10 +33,7 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
                const uint n_cells, const int n_channels,
                __global const float* restrict amps, __global const float* restrict deltas,
                __global float* restrict basis, __global float* restrict dw, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const int* images = prob_images + p * K_MAX;
@@ -45,14 +42,13 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
   __global const float* amp = amps + p * (CH_MAX * K_MAX);
   __global float* bp = basis + p * (K_MAX * slice_stride);
   __global float* dp_out = dw + p * (CH_MAX * slice_stride);
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
   floatv l1[CH_MAX];
   for (int c = 0; c < CH_MAX; ++c) l1[c] = (floatv)0.f;
 
   for (uint it = 0; it < CPW; ++it) {
-    const uint c0 = chunk_cell(g, it, lid);
     floatv t, ph;
-    cell_coords(c0, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const uint c0 = grid_cell(&grid, g, it, lid, &t, &ph);
     const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c0 + LANES < (float)n_cells);
     floatv r[CH_MAX];
     for (int c = 0; c < n_channels; ++c) r[c] = VLOADV(0, w + c * slice_stride + c0);

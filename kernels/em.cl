@@ -12,6 +12,16 @@ inline void write_partials(const floatv* a, const floatv last, const int k, __gl
 
 // Status per problem: [2p] = 0 running, 1 done, 2 failed; [2p + 1] = iterations (M-steps) done.
 
+// The arguments of em_estep and em_loglik: the grid (host/fit/em_engine.cpp set_grid_args),
+// the slices' weights, the problems' slices, K, status and E-step constants, and the
+// partial sums per chunk.
+#define EM_CELL_PARAMS                                                                                      \
+  const uint slice_stride, const uint n_phi, const float inv_nphi, const float theta0, const float dtheta, \
+      const float phi0, const float dphi, __global const float* restrict weights,                         \
+      __global const int* restrict prob_slice, __global const int* restrict prob_k,                        \
+      __global const int* restrict status, __global const float* restrict cparams,                         \
+      __global real_t* restrict partials
+
 __kernel void em_constants(const uint n_problems, __global const int* prob_k,
                            __global const real_t* state, __global float* cparams) {
   const uint p = get_global_id(0);
@@ -24,20 +34,13 @@ __kernel void em_constants(const uint n_problems, __global const int* prob_k,
 // on the current means (phi offsets to the nearest image), and the weighted
 // log-likelihood (in log2 units). Global size (G * WG, P), local (WG, 1).
 __kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
-void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
-              const float theta0, const float dtheta, const float phi0, const float dphi,
-              __global const float* restrict weights, __global const int* restrict prob_slice,
-              __global const int* restrict prob_k, __global const int* restrict status,
-              __global const float* restrict cparams, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+void em_estep(EM_CELL_PARAMS) {
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   if (status[2 * p] != 0) return;
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
 
   // Per component: the six accumulators and the E-step scratch value, interleaved
   // (separate arrays of K_MAX vectors would sit 4 KiB apart and alias in the L1 cache).
@@ -53,10 +56,9 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
   floatv ll = (floatv)0.f;
 
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = chunk_cell(g, it, lid);
-    const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
-    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
+    const floatv wv = VLOADV(0, w + c);
     floatv m = (floatv)(-INFINITY);
     for (int j = 0; j < k; ++j) {
       floatv dt, dp;
@@ -252,43 +254,40 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
   if (iter >= max_iter) status[2 * p] = 1;
 }
 
+// log2 of the mixture's exact periodic density at cells (t, ph): every component summed
+// over the phi images m = -1, 0, 1, relative to the largest term.
+inline floatv periodic_log2(__global const float* cp, const int k, const floatv t, const floatv ph) {
+  floatv m = (floatv)(-INFINITY);
+  for (int j = 0; j < k; ++j) {
+    floatv dt, d0;
+    component_offsets(cp, j, t, ph, &dt, &d0);
+    for (int img = -1; img <= 1; ++img) m = fmax(m, component_log2(cp, j, dt, image_offset(d0, img)));
+  }
+  floatv s = (floatv)0.f;
+  for (int j = 0; j < k; ++j) {
+    floatv dt, d0;
+    component_offsets(cp, j, t, ph, &dt, &d0);
+    for (int img = -1; img <= 1; ++img) s += exp2(component_log2(cp, j, dt, image_offset(d0, img)) - m);
+  }
+  return m + log2(s);
+}
+
 // The weighted log-likelihood (natural log) of the final state with the exact
 // periodic density: every component summed over the phi images m = -1, 0, 1.
 // One partial per chunk; the host adds them. Same grid as em_estep.
 __kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
-void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
-               const float theta0, const float dtheta, const float phi0, const float dphi,
-               __global const float* restrict weights, __global const int* restrict prob_slice,
-               __global const int* restrict prob_k, __global const int* restrict status,
-               __global const float* restrict cparams, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+void em_loglik(EM_CELL_PARAMS) {
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   if (status[2 * p] == 2) return;
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
   floatv ll = (floatv)0.f;
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = chunk_cell(g, it, lid);
-    const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
-    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
-    floatv m = (floatv)(-INFINITY);
-    for (int j = 0; j < k; ++j) {
-      floatv dt, d0;
-      component_offsets(cp, j, t, ph, &dt, &d0);
-      for (int img = -1; img <= 1; ++img) m = fmax(m, component_log2(cp, j, dt, image_offset(d0, img)));
-    }
-    floatv s = (floatv)0.f;
-    for (int j = 0; j < k; ++j) {
-      floatv dt, d0;
-      component_offsets(cp, j, t, ph, &dt, &d0);
-      for (int img = -1; img <= 1; ++img) s += exp2(component_log2(cp, j, dt, image_offset(d0, img)) - m);
-    }
-    ll += wv * (m + log2(s));
+    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
+    ll += VLOADV(0, w + c) * periodic_log2(cp, k, t, ph);
   }
 #if WG == 1
   partials[p * G + g] = LN2_R * hsum(ll);

@@ -179,6 +179,24 @@ inline uint chunk_cell(uint g, uint it, uint lid) {
   return g * (WG * CPW * VEC) + (it * WG + lid) * VEC;
 }
 
+// A slice grid as the kernels' grid arguments give it (n_phi as a float).
+typedef struct {
+  float inv_nphi, nphi, theta0, dtheta, phi0, dphi;
+} slice_grid;
+
+inline slice_grid make_grid(uint n_phi, float inv_nphi, float theta0, float dtheta, float phi0, float dphi) {
+  const slice_grid grid = {inv_nphi, (float)n_phi, theta0, dtheta, phi0, dphi};
+  return grid;
+}
+
+// The first cell of vector `it` of work-item `lid` in chunk g (chunk_cell), and the
+// coordinates of its VEC cells (cell_coords).
+inline uint grid_cell(const slice_grid* grid, uint g, uint it, uint lid, floatv* t, floatv* ph) {
+  const uint c = chunk_cell(g, it, lid);
+  cell_coords(c, grid->inv_nphi, grid->nphi, grid->theta0, grid->dtheta, grid->phi0, grid->dphi, t, ph);
+  return c;
+}
+
 // The offsets of cells (t, ph) from the mean of component j (cparams `cp`, laid out as
 // NCONST): dt, and dp to the nearest phi image.
 inline void component_offsets(__global const float* cp, int j, floatv t, floatv ph, floatv* dt, floatv* dp) {

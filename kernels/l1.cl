@@ -117,10 +117,7 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
            __global const int* restrict prob_images, const uint n_cells, const float area,
            const float eps, __global const float* restrict prob_weights, __global const float* restrict channels,
            __global const float* restrict camp, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const int* images = prob_images + p * K_MAX;
@@ -130,7 +127,7 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
   __global const float* chw = channels + (uint)prob_slice[p] * 3 * slice_stride;
   const float rgb_weight = prob_weights[2 * p + 1];
 #endif
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
   const float eps2 = eps * eps;
   const float kl = prob_weights[2 * p];
 
@@ -141,10 +138,9 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
   floatv mc[3], sc[3];
 
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = chunk_cell(g, it, lid);
-    const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
-    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
+    const floatv wv = VLOADV(0, w + c);
     const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c + LANES < (float)n_cells);
     const floatv m = l1_densities(cp, images, ca, k, t, ph, a, mc);
     const floatv am = fmax(area * m, (floatv)1e-30f);
