@@ -69,6 +69,7 @@ class BatchPool {
   void seed_rate(const std::string& routine, std::size_t d, double seconds_per_unit);
 
  private:
+  class Call;  // the hand-out of one run() call (batch_pool.cpp)
   std::vector<Device> devices_;
   std::vector<cl::CommandQueue> queues_;
   std::vector<std::size_t> queue_device_;
