@@ -45,10 +45,7 @@ namespace {
 void check_queries(const EmEngine::AmpSlices& slices, const std::vector<AmplitudeQuery>& queries) {
   const int C = slices.channels;
   for (const auto& q : queries) {
-    if (q.slice >= slices.w.size())
-      throw ConfigError("amplitude query: slice " + std::to_string(q.slice) + " out of range");
-    if (q.gmm.k() < 1 || q.gmm.k() > kEmMaxK)
-      throw ConfigError("amplitude query: K = " + std::to_string(q.gmm.k()) + " outside 1.." + std::to_string(kEmMaxK));
+    check_query("amplitude query", q.slice, slices.w.size(), q.gmm.k());
     if (q.amp.size() != std::size_t(C * q.gmm.k()) || q.delta.size() != std::size_t(C))
       throw ConfigError("amplitude query: amp must hold channels x K values and delta one per channel");
   }

@@ -176,6 +176,12 @@ BatchSlices::BatchSlices(std::size_t n, const std::function<std::size_t(std::siz
   }
 }
 
+void check_query(const std::string& what, std::size_t slice, std::size_t n_slices, int k) {
+  if (slice >= n_slices) throw ConfigError(what + ": slice " + std::to_string(slice) + " out of range");
+  if (k < 1 || k > kEmMaxK)
+    throw ConfigError(what + ": K = " + std::to_string(k) + " outside 1.." + std::to_string(kEmMaxK));
+}
+
 bool run_on_device(const BatchRun& run, const Device& device, const std::string& what,
                    const std::function<void()>& work) {
   try {

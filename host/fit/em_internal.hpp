@@ -119,6 +119,10 @@ struct BatchSlices {
   std::size_t count() const { return of_slice.size(); }
 };
 
+// Checks what every query of a batched routine holds (`what`: "L1 query"): its slice below
+// n_slices, its K within 1..kEmMaxK. ConfigError.
+void check_query(const std::string& what, std::size_t slice, std::size_t n_slices, int k);
+
 // Runs a batch's device work: an OpenCL error becomes a DeviceError naming `what` and the
 // device. True when this run is the first to finish the batch (BatchRun::claim): only then
 // may it write the batch's results.

@@ -42,10 +42,7 @@ namespace {
 
 void check_queries(const EmEngine::L1Slices& slices, const std::vector<L1Query>& queries) {
   for (const auto& q : queries) {
-    if (q.slice >= slices.w.size())
-      throw ConfigError("L1 query: slice " + std::to_string(q.slice) + " out of range");
-    if (q.gmm.k() < 1 || q.gmm.k() > kEmMaxK)
-      throw ConfigError("L1 query: K = " + std::to_string(q.gmm.k()) + " outside 1.." + std::to_string(kEmMaxK));
+    check_query("L1 query", q.slice, slices.w.size(), q.gmm.k());
     if (!q.rgb_amp.empty() && q.rgb_amp.size() != 3 * static_cast<std::size_t>(q.gmm.k()))
       throw ConfigError("L1 query: " + std::to_string(q.rgb_amp.size()) + " channel amplitudes, expected " +
                         std::to_string(3 * q.gmm.k()));
