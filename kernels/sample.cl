@@ -522,6 +522,13 @@ float mis_weight(const float3 c, const float3 pdf, const int chosen, const float
       __global const float16* comps2, __global const VF* pd2, __global const float* ls, const float4 u
 #define ESTIMATE_ARGS q, comps, pd, geo, f, marg, cond, sc, env, q2, comps2, pd2, ls, u
 
+// The estimate L f c / pdf at the direction d (theta, phi world) drawn with density pdf
+// per steradian (fv: f there); 0 where pdf is not positive.
+float by_pdf(__global const float* sc, __global const float* env, const float2 d, const float fv, const float pdf) {
+  if (!(pdf > 0.0f)) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+}
+
 #if ESTIMATOR == 0 || ESTIMATOR == 1
 // One estimate of L_o by us_tab, us_gmm: directions uniform over the domain.
 float estimate_uniform(ESTIMATE_PARAMS) {
@@ -576,8 +583,7 @@ float estimate_defensive(ESTIMATE_PARAMS) {
   const float j = jacobian(d.x);
   const float pm = j > 0.0f ? mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate)).x / j : 0.0f;
   const float pdf = alpha * UNIFORM_PDF + (1.0f - alpha) * pm;
-  if (!(pdf > 0.0f)) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+  return by_pdf(sc, env, d, fv, pdf);
 }
 #elif ESTIMATOR == 5
 // One estimate of L_o by cdf_tab: the table CDF.
@@ -600,8 +606,7 @@ float estimate_light(ESTIMATE_PARAMS) {
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
   const float pdf = light_pdf(ls, sc, to_world(sc, d.x, d.y));
-  if (!(pdf > 0.0f)) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+  return by_pdf(sc, env, d, fv, pdf);
 }
 #elif ESTIMATOR == 9
 // One estimate of L_o by product: the product mixture.
@@ -612,8 +617,7 @@ float estimate_product(ESTIMATE_PARAMS) {
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
   const float pdf = mixture_pdf_omega(q2, pd2, d.x, d.y);
-  if (!(pdf > 0.0f)) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+  return by_pdf(sc, env, d, fv, pdf);
 }
 #else
 // One estimate of L_o by mis_light_cdf, mis_light_gmm, mis_product: one-sample MIS.
