@@ -23,8 +23,9 @@ class Routine {
     kernel_.setArg(static_cast<cl_uint>(index(arg)), value);
     return *this;
   }
-  // A buffer argument is also kept by the routine until it is destroyed: OpenCL does not
-  // keep an argument's memory object alive, so a buffer made for the call stays valid.
+  // A buffer argument is also kept by the routine until another buffer is set there or the
+  // routine is destroyed: OpenCL does not keep an argument's memory object alive, so a
+  // buffer made for the call stays valid.
   Routine& set(const std::string& arg, const cl::Buffer& buffer) {
     const std::size_t i = index(arg);
     kernel_.setArg(static_cast<cl_uint>(i), buffer);

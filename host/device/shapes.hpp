@@ -1,7 +1,8 @@
 // Kernel shapes per device: of the fitting routines (kernels/em.cl, l1.cl, amplitudes.cl),
 // and the work-group of the kernels that take one item per work-item (kernels/sample.cl,
-// selftest.cl). A built-in table by device type and vendor, and entries that `bsdfmix tune` measured,
-// keyed by device name and driver version, read from the file $BSDFMIX_SHAPES names.
+// selftest.cl). A built-in table by device type and vendor, and entries of the fitting
+// shapes that `bsdfmix tune` measured, keyed by device name and driver version, read from
+// the file $BSDFMIX_SHAPES names.
 #pragma once
 
 #include <cstddef>
