@@ -33,10 +33,7 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
                const uint n_cells, const int n_channels,
                __global const float* restrict amps, __global const float* restrict deltas,
                __global float* restrict basis, __global float* restrict dw, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const int* images = prob_images + p * K_MAX;
@@ -45,15 +42,13 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
   __global const float* amp = amps + p * (CH_MAX * K_MAX);
   __global float* bp = basis + p * (K_MAX * slice_stride);
   __global float* dp_out = dw + p * (CH_MAX * slice_stride);
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
   floatv l1[CH_MAX];
   for (int c = 0; c < CH_MAX; ++c) l1[c] = (floatv)0.f;
 
-  const uint base = g * (WG * CPW * VEC);
   for (uint it = 0; it < CPW; ++it) {
-    const uint c0 = base + (it * WG + lid) * VEC;
     floatv t, ph;
-    cell_coords(c0, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const uint c0 = grid_cell(&grid, g, it, lid, &t, &ph);
     const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c0 + LANES < (float)n_cells);
     floatv r[CH_MAX];
     for (int c = 0; c < n_channels; ++c) r[c] = VLOADV(0, w + c * slice_stride + c0);
@@ -64,11 +59,7 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
         for (int sb = -s; sb <= s; ++sb) {
           const floatv dt = t + (float)sa * (dtheta / 3.f) - cp[0 * K_MAX + j];
           const floatv d0 = wrap_diff(ph + (float)sb * (dphi / 3.f) - cp[1 * K_MAX + j]);
-          for (int img = -n; img <= n; ++img) {
-            const floatv dp = d0 + (float)img * TWO_PI_F;
-            v += exp2(fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                          fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j])));
-          }
+          for (int img = -n; img <= n; ++img) v += exp2(component_log2(cp, j, dt, image_offset(d0, img)));
         }
       if (s) v *= 1.f / 9.f;
       VSTOREV(v, bp + j * slice_stride + c0);
@@ -88,14 +79,8 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
 #else
   __local real_t scratch[WG];
   for (int c = 0; c < n_channels; ++c) {
-    scratch[lid] = hsum(l1[c]);
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint span = WG / 2; span > 0; span >>= 1) {
-      if (lid < span) scratch[lid] += scratch[lid + span];
-      barrier(CLK_LOCAL_MEM_FENCE);
-    }
-    if (lid == 0) out[c] = scratch[0];
-    barrier(CLK_LOCAL_MEM_FENCE);
+    const real_t total = group_sum(hsum(l1[c]), scratch);
+    if (lid == 0) out[c] = total;
   }
 #endif
 }
@@ -129,9 +114,8 @@ void amp_sums(const uint slice_stride, const uint n_chunks, __global const float
       for (int i = 0; i <= j; ++i) acc[c * AMP_ROW + i] = (floatv)0.f;
       acc[c * AMP_ROW + K_MAX] = (floatv)0.f;
     }
-    const uint base = g * (WG * CPW * VEC);
     for (uint it = 0; it < CPW; ++it) {
-      const uint c0 = base + (it * WG + lid) * VEC;
+      const uint c0 = chunk_cell(g, it, lid);
       const floatv pj = VLOADV(0, bj + c0);
       floatv u[CH_MAX];
       for (int c = 0; c < n_channels; ++c) {
@@ -159,14 +143,8 @@ void amp_sums(const uint slice_stride, const uint n_chunks, __global const float
   for (int c = 0; c < n_channels; ++c)
     for (int i = 0; i <= j + 1; ++i) {
       const int q = c * AMP_ROW + (i <= j ? i : K_MAX);
-      scratch[lid] = tot[q];
-      barrier(CLK_LOCAL_MEM_FENCE);
-      for (uint span = WG / 2; span > 0; span >>= 1) {
-        if (lid < span) scratch[lid] += scratch[lid + span];
-        barrier(CLK_LOCAL_MEM_FENCE);
-      }
-      if (lid == 0) out[q] = scratch[0];
-      barrier(CLK_LOCAL_MEM_FENCE);
+      const real_t total = group_sum(tot[q], scratch);
+      if (lid == 0) out[q] = total;
     }
 #endif
 }

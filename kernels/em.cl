@@ -12,6 +12,16 @@ inline void write_partials(const floatv* a, const floatv last, const int k, __gl
 
 // Status per problem: [2p] = 0 running, 1 done, 2 failed; [2p + 1] = iterations (M-steps) done.
 
+// The arguments of em_estep and em_loglik: the grid (host/fit/em_engine.cpp set_grid_args),
+// the slices' weights, the problems' slices, K, status and E-step constants, and the
+// partial sums per chunk.
+#define EM_CELL_PARAMS                                                                                      \
+  const uint slice_stride, const uint n_phi, const float inv_nphi, const float theta0, const float dtheta, \
+      const float phi0, const float dphi, __global const float* restrict weights,                         \
+      __global const int* restrict prob_slice, __global const int* restrict prob_k,                        \
+      __global const int* restrict status, __global const float* restrict cparams,                         \
+      __global real_t* restrict partials
+
 __kernel void em_constants(const uint n_problems, __global const int* prob_k,
                            __global const real_t* state, __global float* cparams) {
   const uint p = get_global_id(0);
@@ -24,20 +34,13 @@ __kernel void em_constants(const uint n_problems, __global const int* prob_k,
 // on the current means (phi offsets to the nearest image), and the weighted
 // log-likelihood (in log2 units). Global size (G * WG, P), local (WG, 1).
 __kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
-void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
-              const float theta0, const float dtheta, const float phi0, const float dphi,
-              __global const float* restrict weights, __global const int* restrict prob_slice,
-              __global const int* restrict prob_k, __global const int* restrict status,
-              __global const float* restrict cparams, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+void em_estep(EM_CELL_PARAMS) {
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   if (status[2 * p] != 0) return;
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
 
   // Per component: the six accumulators and the E-step scratch value, interleaved
   // (separate arrays of K_MAX vectors would sit 4 KiB apart and alias in the L1 cache).
@@ -52,18 +55,15 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
   for (int j = 0; j < k; ++j) A0(j) = A1(j) = A2(j) = A3(j) = A4(j) = A5(j) = (floatv)0.f;
   floatv ll = (floatv)0.f;
 
-  const uint base = g * (WG * CPW * VEC);
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = base + (it * WG + lid) * VEC;
-    const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
-    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
+    const floatv wv = VLOADV(0, w + c);
     floatv m = (floatv)(-INFINITY);
     for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
-      const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                            fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+      floatv dt, dp;
+      component_offsets(cp, j, t, ph, &dt, &dp);
+      const floatv ej = component_log2(cp, j, dt, dp);
       E(j) = ej;
       m = select(m, ej, ej > m);
     }
@@ -76,8 +76,8 @@ void em_estep(const uint slice_stride, const uint n_phi, const float inv_nphi,
     const floatv f = wv / s;
     ll = fma(wv, m + log2_fast(s), ll);
     for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
+      floatv dt, dp;
+      component_offsets(cp, j, t, ph, &dt, &dp);
       const floatv rw = f * E(j);
       const floatv rwt = rw * dt, rwp = rw * dp;
       A0(j) += rw;
@@ -133,6 +133,70 @@ inline void floor_covariance(real_t* a, real_t* b, real_t* c, const real_t f) {
   *c = m1 * vy * vy + m2 * vx * vx;
 }
 
+// Marks problem p failed after iteration iter - 1.
+inline void fail_problem(__global int* status, uint p, int iter) {
+  status[2 * p] = 2;
+  status[2 * p + 1] = iter - 1;
+}
+
+// The M-step of component j from problem p's chunk statistics (`total`: the responsibility
+// mass of every component): weight, mean (phi wrapped) and covariance (floored). False,
+// the state untouched, when the component is empty (mass at most min_weight * total).
+inline bool update_component(__global real_t* st, __global const real_t* partials, uint p, uint G, int j,
+                             const real_t total, const real_t cov_floor, const real_t min_weight) {
+  const real_t s0 = sum_chunks(partials, p, G, 0 * K_MAX + j);
+  if (!(s0 > min_weight * total)) return false;
+  const real_t dt = sum_chunks(partials, p, G, 1 * K_MAX + j) / s0;
+  const real_t dp = sum_chunks(partials, p, G, 2 * K_MAX + j) / s0;
+  real_t ctt = sum_chunks(partials, p, G, 3 * K_MAX + j) / s0 - dt * dt;
+  real_t ctp = sum_chunks(partials, p, G, 4 * K_MAX + j) / s0 - dt * dp;
+  real_t cpp = sum_chunks(partials, p, G, 5 * K_MAX + j) / s0 - dp * dp;
+  ctt = fmax(ctt, R(0.0));
+  cpp = fmax(cpp, R(0.0));
+  const real_t lim = sqrt(ctt * cpp);
+  ctp = fmin(fmax(ctp, -lim), lim);
+  st[0 * K_MAX + j] = s0 / total;
+  st[1 * K_MAX + j] += dt;
+  st[2 * K_MAX + j] = wrap_phi_r(st[2 * K_MAX + j] + dp);
+  floor_covariance(&ctt, &ctp, &cpp, cov_floor);
+  st[3 * K_MAX + j] = ctt;
+  st[4 * K_MAX + j] = ctp;
+  st[5 * K_MAX + j] = cpp;
+  return true;
+}
+
+// Re-seeds the empty component j by splitting component h along its principal axis:
+// means +- half a standard deviation, weight halved, covariance kept.
+inline void split_component(__global real_t* st, int j, int h) {
+  const real_t a = st[3 * K_MAX + h], b = st[4 * K_MAX + h], c = st[5 * K_MAX + h];
+  const real_t half_tr = R(0.5) * (a + c);
+  const real_t disc = sqrt(R(0.25) * (a - c) * (a - c) + b * b);
+  const real_t lambda = half_tr + disc;
+  real_t vx, vy;
+  if (fabs(b) > R(0.0)) {
+    vx = lambda - c;
+    vy = b;
+  } else if (a >= c) {
+    vx = R(1.0);
+    vy = R(0.0);
+  } else {
+    vx = R(0.0);
+    vy = R(1.0);
+  }
+  const real_t norm = sqrt(vx * vx + vy * vy);
+  const real_t step = R(0.5) * sqrt(lambda) / norm;
+  const real_t mt = st[1 * K_MAX + h], mp = st[2 * K_MAX + h];
+  st[1 * K_MAX + j] = mt + step * vx;
+  st[2 * K_MAX + j] = wrap_phi_r(mp + step * vy);
+  st[1 * K_MAX + h] = mt - step * vx;
+  st[2 * K_MAX + h] = wrap_phi_r(mp - step * vy);
+  st[0 * K_MAX + h] *= R(0.5);
+  st[0 * K_MAX + j] = st[0 * K_MAX + h];
+  st[3 * K_MAX + j] = a;
+  st[4 * K_MAX + j] = b;
+  st[5 * K_MAX + j] = c;
+}
+
 // M-step, one work-item per problem: reduces the chunk statistics, tests
 // convergence on the log-likelihood of the current state, updates the state
 // (weights, means with phi wrapped, covariances floored), re-seeds empty
@@ -150,8 +214,7 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
 
   const real_t L = LN2_R * sum_chunks(partials, p, G, LL_INDEX);
   if (!isfinite(L)) {
-    status[2 * p] = 2;
-    status[2 * p + 1] = iter - 1;
+    fail_problem(status, p, iter);
     return;
   }
   if (iter >= 2 && tol > R(0.0) && fabs(L - lprev[p]) <= tol * fmax(R(1.0), fabs(L))) {
@@ -165,72 +228,22 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
   real_t total = R(0.0);
   for (int j = 0; j < k; ++j) total += sum_chunks(partials, p, G, 0 * K_MAX + j);
   if (!(total > R(0.0)) || !isfinite(total)) {
-    status[2 * p] = 2;
-    status[2 * p + 1] = iter - 1;
+    fail_problem(status, p, iter);
     return;
   }
   bool empty[K_MAX];
-  for (int j = 0; j < k; ++j) {
-    const real_t s0 = sum_chunks(partials, p, G, 0 * K_MAX + j);
-    empty[j] = !(s0 > min_weight * total);
-    if (empty[j]) continue;
-    const real_t dt = sum_chunks(partials, p, G, 1 * K_MAX + j) / s0;
-    const real_t dp = sum_chunks(partials, p, G, 2 * K_MAX + j) / s0;
-    real_t ctt = sum_chunks(partials, p, G, 3 * K_MAX + j) / s0 - dt * dt;
-    real_t ctp = sum_chunks(partials, p, G, 4 * K_MAX + j) / s0 - dt * dp;
-    real_t cpp = sum_chunks(partials, p, G, 5 * K_MAX + j) / s0 - dp * dp;
-    ctt = fmax(ctt, R(0.0));
-    cpp = fmax(cpp, R(0.0));
-    const real_t lim = sqrt(ctt * cpp);
-    ctp = fmin(fmax(ctp, -lim), lim);
-    st[0 * K_MAX + j] = s0 / total;
-    st[1 * K_MAX + j] += dt;
-    st[2 * K_MAX + j] = wrap_phi_r(st[2 * K_MAX + j] + dp);
-    floor_covariance(&ctt, &ctp, &cpp, cov_floor);
-    st[3 * K_MAX + j] = ctt;
-    st[4 * K_MAX + j] = ctp;
-    st[5 * K_MAX + j] = cpp;
-  }
-  // Re-seed each empty component (in index order) by splitting the heaviest
-  // non-empty one along its principal axis: means +- half a standard deviation,
-  // weight halved, covariance kept.
+  for (int j = 0; j < k; ++j) empty[j] = !update_component(st, partials, p, G, j, total, cov_floor, min_weight);
+  // Each empty component (in index order) splits the heaviest non-empty one.
   for (int j = 0; j < k; ++j) {
     if (!empty[j]) continue;
     int h = -1;
     for (int i = 0; i < k; ++i)
       if (!empty[i] && (h < 0 || st[0 * K_MAX + i] > st[0 * K_MAX + h])) h = i;
     if (h < 0) {
-      status[2 * p] = 2;
-      status[2 * p + 1] = iter - 1;
+      fail_problem(status, p, iter);
       return;
     }
-    const real_t a = st[3 * K_MAX + h], b = st[4 * K_MAX + h], c = st[5 * K_MAX + h];
-    const real_t half_tr = R(0.5) * (a + c);
-    const real_t disc = sqrt(R(0.25) * (a - c) * (a - c) + b * b);
-    const real_t lambda = half_tr + disc;
-    real_t vx, vy;
-    if (fabs(b) > R(0.0)) {
-      vx = lambda - c;
-      vy = b;
-    } else if (a >= c) {
-      vx = R(1.0);
-      vy = R(0.0);
-    } else {
-      vx = R(0.0);
-      vy = R(1.0);
-    }
-    const real_t norm = sqrt(vx * vx + vy * vy);
-    const real_t step = R(0.5) * sqrt(lambda) / norm;
-    const real_t mt = st[1 * K_MAX + h], mp = st[2 * K_MAX + h];
-    st[1 * K_MAX + j] = mt + step * vx;
-    st[2 * K_MAX + j] = wrap_phi_r(mp + step * vy);
-    st[1 * K_MAX + h] = mt - step * vx;
-    st[2 * K_MAX + h] = wrap_phi_r(mp - step * vy);
-    st[0 * K_MAX + h] *= R(0.5);
-    st[0 * K_MAX + j] = st[0 * K_MAX + h];
-    st[3 * K_MAX + j] = a;
-    st[4 * K_MAX + j] = b;
-    st[5 * K_MAX + j] = c;
+    split_component(st, j, h);
     empty[j] = false;
   }
   real_t wsum = R(0.0);
@@ -241,65 +254,46 @@ __kernel void em_mstep(const uint n_problems, const uint G, const int iter, cons
   if (iter >= max_iter) status[2 * p] = 1;
 }
 
+// log2 of the mixture's exact periodic density at cells (t, ph): every component summed
+// over the phi images m = -1, 0, 1, relative to the largest term.
+inline floatv periodic_log2(__global const float* cp, const int k, const floatv t, const floatv ph) {
+  floatv m = (floatv)(-INFINITY);
+  for (int j = 0; j < k; ++j) {
+    floatv dt, d0;
+    component_offsets(cp, j, t, ph, &dt, &d0);
+    for (int img = -1; img <= 1; ++img) m = fmax(m, component_log2(cp, j, dt, image_offset(d0, img)));
+  }
+  floatv s = (floatv)0.f;
+  for (int j = 0; j < k; ++j) {
+    floatv dt, d0;
+    component_offsets(cp, j, t, ph, &dt, &d0);
+    for (int img = -1; img <= 1; ++img) s += exp2(component_log2(cp, j, dt, image_offset(d0, img)) - m);
+  }
+  return m + log2(s);
+}
+
 // The weighted log-likelihood (natural log) of the final state with the exact
 // periodic density: every component summed over the phi images m = -1, 0, 1.
 // One partial per chunk; the host adds them. Same grid as em_estep.
 __kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
-void em_loglik(const uint slice_stride, const uint n_phi, const float inv_nphi,
-               const float theta0, const float dtheta, const float phi0, const float dphi,
-               __global const float* restrict weights, __global const int* restrict prob_slice,
-               __global const int* restrict prob_k, __global const int* restrict status,
-               __global const float* restrict cparams, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+void em_loglik(EM_CELL_PARAMS) {
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   if (status[2 * p] == 2) return;
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
-  const float nphi = (float)n_phi;
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
   floatv ll = (floatv)0.f;
-  const uint base = g * (WG * CPW * VEC);
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = base + (it * WG + lid) * VEC;
-    const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
-    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
-    floatv m = (floatv)(-INFINITY);
-    for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
-      for (int img = -1; img <= 1; ++img) {
-        const floatv dp = d0 + (float)img * TWO_PI_F;
-        const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                              fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
-        m = fmax(m, ej);
-      }
-    }
-    floatv s = (floatv)0.f;
-    for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
-      for (int img = -1; img <= 1; ++img) {
-        const floatv dp = d0 + (float)img * TWO_PI_F;
-        const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                              fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
-        s += exp2(ej - m);
-      }
-    }
-    ll += wv * (m + log2(s));
+    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
+    ll += VLOADV(0, w + c) * periodic_log2(cp, k, t, ph);
   }
 #if WG == 1
   partials[p * G + g] = LN2_R * hsum(ll);
 #else
   __local real_t scratch[WG];
-  scratch[lid] = hsum(ll);
-  barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint span = WG / 2; span > 0; span >>= 1) {
-    if (lid < span) scratch[lid] += scratch[lid + span];
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-  if (lid == 0) partials[p * G + g] = LN2_R * scratch[0];
+  const real_t total = group_sum(hsum(ll), scratch);
+  if (lid == 0) partials[p * G + g] = LN2_R * total;
 #endif
 }

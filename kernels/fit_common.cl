@@ -173,6 +173,47 @@ inline floatv log2_fast(floatv x) {
   return fma(2.8853900817779268f * t, p, e);
 }
 
+// The first cell of vector `it` of work-item `lid` in chunk g: chunk g holds the cells
+// g * WG * CPW * VEC onwards, its work-items' vectors interleaved.
+inline uint chunk_cell(uint g, uint it, uint lid) {
+  return g * (WG * CPW * VEC) + (it * WG + lid) * VEC;
+}
+
+// A slice grid as the kernels' grid arguments give it (n_phi as a float).
+typedef struct {
+  float inv_nphi, nphi, theta0, dtheta, phi0, dphi;
+} slice_grid;
+
+inline slice_grid make_grid(uint n_phi, float inv_nphi, float theta0, float dtheta, float phi0, float dphi) {
+  const slice_grid grid = {inv_nphi, (float)n_phi, theta0, dtheta, phi0, dphi};
+  return grid;
+}
+
+// The first cell of vector `it` of work-item `lid` in chunk g (chunk_cell), and the
+// coordinates of its VEC cells (cell_coords).
+inline uint grid_cell(const slice_grid* grid, uint g, uint it, uint lid, floatv* t, floatv* ph) {
+  const uint c = chunk_cell(g, it, lid);
+  cell_coords(c, grid->inv_nphi, grid->nphi, grid->theta0, grid->dtheta, grid->phi0, grid->dphi, t, ph);
+  return c;
+}
+
+// The offsets of cells (t, ph) from the mean of component j (cparams `cp`, laid out as
+// NCONST): dt, and dp to the nearest phi image.
+inline void component_offsets(__global const float* cp, int j, floatv t, floatv ph, floatv* dt, floatv* dp) {
+  *dt = t - cp[0 * K_MAX + j];
+  *dp = wrap_diff(ph - cp[1 * K_MAX + j]);
+}
+
+// The phi offset of image `img` (whole turns) of a nearest-image offset d0.
+inline floatv image_offset(floatv d0, int img) { return d0 + (float)img * TWO_PI_F; }
+
+// The Gaussian quadratic of component j: log2 of its weighted density at offsets (dt, dp)
+// from its mean, c0 + qa dt^2 + qb dt dp + qc dp^2.
+inline floatv component_log2(__global const float* cp, int j, floatv dt, floatv dp) {
+  return fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
+             fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
+}
+
 // Writes the E-step constants of component k of a problem from its state.
 inline void component_constants(__global const real_t* st, __global float* cp, int k) {
   const real_t w = st[0 * K_MAX + k], mt = st[1 * K_MAX + k], mp = st[2 * K_MAX + k];
@@ -186,6 +227,23 @@ inline void component_constants(__global const real_t* st, __global float* cp, i
   cp[4 * K_MAX + k] = (float)(-R(0.5) * l2e * stt / det);
   cp[5 * K_MAX + k] = (float)(log2(w) - log2(TWO_PI_R) - R(0.5) * log2(det));
 }
+
+#if WG > 1
+// The sum of every work-item's `v` over the work-group (a tree through `scratch`, WG values
+// of local memory), returned to every work-item; `scratch` is free again on return.
+inline real_t group_sum(real_t v, __local real_t* scratch) {
+  const uint lid = get_local_id(0);
+  scratch[lid] = v;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint span = WG / 2; span > 0; span >>= 1) {
+    if (lid < span) scratch[lid] += scratch[lid + span];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  const real_t total = scratch[0];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return total;
+}
+#endif
 
 // Writes a work-group's sums to `out`: per component j the nq sums a[(nq + 1) j + q] (the
 // last slot of a component's stride is the caller's scratch) at q * K_MAX + j, then `last`
@@ -203,14 +261,8 @@ inline void write_sums(const floatv* a, const floatv last, const int k, const in
   for (int q = 0; q <= nq * k; ++q) {
     const int j = q % k;
     const int which = q / k;
-    scratch[lid] = hsum(which < nq ? a[stride * j + which] : last);
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint span = WG / 2; span > 0; span >>= 1) {
-      if (lid < span) scratch[lid] += scratch[lid + span];
-      barrier(CLK_LOCAL_MEM_FENCE);
-    }
-    if (lid == 0) out[which < nq ? which * K_MAX + j : nq * K_MAX] = scratch[0];
-    barrier(CLK_LOCAL_MEM_FENCE);
+    const real_t total = group_sum(hsum(which < nq ? a[stride * j + which] : last), scratch);
+    if (lid == 0) out[which < nq ? which * K_MAX + j : nq * K_MAX] = total;
   }
 #endif
 }

@@ -28,6 +28,87 @@
 #define L1_NSTAT (L1_NQ * K_MAX + 1)
 #define L1_ST (L1_NQ + 1)
 
+// The density of every component at cells (t, ph) (cparams `cp`, images of prob_images):
+// the nearest image's, relative to the largest of them times 2^largest, to
+// a[L1_ST j + L1_NQ] (em_estep's scheme: one exp2 per cell, exp2_neg per component),
+// farther images (wide components only) directly. Returns the mixture's density summed
+// over every image; with L1_CH, mc[c] the channels' (amplitudes `ca`).
+inline floatv l1_densities(__global const float* cp, __global const int* images, __global const float* ca,
+                           const int k, const floatv t, const floatv ph, floatv* a, floatv* mc) {
+  floatv top = (floatv)(-INFINITY);
+  for (int j = 0; j < k; ++j) {
+    floatv dt, dp;
+    component_offsets(cp, j, t, ph, &dt, &dp);
+    const floatv ej = component_log2(cp, j, dt, dp);
+    a[L1_ST * j + L1_NQ] = ej;
+    top = fmax(top, ej);
+  }
+  const floatv unit = exp2(top);
+  floatv m = (floatv)0.f;
+#if L1_CH
+  mc[0] = mc[1] = mc[2] = (floatv)0.f;
+#endif
+  for (int j = 0; j < k; ++j) {
+    const floatv r = unit * exp2_neg(a[L1_ST * j + L1_NQ] - top);
+    a[L1_ST * j + L1_NQ] = r;
+    m += r;
+    floatv all = r;  // every image of component j, for the channels
+    const int n = images[j];
+    if (n > 0) {
+      floatv dt, d0;
+      component_offsets(cp, j, t, ph, &dt, &d0);
+      for (int img = -n; img <= n; ++img) {
+        if (img == 0) continue;
+        const floatv e = exp2(component_log2(cp, j, dt, image_offset(d0, img)));
+        m += e;
+        all += e;
+      }
+    }
+#if L1_CH
+    for (int c = 0; c < 3; ++c) mc[c] = fma((floatv)ca[c * K_MAX + j], all, mc[c]);
+#endif
+  }
+  return m;
+}
+
+// Adds the gradient statistics of cells (t, ph) to a: per component and image, the density
+// (a[L1_ST j + L1_NQ] for the nearest image, as l1_densities left it) times s (with L1_CH
+// plus the channels' sc[c] by their amplitudes `ca`) times (1, dt, dp, dt^2, dt dp, dp^2);
+// with L1_CH the first sum is s's alone and sc[c] times the density follow.
+inline void l1_accumulate(__global const float* cp, __global const int* images, __global const float* ca,
+                          const int k, const floatv t, const floatv ph, const floatv s, const floatv* sc, floatv* a) {
+  for (int j = 0; j < k; ++j) {
+    floatv dt, d0;
+    component_offsets(cp, j, t, ph, &dt, &d0);
+#if L1_CH
+    const floatv seff = fma((floatv)ca[0 * K_MAX + j], sc[0],
+                            fma((floatv)ca[1 * K_MAX + j], sc[1], fma((floatv)ca[2 * K_MAX + j], sc[2], s)));
+#else
+    const floatv seff = s;
+#endif
+    const int n = images[j];
+    for (int img = -n; img <= n; ++img) {
+      const floatv dp = image_offset(d0, img);
+      const floatv dens = img == 0 ? a[L1_ST * j + L1_NQ] : exp2(component_log2(cp, j, dt, dp));
+      const floatv sn = seff * dens;
+      const floatv snt = sn * dt, snp = sn * dp;
+#if L1_CH
+      a[L1_ST * j + 0] += s * dens;
+#else
+      a[L1_ST * j + 0] += sn;
+#endif
+      a[L1_ST * j + 1] += snt;
+      a[L1_ST * j + 2] += snp;
+      a[L1_ST * j + 3] = fma(snt, dt, a[L1_ST * j + 3]);
+      a[L1_ST * j + 4] = fma(snt, dp, a[L1_ST * j + 4]);
+      a[L1_ST * j + 5] = fma(snp, dp, a[L1_ST * j + 5]);
+#if L1_CH
+      for (int c = 0; c < 3; ++c) a[L1_ST * j + 6 + c] = fma(sc[c], dens, a[L1_ST * j + 6 + c]);
+#endif
+    }
+  }
+}
+
 __kernel __attribute__((reqd_work_group_size(WG, 1, 1)))
 void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
            const float theta0, const float dtheta, const float phi0, const float dphi,
@@ -36,77 +117,32 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
            __global const int* restrict prob_images, const uint n_cells, const float area,
            const float eps, __global const float* restrict prob_weights, __global const float* restrict channels,
            __global const float* restrict camp, __global real_t* restrict partials) {
-  const uint p = get_group_id(1);
-  const uint g = get_group_id(0);
-  const uint G = get_num_groups(0);
-  const uint lid = get_local_id(0);
+  const uint p = get_group_id(1), g = get_group_id(0), G = get_num_groups(0), lid = get_local_id(0);
   const int k = prob_k[p];
   __global const float* cp = cparams + p * NCONST;
   __global const int* images = prob_images + p * K_MAX;
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
+  __global const float* ca = camp + p * 3 * K_MAX;
 #if L1_CH
   __global const float* chw = channels + (uint)prob_slice[p] * 3 * slice_stride;
-  __global const float* ca = camp + p * 3 * K_MAX;
-#endif
-  const float nphi = (float)n_phi;
-  const float eps2 = eps * eps;
-  const float kl = prob_weights[2 * p];
-#if L1_CH
   const float rgb_weight = prob_weights[2 * p + 1];
 #endif
+  const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
+  const float eps2 = eps * eps;
+  const float kl = prob_weights[2 * p];
 
-  // Per component: the sums and the density of the nearest image at the current cell,
-  // relative to the largest of them (em_estep's scheme: one exp2 per cell, exp2_neg per
-  // component); farther images (wide components only) directly.
+  // Per component: the sums, then the density of the nearest image at the current cell.
   floatv a[L1_ST * K_MAX];
   for (int q = 0; q < L1_ST * k; ++q) a[q] = (floatv)0.f;
   floatv obj = (floatv)0.f;
+  floatv mc[3], sc[3];
 
-  const uint base = g * (WG * CPW * VEC);
   for (uint it = 0; it < CPW; ++it) {
-    const uint c = base + (it * WG + lid) * VEC;
-    const floatv wv = VLOADV(0, w + c);
     floatv t, ph;
-    cell_coords(c, inv_nphi, nphi, theta0, dtheta, phi0, dphi, &t, &ph);
+    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
+    const floatv wv = VLOADV(0, w + c);
     const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c + LANES < (float)n_cells);
-    floatv top = (floatv)(-INFINITY);
-    for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv dp = wrap_diff(ph - cp[1 * K_MAX + j]);
-      const floatv ej = fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                            fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j]));
-      a[L1_ST * j + L1_NQ] = ej;
-      top = fmax(top, ej);
-    }
-    const floatv unit = exp2(top);
-    floatv m = (floatv)0.f;
-#if L1_CH
-    floatv mc0 = (floatv)0.f, mc1 = (floatv)0.f, mc2 = (floatv)0.f;
-#endif
-    for (int j = 0; j < k; ++j) {
-      const floatv r = unit * exp2_neg(a[L1_ST * j + L1_NQ] - top);
-      a[L1_ST * j + L1_NQ] = r;
-      m += r;
-      floatv all = r;  // every image of component j, for the channels
-      const int n = images[j];
-      if (n > 0) {
-        const floatv dt = t - cp[0 * K_MAX + j];
-        const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
-        for (int img = -n; img <= n; ++img) {
-          if (img == 0) continue;
-          const floatv dp = d0 + (float)img * TWO_PI_F;
-          const floatv e = exp2(fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                                    fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j])));
-          m += e;
-          all += e;
-        }
-      }
-#if L1_CH
-      mc0 = fma((floatv)ca[0 * K_MAX + j], all, mc0);
-      mc1 = fma((floatv)ca[1 * K_MAX + j], all, mc1);
-      mc2 = fma((floatv)ca[2 * K_MAX + j], all, mc2);
-#endif
-    }
+    const floatv m = l1_densities(cp, images, ca, k, t, ph, a, mc);
     const floatv am = fmax(area * m, (floatv)1e-30f);
     const floatv d = wv - area * m;
     const floatv rho = sqrt(fma(d, d, (floatv)eps2));
@@ -115,49 +151,15 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
     obj = fma(valid, fma((floatv)kl, kl_cell, rho), obj);
     const floatv s = valid * (d / rho + kl * wv / am);
 #if L1_CH
-    const floatv d0c = VLOADV(0, chw + c) - area * mc0;
-    const floatv d1c = VLOADV(0, chw + slice_stride + c) - area * mc1;
-    const floatv d2c = VLOADV(0, chw + 2 * slice_stride + c) - area * mc2;
-    const floatv r0c = sqrt(fma(d0c, d0c, (floatv)eps2)), r1c = sqrt(fma(d1c, d1c, (floatv)eps2)),
-                 r2c = sqrt(fma(d2c, d2c, (floatv)eps2));
-    obj = fma(valid * rgb_weight, r0c + r1c + r2c, obj);
-    const floatv s0c = valid * rgb_weight * d0c / r0c, s1c = valid * rgb_weight * d1c / r1c,
-                 s2c = valid * rgb_weight * d2c / r2c;
-#endif
-    for (int j = 0; j < k; ++j) {
-      const floatv dt = t - cp[0 * K_MAX + j];
-      const floatv d0 = wrap_diff(ph - cp[1 * K_MAX + j]);
-#if L1_CH
-      const floatv seff = fma((floatv)ca[0 * K_MAX + j], s0c,
-                              fma((floatv)ca[1 * K_MAX + j], s1c, fma((floatv)ca[2 * K_MAX + j], s2c, s)));
-#else
-      const floatv seff = s;
-#endif
-      const int n = images[j];
-      for (int img = -n; img <= n; ++img) {
-        const floatv dp = d0 + (float)img * TWO_PI_F;
-        const floatv dens = img == 0 ? a[L1_ST * j + L1_NQ]
-                                     : exp2(fma(dt, fma((floatv)cp[2 * K_MAX + j], dt, cp[3 * K_MAX + j] * dp),
-                                                fma((floatv)cp[4 * K_MAX + j], dp * dp, (floatv)cp[5 * K_MAX + j])));
-        const floatv sn = seff * dens;
-        const floatv snt = sn * dt, snp = sn * dp;
-#if L1_CH
-        a[L1_ST * j + 0] += s * dens;
-#else
-        a[L1_ST * j + 0] += sn;
-#endif
-        a[L1_ST * j + 1] += snt;
-        a[L1_ST * j + 2] += snp;
-        a[L1_ST * j + 3] = fma(snt, dt, a[L1_ST * j + 3]);
-        a[L1_ST * j + 4] = fma(snt, dp, a[L1_ST * j + 4]);
-        a[L1_ST * j + 5] = fma(snp, dp, a[L1_ST * j + 5]);
-#if L1_CH
-        a[L1_ST * j + 6] = fma(s0c, dens, a[L1_ST * j + 6]);
-        a[L1_ST * j + 7] = fma(s1c, dens, a[L1_ST * j + 7]);
-        a[L1_ST * j + 8] = fma(s2c, dens, a[L1_ST * j + 8]);
-#endif
-      }
+    floatv rc[3];
+    for (int ch = 0; ch < 3; ++ch) {
+      const floatv dc = VLOADV(0, chw + ch * slice_stride + c) - area * mc[ch];
+      rc[ch] = sqrt(fma(dc, dc, (floatv)eps2));
+      sc[ch] = valid * rgb_weight * dc / rc[ch];
     }
+    obj = fma(valid * rgb_weight, rc[0] + rc[1] + rc[2], obj);
+#endif
+    l1_accumulate(cp, images, ca, k, t, ph, s, sc, a);
   }
 
   __local real_t scratch[WG];

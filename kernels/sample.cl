@@ -512,13 +512,27 @@ float mis_weight(const float3 c, const float3 pdf, const int chosen, const float
   return sel / dot(cp, cp);
 }
 
-// One estimate of L_o with uniforms u.
-float estimate(__global const float* q, __global const float16* comps, __global const VF* pd, __global const float* geo,
-               __global const float* f, __global const float* marg, __global const float* cond,
-               __global const float* sc, __global const float* env, __global const float* q2,
-               __global const float16* comps2, __global const VF* pd2, __global const float* ls, const float4 u) {
-  const float rotate = q[Q_ROTATE];
+// The inputs every estimator may read (integrate_chunks' buffers): the mixture (q, comps,
+// pd), the table (geo, f) and its CDF (marg, cond), the scene (sc, env), the product
+// mixture (q2, comps2, pd2), the light sampler (ls), and the sample's uniforms u.
+#define ESTIMATE_PARAMS                                                                                     \
+  __global const float* q, __global const float16* comps, __global const VF* pd, __global const float* geo, \
+      __global const float* f, __global const float* marg, __global const float* cond,                       \
+      __global const float* sc, __global const float* env, __global const float* q2,                       \
+      __global const float16* comps2, __global const VF* pd2, __global const float* ls, const float4 u
+#define ESTIMATE_ARGS q, comps, pd, geo, f, marg, cond, sc, env, q2, comps2, pd2, ls, u
+
+// The estimate L f c / pdf at the direction d (theta, phi world) drawn with density pdf
+// per steradian (fv: f there); 0 where pdf is not positive.
+float by_pdf(__global const float* sc, __global const float* env, const float2 d, const float fv, const float pdf) {
+  if (!(pdf > 0.0f)) return 0.0f;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+}
+
 #if ESTIMATOR == 0 || ESTIMATOR == 1
+// One estimate of L_o by us_tab, us_gmm: directions uniform over the domain.
+float estimate_uniform(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   const float2 d = uniform_draw(u.z, u.w);
 #if ESTIMATOR == 0
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
@@ -531,7 +545,11 @@ float estimate(__global const float* q, __global const float16* comps, __global 
 #endif
   if (fv == 0.0f) return 0.0f;
   return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / UNIFORM_PDF;
+}
 #elif ESTIMATOR == 2 || ESTIMATOR == 3
+// One estimate of L_o by is_tab, is_gmm: directions drawn from the mixture.
+float estimate_mixture(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   const float2 d = mixture_draw(q, comps, u);
   if (!theta_inside(d.x)) return 0.0f;
   const float j = jacobian(d.x);
@@ -547,7 +565,11 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   // the stand-in: f c J = sum w scale p_param, so f c / pdf_omega = sums.y / sums.x
   return radiance(sc, env, d.x, d.y) * s.y / s.x;
 #endif
+}
 #elif ESTIMATOR == 4
+// One estimate of L_o by mis_tab: the mixture with a defensive uniform share alpha.
+float estimate_defensive(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   const float alpha = geo[T_ALPHA];
   float2 d;
   if (u.x < alpha) {
@@ -561,9 +583,12 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   const float j = jacobian(d.x);
   const float pm = j > 0.0f ? mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate)).x / j : 0.0f;
   const float pdf = alpha * UNIFORM_PDF + (1.0f - alpha) * pm;
-  if (!(pdf > 0.0f)) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+  return by_pdf(sc, env, d, fv, pdf);
+}
 #elif ESTIMATOR == 5
+// One estimate of L_o by cdf_tab: the table CDF.
+float estimate_cdf(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   // piecewise-constant 2D CDF over the cells, exact within a cell: theta drawn with
   // density proportional to c(theta) J(theta), phi uniform
   const float3 d = cdf_draw(geo, marg, cond, rotate, u);
@@ -571,23 +596,33 @@ float estimate(__global const float* q, __global const float16* comps, __global 
   const float pdf = cdf_pdf(geo, marg, cond, d.x, wrap_phi(d.y - rotate));
   if (!(pdf > 0.0f)) return 0.0f;
   return radiance(sc, env, d.x, d.y) * table_f(geo, f, d.x, wrap_phi(d.y - rotate)) * cos_factor(d.x) / pdf;
+}
 #elif ESTIMATOR == 6
+// One estimate of L_o by light: the light sampler.
+float estimate_light(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   const float2 d = to_slice(sc, light_draw(ls, sc, u));
   if (!theta_inside(d.x)) return 0.0f;
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
   const float pdf = light_pdf(ls, sc, to_world(sc, d.x, d.y));
-  if (!(pdf > 0.0f)) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+  return by_pdf(sc, env, d, fv, pdf);
+}
 #elif ESTIMATOR == 9
+// One estimate of L_o by product: the product mixture.
+float estimate_product(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   const float2 d = mixture_draw(q2, comps2, u);
   if (!theta_inside(d.x)) return 0.0f;
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
   const float pdf = mixture_pdf_omega(q2, pd2, d.x, d.y);
-  if (!(pdf > 0.0f)) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / pdf;
+  return by_pdf(sc, env, d, fv, pdf);
+}
 #else
+// One estimate of L_o by mis_light_cdf, mis_light_gmm, mis_product: one-sample MIS.
+float estimate_mis(ESTIMATE_PARAMS) {
+  const float rotate = q[Q_ROTATE];
   // one-sample MIS over two or three techniques, picked by u.x with the fractions c; the
   // remainder of u.x is the technique's own u.x
 #if ESTIMATOR == 7
@@ -639,6 +674,25 @@ float estimate(__global const float* q, __global const float16* comps, __global 
 #endif
   const float w = mis_weight(c, pdf, k, geo[T_POWER]);
   return w > 0.0f ? radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) * w : 0.0f;
+}
+#endif
+
+// One estimate of L_o with uniforms u, by the estimator ESTIMATOR.
+float estimate(ESTIMATE_PARAMS) {
+#if ESTIMATOR == 0 || ESTIMATOR == 1
+  return estimate_uniform(ESTIMATE_ARGS);
+#elif ESTIMATOR == 2 || ESTIMATOR == 3
+  return estimate_mixture(ESTIMATE_ARGS);
+#elif ESTIMATOR == 4
+  return estimate_defensive(ESTIMATE_ARGS);
+#elif ESTIMATOR == 5
+  return estimate_cdf(ESTIMATE_ARGS);
+#elif ESTIMATOR == 6
+  return estimate_light(ESTIMATE_ARGS);
+#elif ESTIMATOR == 9
+  return estimate_product(ESTIMATE_ARGS);
+#else
+  return estimate_mis(ESTIMATE_ARGS);
 #endif
 }
 

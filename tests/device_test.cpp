@@ -112,6 +112,11 @@ TEST_CASE("kernel shapes: the table by type, a tuned entry by name and driver, e
   small.type = "gpu";
   small.max_work_group = 48;  // the work-group is halved until it fits
   CHECK(choose_shape(small).shape == make_shape(1, 32));
+  // The one-item-per-work-item kernels: 64 on every row, halved to fit the device.
+  CHECK(item_group_size(cpu) == 64);
+  CHECK(item_group_size(small) == 32);
+  CHECK(item_global_size(1000, 64) == 1024);
+  CHECK(item_global_size(1024, 64) == 1024);
 
   const fs::path file = fs::temp_directory_path() / "bsdfmix_shapes_test.tsv";
   std::ofstream(file) << "# tuned\nother device\t1.0\t1\t128\n" << shape_entry(cpu, make_shape(8, 1), "measured") << "\n";

@@ -70,6 +70,7 @@ class BatchPool {
   void seed_rate(const std::string& routine, std::size_t d, double seconds_per_unit);
 
  private:
+  class Call;  // the hand-out of one run() call (batch_pool.cpp)
   std::vector<Device> devices_;
   bool log_ = false;
   std::vector<cl::CommandQueue> queues_;

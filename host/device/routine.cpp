@@ -18,6 +18,7 @@ Routine::Routine(const cl::Program& program, const std::string& kernel) : name_(
       while (!a.empty() && a.back() == '\0') a.pop_back();
       args_.push_back(a);
     }
+    held_.resize(n);
   } catch (const cl::Error& e) {
     throw_device_error(e, "creating kernel " + kernel + " (its argument names need -cl-kernel-arg-info)");
   }

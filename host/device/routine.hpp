@@ -23,11 +23,13 @@ class Routine {
     kernel_.setArg(static_cast<cl_uint>(index(arg)), value);
     return *this;
   }
-  // A buffer argument is also kept by the routine until it is destroyed: OpenCL does not
-  // keep an argument's memory object alive, so a buffer made for the call stays valid.
+  // A buffer argument is also kept by the routine until another buffer is set there or the
+  // routine is destroyed: OpenCL does not keep an argument's memory object alive, so a
+  // buffer made for the call stays valid.
   Routine& set(const std::string& arg, const cl::Buffer& buffer) {
-    kernel_.setArg(static_cast<cl_uint>(index(arg)), buffer);
-    held_.push_back(buffer);
+    const std::size_t i = index(arg);
+    kernel_.setArg(static_cast<cl_uint>(i), buffer);
+    held_[i] = buffer;
     return *this;
   }
   // A real_t argument: double when the program was built for fp64, else float.
@@ -45,7 +47,7 @@ class Routine {
   cl::Kernel kernel_;
   std::string name_;
   std::vector<std::string> args_;
-  std::vector<cl::Buffer> held_;
+  std::vector<cl::Buffer> held_;  // per argument: the buffer last set there
 };
 
 // A device buffer of `bytes` (at least 1) with `flags`, copied from `host` when it is not

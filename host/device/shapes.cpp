@@ -25,14 +25,15 @@ struct Row {
   const char* type;    // "cpu", "gpu", "" (any)
   const char* vendor;  // substring, "" (any)
   int vec, wg;
+  int items;  // work-group of the one-item-per-work-item kernels (item_group_size)
   const char* why;
 };
 const Row kTable[] = {
-    {"cpu", "", 16, 1, "CPUs: 16-wide float vectors, one work-item per group (PoCL measured)"},
-    {"gpu", "nvidia", 1, 64, "NVIDIA GPUs: 64 scalar work-items (two warps)"},
-    {"gpu", "advanced micro devices", 1, 64, "AMD GPUs: one wavefront of 64"},
-    {"gpu", "intel", 1, 64, "Intel GPUs: 64 scalar work-items"},
-    {"", "", 1, 64, "any other device (oclgrind included): 64 scalar work-items"},
+    {"cpu", "", 16, 1, 64, "CPUs: 16-wide float vectors, one work-item per group (PoCL measured)"},
+    {"gpu", "nvidia", 1, 64, 64, "NVIDIA GPUs: 64 scalar work-items (two warps)"},
+    {"gpu", "advanced micro devices", 1, 64, 64, "AMD GPUs: one wavefront of 64"},
+    {"gpu", "intel", 1, 64, 64, "Intel GPUs: 64 scalar work-items"},
+    {"", "", 1, 64, 64, "any other device (oclgrind included): 64 scalar work-items"},
 };
 
 bool row_matches(const Row& r, const DeviceInfo& info) {
@@ -40,6 +41,13 @@ bool row_matches(const Row& r, const DeviceInfo& info) {
   if (!*r.vendor) return true;
   return lower(info.vendor).find(r.vendor) != std::string::npos ||
          lower(info.platform).find(r.vendor) != std::string::npos;
+}
+
+// The first row that matches `info` (the last row matches every device).
+const Row& row_for(const DeviceInfo& info) {
+  for (const Row& r : kTable)
+    if (row_matches(r, info)) return r;
+  return kTable[sizeof(kTable) / sizeof(kTable[0]) - 1];
 }
 
 int largest_power_of_two_at_most(std::size_t n) {
@@ -102,9 +110,19 @@ ShapeChoice choose_shape(const DeviceInfo& info, bool gpu_layout) {
     }
   }
   if (gpu_layout) return {fit_device(make_shape(1, 64), info), "gpu layout forced"};
-  for (const Row& r : kTable)
-    if (row_matches(r, info)) return {fit_device(make_shape(r.vec, r.wg), info), std::string("table: ") + r.why};
-  return {fit_device(make_shape(1, 64), info), "table"};
+  const Row& r = row_for(info);
+  return {fit_device(make_shape(r.vec, r.wg), info), std::string("table: ") + r.why};
+}
+
+std::size_t item_group_size(const DeviceInfo& info) {
+  const std::size_t items = static_cast<std::size_t>(row_for(info).items);
+  if (info.max_work_group && items > info.max_work_group)
+    return static_cast<std::size_t>(largest_power_of_two_at_most(info.max_work_group));
+  return items;
+}
+
+std::size_t item_global_size(std::size_t items, std::size_t group) {
+  return (items + group - 1) / group * group;
 }
 
 std::vector<KernelShape> shape_candidates(const DeviceInfo& info) {
@@ -122,10 +140,10 @@ std::string shape_entry(const DeviceInfo& info, const KernelShape& shape, const 
 
 std::string shape_table_text() {
   std::ostringstream os;
-  os << "| type | vendor | vec | wg | why |\n|---|---|---|---|---|\n";
+  os << "| type | vendor | vec | wg | items | why |\n|---|---|---|---|---|---|\n";
   for (const Row& r : kTable)
     os << "| " << (*r.type ? r.type : "any") << " | " << (*r.vendor ? r.vendor : "any") << " | " << r.vec << " | " << r.wg
-       << " | " << r.why << " |\n";
+       << " | " << r.items << " | " << r.why << " |\n";
   return os.str();
 }
 

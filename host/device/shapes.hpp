@@ -1,8 +1,11 @@
-// Kernel shapes of the fitting routines (kernels/em.cl, l1.cl, amplitudes.cl) per device:
-// a built-in table by device type and vendor, and entries that `bsdfmix tune` measured,
-// keyed by device name and driver version, read from the file $BSDFMIX_SHAPES names.
+// Kernel shapes per device: of the fitting routines (kernels/em.cl, l1.cl, amplitudes.cl),
+// and the work-group of the kernels that take one item per work-item (kernels/sample.cl,
+// selftest.cl). A built-in table by device type and vendor, and entries of the fitting
+// shapes that `bsdfmix tune` measured, keyed by device name and driver version, read from
+// the file $BSDFMIX_SHAPES names.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -35,6 +38,14 @@ struct ShapeChoice {
 // else the built-in table's first matching row; `gpu_layout` forces the scalar layout on
 // CPUs. The work-group size never exceeds the device's maximum (halved until it fits).
 ShapeChoice choose_shape(const DeviceInfo& info, bool gpu_layout = false);
+
+// The work-group size of the one-item-per-work-item kernels (kernels/sample.cl,
+// selftest.cl) on `info`: the built-in table's "items" column, halved to the largest power
+// of two within the device's maximum.
+std::size_t item_group_size(const DeviceInfo& info);
+
+// `items` rounded up to a whole number of work-groups of `group`.
+std::size_t item_global_size(std::size_t items, std::size_t group);
 
 // The shapes `bsdfmix tune` measures on `info` (within its work-group limit).
 std::vector<KernelShape> shape_candidates(const DeviceInfo& info);

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,6 +18,11 @@
 #include "fit/slices.hpp"
 
 namespace bsdfmix {
+
+namespace em_detail {
+struct ProblemBatch;
+struct BatchWork;
+}  // namespace em_detail
 
 class Progress;
 
@@ -141,6 +147,11 @@ class EmEngine {
   // devices within that factor are measured on real batches.
   void calibrate();
   bool calibrated_ = false;
+  // The batch skeleton of fit, l1_values and amplitude_sums: every batch of `batches`
+  // (em_detail::plan_batches; cost[b], its work) run over the pool as `routine`, `work`
+  // called once per run of a batch with its device, precision and kernel shape.
+  void run_batches(const std::string& routine, const std::vector<em_detail::ProblemBatch>& batches,
+                   const std::vector<double>& cost, const std::function<void(const em_detail::BatchWork&)>& work);
 
   std::vector<Device> devices_;
   std::shared_ptr<BatchPool> pool_;

@@ -155,6 +155,33 @@ std::vector<std::pair<int, std::vector<std::size_t>>> bucket_batches(
   return batches;
 }
 
+std::vector<ProblemBatch> plan_batches(const std::vector<std::pair<int, std::vector<std::size_t>>>& groups,
+                                       std::size_t stride, int extra_rows, std::uint64_t limit,
+                                       std::uint64_t batch_budget) {
+  std::vector<ProblemBatch> out;
+  for (const auto& [bucket, list] : groups) {
+    check_problem_fits(stride, bucket, extra_rows, limit);
+    for (auto& [b, items] : bucket_batches({{bucket, list}}, stride, extra_rows, batch_budget))
+      out.push_back(ProblemBatch{b, std::move(items)});
+  }
+  return out;
+}
+
+BatchSlices::BatchSlices(std::size_t n, const std::function<std::size_t(std::size_t)>& slice_of) : local(n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t slice = slice_of(i);
+    auto it = of_slice.find(slice);
+    if (it == of_slice.end()) it = of_slice.emplace(slice, static_cast<int>(of_slice.size())).first;
+    local[i] = it->second;
+  }
+}
+
+void check_query(const std::string& what, std::size_t slice, std::size_t n_slices, int k) {
+  if (slice >= n_slices) throw ConfigError(what + ": slice " + std::to_string(slice) + " out of range");
+  if (k < 1 || k > kEmMaxK)
+    throw ConfigError(what + ": K = " + std::to_string(k) + " outside 1.." + std::to_string(kEmMaxK));
+}
+
 bool run_on_device(const BatchRun& run, const Device& device, const std::string& what,
                    const std::function<void()>& work) {
   try {

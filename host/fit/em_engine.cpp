@@ -85,15 +85,132 @@ struct Problem {
   int restart;
 };
 
-struct Batch {
-  int bucket;
-  const EmSettings* settings;
-  std::vector<std::size_t> problems;
-};
-
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
+
+// What the batches of one EmEngine::fit call share.
+struct FitCall {
+  const SliceSet& set;
+  const std::vector<EmTask>& tasks;
+  Progress* progress;
+  const ChunkLayout layout;
+  std::vector<std::unique_ptr<PreparedSlice>> prepared;  // per slice, those the tasks fit
+  std::vector<EmResult> out;                             // per task
+  std::vector<Problem> problems;                         // task x restart
+  std::vector<std::atomic<int>> remaining;               // per task: restarts not yet stored
+  std::vector<EmResult> results;                         // per problem
+  std::mutex timing_mutex;
+
+  // Prepares the tasks' slices; a task that cannot run fails at once, the others' restarts
+  // become the problems.
+  FitCall(const SliceSet& set_, const std::vector<EmTask>& tasks_, Progress* progress_)
+      : set(set_), tasks(tasks_), progress(progress_), layout(set_.grid), prepared(set_.weights.size()),
+        out(tasks_.size()), remaining(tasks_.size()) {
+    for (std::size_t ti = 0; ti < tasks.size(); ++ti) {
+      const EmTask& t = tasks[ti];
+      if (!prepared[t.slice]) prepared[t.slice] = std::make_unique<PreparedSlice>(prepare_slice(set, t.slice));
+      out[ti].ok = false;
+      out[ti].loglik = -std::numeric_limits<double>::infinity();
+      if (std::string why = task_failure(*prepared[t.slice], t.slice, t.k); !why.empty()) {
+        out[ti].failure = why;
+        remaining[ti] = 0;
+        if (progress) progress->advance(1);
+        continue;
+      }
+      remaining[ti] = t.settings.restarts;
+      for (int r = 0; r < t.settings.restarts; ++r) problems.push_back({ti, r});
+    }
+    results.resize(problems.size());
+  }
+
+  const EmTask& task_of(const BatchWork& w, std::size_t i) const { return tasks[problems[w.batch.items[i]].task]; }
+};
+
+// A batch's initial states (its problems' starts, in parallel on the host) and slices.
+struct EmInputs {
+  BatchSlices slices;
+  std::vector<int> prob_k;
+  std::vector<double> state;  // NSTATE per problem (kernels/em.cl)
+  std::vector<float> weights;
+
+  EmInputs(const FitCall& f, const BatchWork& w)
+      : slices(w.size(), [&](std::size_t i) { return f.task_of(w, i).slice; }), prob_k(w.size()) {
+    const std::size_t P = w.size(), K = static_cast<std::size_t>(w.bucket()), nstate = 6 * K;
+    for (std::size_t i = 0; i < P; ++i) prob_k[i] = f.task_of(w, i).k;
+    state.assign(P * nstate, 0.0);
+    // Each initialization depends on its problem only.
+    const std::size_t init_threads = std::min<std::size_t>(P, std::max(1u, std::thread::hardware_concurrency()));
+    run_on_workers(P, init_threads, [&](std::size_t, std::size_t i) {
+      const Problem& pr = f.problems[w.batch.items[i]];
+      const EmTask& t = f.tasks[pr.task];
+      const Gmm g = task_start(f.set.grid, f.prepared[t.slice]->w, t, pr.restart);
+      double* st = &state[i * nstate];
+      for (int j = 0; j < t.k; ++j) {
+        st[0 * K + j] = g.weight[j];
+        st[1 * K + j] = g.mean[2 * j];
+        st[2 * K + j] = g.mean[2 * j + 1];
+        st[3 * K + j] = g.cov[3 * j];
+        st[4 * K + j] = g.cov[3 * j + 1];
+        st[5 * K + j] = g.cov[3 * j + 2];
+      }
+    });
+    const std::size_t stride = f.layout.stride;
+    weights.assign(slices.count() * stride, 0.0f);
+    for (const auto& [slice, local] : slices.of_slice) {
+      const auto& src = f.prepared[slice]->w;
+      float* dst = &weights[static_cast<std::size_t>(local) * stride];
+      for (std::size_t c = 0; c < f.layout.cells; ++c) dst[c] = static_cast<float>(src[c]);
+    }
+  }
+};
+
+// What a batch's device run reads back, and its times.
+struct EmOutputs {
+  std::vector<int> status;                // [2p] 0 running, 1 done, 2 failed; [2p + 1] iterations
+  std::vector<unsigned char> state, ll;   // the final states, the log-likelihood partials (real_t)
+  int launched = 0;                       // iterations launched
+  double iterate_seconds = 0, finish_seconds = 0;
+};
+
+// The four EM kernels of a batch, their buffers made and their arguments set.
+struct EmRoutines {
+  Routine constants, estep, mstep, loglik;
+  cl::Buffer status, state, ll;
+
+  EmRoutines(const cl::Program& program, const FitCall& f, const BatchWork& w, const EmInputs& in, EmOutputs& o,
+             const EmSettings& s)
+      : constants(program, "em_constants"), estep(program, "em_estep"), mstep(program, "em_mstep"),
+        loglik(program, "em_loglik") {
+    const Device& dev = w.device;
+    const std::size_t P = w.size(), K = static_cast<std::size_t>(w.bucket()), real_size = w.fp64 ? 8 : 4;
+    const std::size_t nstat = 6 * K + 1, nstate = 6 * K, n_chunks = f.layout.chunks;
+    cl::Buffer b_weights = upload(dev, "weights", in.weights), b_slice = upload(dev, "prob_slice", in.slices.local),
+               b_k = upload(dev, "prob_k", in.prob_k);
+    status = device_buffer(dev, "status", o.status.size() * sizeof(int), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
+                           o.status.data());
+    state = device_buffer(dev, "state", o.state.size(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, o.state.data());
+    cl::Buffer b_lprev = device_buffer(dev, "lprev", P * real_size, CL_MEM_READ_WRITE);
+    cl::Buffer b_partials = device_buffer(dev, "partials", P * n_chunks * nstat * real_size, CL_MEM_READ_WRITE);
+    cl::Buffer b_const = device_buffer(dev, "cparams", P * nstate * sizeof(float), CL_MEM_READ_WRITE);
+    ll = device_buffer(dev, "loglik partials", o.ll.size(), CL_MEM_WRITE_ONLY);
+
+    const cl_uint nP = static_cast<cl_uint>(P);
+    constants.set("n_problems", nP).set("prob_k", b_k).set("state", state).set("cparams", b_const);
+    for (Routine* kk : {&estep, &loglik}) {
+      set_grid_args(*kk, f.layout, f.set.grid);
+      kk->set("weights", b_weights).set("prob_slice", b_slice).set("prob_k", b_k).set("status", status)
+          .set("cparams", b_const);
+    }
+    estep.set("partials", b_partials);
+    loglik.set("partials", ll);
+    mstep.set("n_problems", nP).set("G", static_cast<cl_uint>(n_chunks)).set("max_iter", static_cast<cl_int>(s.iterations));
+    mstep.set_real("tol", s.tolerance, w.fp64).set_real("cov_floor", cov_floor(f.set.grid, s), w.fp64)
+        .set_real("min_weight", s.min_weight, w.fp64);
+    mstep.set("prob_k", b_k).set("status", status).set("state", state).set("lprev", b_lprev)
+        .set("partials", b_partials).set("cparams", b_const);
+  }
+};
 
 }  // namespace
 
@@ -169,6 +286,117 @@ void EmEngine::calibrate() {
     for (std::size_t d = 0; d < devices_.size(); ++d) pool_->seed_rate("em", d, rate[d]);
 }
 
+void EmEngine::run_batches(const std::string& routine, const std::vector<ProblemBatch>& batches,
+                           const std::vector<double>& cost, const std::function<void(const BatchWork&)>& work) {
+  pool_->run(routine, cost, [&](const BatchRun& run) {
+    const BatchWork w{batches[run.batch], run, devices_[run.device], uses_fp64(run.device), shape(run.device)};
+    work(w);
+  });
+}
+
+namespace {
+
+// Runs EM on a batch: the constants, then E- and M-steps until every problem is done or
+// the iterations run out, then the final log-likelihood, into `o`. The status is read every
+// kStatusEvery iterations, every one when the run is watched (a run likely to lose to a
+// faster device then stops after one iteration, not kStatusEvery). False when another
+// device finished the batch first.
+bool run_em(const FitCall& f, const BatchWork& w, const EmInputs& in, const EmSettings& s, EmOutputs& o) {
+  const std::size_t P = w.size();
+  const cl::CommandQueue& queue = *w.run.queue;
+  auto t0 = std::chrono::steady_clock::now();
+  try {
+    EmRoutines r(build_program(w.device, "em", em_program_options(w.bucket(), w.shape, w.fp64)), f, w, in, o, s);
+    const cl::NDRange e_global(f.layout.chunks * static_cast<std::size_t>(w.shape.wg), P);
+    const cl::NDRange e_local(static_cast<std::size_t>(w.shape.wg), 1);
+    r.constants.run(queue, cl::NDRange(P));
+    for (int it = 1; it <= s.iterations; ++it) {
+      if (w.run.cancelled()) break;  // another device finished this batch
+      r.estep.run(queue, e_global, e_local);
+      r.mstep.set("iter", static_cast<cl_int>(it));
+      r.mstep.run(queue, cl::NDRange(P));
+      ++o.launched;
+      if ((w.run.watched() || it % kStatusEvery == 0) && it < s.iterations) {
+        queue.enqueueReadBuffer(r.status, CL_TRUE, 0, o.status.size() * sizeof(int), o.status.data());
+        bool all = true;
+        for (std::size_t i = 0; i < P && all; ++i) all = o.status[2 * i] != 0;
+        if (all) break;
+      }
+    }
+    if (w.run.cancelled()) {
+      queue.finish();
+      return false;
+    }
+    queue.finish();
+    o.iterate_seconds = seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    r.loglik.run(queue, e_global, e_local);
+    queue.enqueueReadBuffer(r.status, CL_FALSE, 0, o.status.size() * sizeof(int), o.status.data());
+    queue.enqueueReadBuffer(r.state, CL_FALSE, 0, o.state.size(), o.state.data());
+    queue.enqueueReadBuffer(r.ll, CL_TRUE, 0, o.ll.size(), o.ll.data());
+    o.finish_seconds = seconds_since(t0);
+  } catch (const cl::Error& e) {
+    throw_device_error(e, "EM batch on " + w.device.info().label());
+  }
+  return w.run.claim();
+}
+
+// The results of a batch's problems from what its run read back.
+void store_results(FitCall& f, const BatchWork& w, const EmOutputs& o) {
+  const std::size_t K = static_cast<std::size_t>(w.bucket()), nstate = 6 * K, n_chunks = f.layout.chunks;
+  const bool fp64 = w.fp64;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    const std::size_t pi = w.batch.items[i];
+    const EmTask& t = f.tasks[f.problems[pi].task];
+    EmResult& r = f.results[pi];
+    r.iterations = o.status[2 * i + 1];
+    Gmm& g = r.gmm;
+    g.weight.resize(t.k);
+    g.mean.resize(2 * t.k);
+    g.cov.resize(3 * t.k);
+    for (int j = 0; j < t.k; ++j) {
+      const std::size_t b = i * nstate;
+      g.weight[j] = unpack(o.state, b + 0 * K + j, fp64);
+      g.mean[2 * j] = unpack(o.state, b + 1 * K + j, fp64);
+      g.mean[2 * j + 1] = unpack(o.state, b + 2 * K + j, fp64);
+      g.cov[3 * j] = unpack(o.state, b + 3 * K + j, fp64);
+      g.cov[3 * j + 1] = unpack(o.state, b + 4 * K + j, fp64);
+      g.cov[3 * j + 2] = unpack(o.state, b + 5 * K + j, fp64);
+    }
+    if (o.status[2 * i] == 2) {
+      r.ok = false;
+      r.loglik = -std::numeric_limits<double>::infinity();
+      r.failure = "numerical failure (non-finite log-likelihood or no responsibility mass) after " +
+                  std::to_string(r.iterations) + " iterations";
+    } else {
+      double l = 0;
+      for (std::size_t c = 0; c < n_chunks; ++c) l += unpack(o.ll, i * n_chunks + c, fp64);
+      r.loglik = l;
+      r.ok = std::isfinite(l);
+      if (!r.ok) r.failure = "non-finite final log-likelihood";
+    }
+    if (--f.remaining[f.problems[pi].task] == 0 && f.progress) f.progress->advance(1);
+  }
+}
+
+// The best restart per task (the first of equal log-likelihoods) into f.out.
+void keep_best_restarts(FitCall& f) {
+  std::vector<std::string> first_failure(f.tasks.size());
+  for (std::size_t pi = 0; pi < f.problems.size(); ++pi) {
+    const std::size_t ti = f.problems[pi].task;
+    EmResult& r = f.results[pi];
+    if (!r.ok) {
+      if (first_failure[ti].empty()) first_failure[ti] = r.failure;
+      continue;
+    }
+    if (!f.out[ti].ok || r.loglik > f.out[ti].loglik) f.out[ti] = std::move(r);
+  }
+  for (std::size_t ti = 0; ti < f.tasks.size(); ++ti)
+    if (!f.out[ti].ok && f.out[ti].failure.empty()) f.out[ti].failure = "every restart failed: " + first_failure[ti];
+}
+
+}  // namespace
+
 std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTask>& tasks,
                                     Progress* progress) {
   if (!calibrated_) calibrate();
@@ -177,29 +405,9 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
   validate_slices(set);
   validate_tasks(set, tasks);
   const SliceGrid& grid = set.grid;
-  const ChunkLayout layout(grid);
-  const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
-
-  // Slices, task failures, problems.
-  std::vector<std::unique_ptr<PreparedSlice>> prepared(set.weights.size());
-  std::vector<EmResult> out(tasks.size());
-  std::vector<Problem> problems;
-  std::vector<std::atomic<int>> remaining(tasks.size());
-  for (std::size_t ti = 0; ti < tasks.size(); ++ti) {
-    const EmTask& t = tasks[ti];
-    if (!prepared[t.slice]) prepared[t.slice] = std::make_unique<PreparedSlice>(prepare_slice(set, t.slice));
-    out[ti].ok = false;
-    out[ti].loglik = -std::numeric_limits<double>::infinity();
-    if (std::string why = task_failure(*prepared[t.slice], t.slice, t.k); !why.empty()) {
-      out[ti].failure = why;
-      remaining[ti] = 0;
-      if (progress) progress->advance(1);
-      continue;
-    }
-    remaining[ti] = t.settings.restarts;
-    for (int r = 0; r < t.settings.restarts; ++r) problems.push_back({ti, r});
-  }
-  std::vector<EmResult> results(problems.size());
+  FitCall f(set, tasks, progress);
+  const std::vector<Problem>& problems = f.problems;
+  const std::size_t stride = f.layout.stride;
 
   // Batches: problems of one K bucket and one set of settings, up to the budget.
   struct Key {  // what a batch's problems share
@@ -216,199 +424,39 @@ std::vector<EmResult> EmEngine::fit(const SliceSet& set, const std::vector<EmTas
     const EmSettings& s = t.settings;
     groups[Key{k_bucket(t.k), s.iterations, s.tolerance, cov_floor(grid, s), s.min_weight}].push_back(pi);
   }
-  std::vector<Batch> batches;
+  std::vector<std::pair<int, std::vector<std::size_t>>> lists;
+  for (auto& [key, list] : groups) lists.emplace_back(key.bucket, std::move(list));
+  const std::vector<ProblemBatch> batches = plan_batches(lists, stride, 0, device_limit(), budget());
   std::vector<double> cost;
-  const std::uint64_t limit = device_limit();
-  for (auto& [key, list] : groups) {
-    const int bucket = key.bucket;
-    check_problem_fits(stride, bucket, 0, limit);
-    for (auto& [b, items] : bucket_batches({{bucket, list}}, stride, 0, budget())) {
-      const EmSettings& s = tasks[problems[items.front()].task].settings;
-      cost.push_back(static_cast<double>(items.size()) * static_cast<double>(stride) * b * s.iterations);
-      batches.push_back(Batch{b, &s, std::move(items)});
-    }
+  for (const ProblemBatch& b : batches) {
+    const EmSettings& s = tasks[problems[b.items.front()].task].settings;
+    cost.push_back(static_cast<double>(b.items.size()) * static_cast<double>(stride) * b.bucket * s.iterations);
   }
   timing_.batches = batches.size();
 
-  std::mutex timing_mutex;
-
-  auto run_batch = [&](const BatchRun& run) {
-    const Batch& batch = batches[run.batch];
-    const std::size_t d = run.device;
-    const Device& dev = devices_[d];
-    const cl::CommandQueue& queue = *run.queue;
-    const bool fp64 = uses_fp64(d);
-    const KernelShape shape = this->shape(d);
-    const int K = batch.bucket;
-    const EmSettings& s = *batch.settings;
-    const std::size_t P = batch.problems.size();
-    const std::size_t real_size = fp64 ? 8 : 4;
-    const std::size_t nstat = 6 * static_cast<std::size_t>(K) + 1, nstate = 6 * static_cast<std::size_t>(K);
-
-    auto t0 = std::chrono::steady_clock::now();
-    // Initial states and the slices of the batch.
-    std::map<std::size_t, int> local_slice;
-    std::vector<int> prob_slice(P), prob_k(P);
-    std::vector<double> state(P * nstate, 0.0);
-    for (std::size_t i = 0; i < P; ++i) {
-      const EmTask& t = tasks[problems[batch.problems[i]].task];
-      auto it = local_slice.find(t.slice);
-      if (it == local_slice.end()) it = local_slice.emplace(t.slice, static_cast<int>(local_slice.size())).first;
-      prob_slice[i] = it->second;
-      prob_k[i] = t.k;
-    }
-    // Initializations in parallel on the host (each depends on its problem only).
-    const std::size_t init_threads =
-        std::min<std::size_t>(P, std::max(1u, std::thread::hardware_concurrency()));
-    run_on_workers(P, init_threads, [&](std::size_t, std::size_t i) {
-      const Problem& pr = problems[batch.problems[i]];
-      const EmTask& t = tasks[pr.task];
-      const Gmm g = task_start(grid, prepared[t.slice]->w, t, pr.restart);
-      double* st = &state[i * nstate];
-      for (int j = 0; j < t.k; ++j) {
-        st[0 * K + j] = g.weight[j];
-        st[1 * K + j] = g.mean[2 * j];
-        st[2 * K + j] = g.mean[2 * j + 1];
-        st[3 * K + j] = g.cov[3 * j];
-        st[4 * K + j] = g.cov[3 * j + 1];
-        st[5 * K + j] = g.cov[3 * j + 2];
-      }
-    });
-    std::vector<float> weights(local_slice.size() * stride, 0.0f);
-    for (const auto& [slice, local] : local_slice) {
-      const auto& w = prepared[slice]->w;
-      float* dst = &weights[static_cast<std::size_t>(local) * stride];
-      for (std::size_t c = 0; c < n_cells; ++c) dst[c] = static_cast<float>(w[c]);
-    }
+  run_batches("em", batches, cost, [&](const BatchWork& w) {
+    const EmSettings& s = f.task_of(w, 0).settings;
+    const auto t0 = std::chrono::steady_clock::now();
+    const EmInputs in(f, w);
     const double init_s = seconds_since(t0);
-
-    t0 = std::chrono::steady_clock::now();
-    std::vector<int> status(2 * P, 0);
-    std::vector<unsigned char> state_bytes = pack(state, fp64);
-    std::vector<unsigned char> ll_bytes(P * n_chunks * real_size);
-    int launched = 0;
-    try {
-      cl::Program program = build_program(dev, "em", em_program_options(K, shape, fp64));
-      cl::Buffer b_weights = upload(dev, "weights", weights), b_slice = upload(dev, "prob_slice", prob_slice),
-                 b_k = upload(dev, "prob_k", prob_k);
-      cl::Buffer b_status = device_buffer(dev, "status", status.size() * sizeof(int),
-                                          CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, status.data());
-      cl::Buffer b_state = device_buffer(dev, "state", state_bytes.size(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR,
-                                         state_bytes.data());
-      cl::Buffer b_lprev = device_buffer(dev, "lprev", P * real_size, CL_MEM_READ_WRITE);
-      cl::Buffer b_partials = device_buffer(dev, "partials", P * n_chunks * nstat * real_size, CL_MEM_READ_WRITE);
-      cl::Buffer b_const = device_buffer(dev, "cparams", P * nstate * sizeof(float), CL_MEM_READ_WRITE);
-      cl::Buffer b_ll = device_buffer(dev, "loglik partials", ll_bytes.size(), CL_MEM_WRITE_ONLY);
-
-      Routine k_const(program, "em_constants"), k_estep(program, "em_estep"), k_mstep(program, "em_mstep"),
-          k_ll(program, "em_loglik");
-      const cl_uint nP = static_cast<cl_uint>(P);
-      k_const.set("n_problems", nP).set("prob_k", b_k).set("state", b_state).set("cparams", b_const);
-      for (Routine* kk : {&k_estep, &k_ll}) {
-        set_grid_args(*kk, layout, grid);
-        kk->set("weights", b_weights).set("prob_slice", b_slice).set("prob_k", b_k).set("status", b_status)
-            .set("cparams", b_const);
-      }
-      k_estep.set("partials", b_partials);
-      k_ll.set("partials", b_ll);
-      k_mstep.set("n_problems", nP).set("G", static_cast<cl_uint>(n_chunks)).set("max_iter", static_cast<cl_int>(s.iterations));
-      k_mstep.set_real("tol", s.tolerance, fp64).set_real("cov_floor", cov_floor(grid, s), fp64)
-          .set_real("min_weight", s.min_weight, fp64);
-      k_mstep.set("prob_k", b_k).set("status", b_status).set("state", b_state).set("lprev", b_lprev)
-          .set("partials", b_partials).set("cparams", b_const);
-
-      const cl::NDRange e_global(n_chunks * static_cast<std::size_t>(shape.wg), P);
-      const cl::NDRange e_local(static_cast<std::size_t>(shape.wg), 1);
-      k_const.run(queue, cl::NDRange(P));
-      for (int it = 1; it <= s.iterations; ++it) {
-        if (run.cancelled()) break;  // another device finished this batch
-        k_estep.run(queue, e_global, e_local);
-        k_mstep.set("iter", static_cast<cl_int>(it));
-        k_mstep.run(queue, cl::NDRange(P));
-        ++launched;
-        // A run likely to lose to a faster device reads every iteration: if another device
-        // finishes the batch first, it stops after one iteration, not kStatusEvery.
-        if ((run.watched() || it % kStatusEvery == 0) && it < s.iterations) {
-          queue.enqueueReadBuffer(b_status, CL_TRUE, 0, status.size() * sizeof(int), status.data());
-          bool all = true;
-          for (std::size_t i = 0; i < P && all; ++i) all = status[2 * i] != 0;
-          if (all) break;
-        }
-      }
-      if (run.cancelled()) {
-        queue.finish();
-        return;
-      }
-      queue.finish();
-      const double iterate_s = seconds_since(t0);
-      t0 = std::chrono::steady_clock::now();
-      k_ll.run(queue, e_global, e_local);
-      queue.enqueueReadBuffer(b_status, CL_FALSE, 0, status.size() * sizeof(int), status.data());
-      queue.enqueueReadBuffer(b_state, CL_FALSE, 0, state_bytes.size(), state_bytes.data());
-      queue.enqueueReadBuffer(b_ll, CL_TRUE, 0, ll_bytes.size(), ll_bytes.data());
-      const double finish_s = seconds_since(t0);
-      if (!run.claim()) return;  // another device finished this batch first
-      std::lock_guard<std::mutex> lock(timing_mutex);
+    EmOutputs o;
+    o.status.assign(2 * w.size(), 0);
+    o.state = pack(in.state, w.fp64);
+    o.ll.resize(w.size() * f.layout.chunks * (w.fp64 ? 8 : 4));
+    if (!run_em(f, w, in, s, o)) return;  // another device finished this batch first
+    {
+      std::lock_guard<std::mutex> lock(f.timing_mutex);
       timing_.init_seconds += init_s;
-      timing_.iterate_seconds += iterate_s;
-      timing_.finish_seconds += finish_s;
-      timing_.iterations += launched;
-    } catch (const cl::Error& e) {
-      throw_device_error(e, "EM batch on " + dev.info().label());
+      timing_.iterate_seconds += o.iterate_seconds;
+      timing_.finish_seconds += o.finish_seconds;
+      timing_.iterations += o.launched;
     }
-
-    for (std::size_t i = 0; i < P; ++i) {
-      const std::size_t pi = batch.problems[i];
-      const EmTask& t = tasks[problems[pi].task];
-      EmResult& r = results[pi];
-      r.iterations = status[2 * i + 1];
-      Gmm& g = r.gmm;
-      g.weight.resize(t.k);
-      g.mean.resize(2 * t.k);
-      g.cov.resize(3 * t.k);
-      for (int j = 0; j < t.k; ++j) {
-        const std::size_t b = i * nstate;
-        g.weight[j] = unpack(state_bytes, b + 0 * K + j, fp64);
-        g.mean[2 * j] = unpack(state_bytes, b + 1 * K + j, fp64);
-        g.mean[2 * j + 1] = unpack(state_bytes, b + 2 * K + j, fp64);
-        g.cov[3 * j] = unpack(state_bytes, b + 3 * K + j, fp64);
-        g.cov[3 * j + 1] = unpack(state_bytes, b + 4 * K + j, fp64);
-        g.cov[3 * j + 2] = unpack(state_bytes, b + 5 * K + j, fp64);
-      }
-      if (status[2 * i] == 2) {
-        r.ok = false;
-        r.loglik = -std::numeric_limits<double>::infinity();
-        r.failure = "numerical failure (non-finite log-likelihood or no responsibility mass) after " +
-                    std::to_string(r.iterations) + " iterations";
-      } else {
-        double l = 0;
-        for (std::size_t c = 0; c < n_chunks; ++c) l += unpack(ll_bytes, i * n_chunks + c, fp64);
-        r.loglik = l;
-        r.ok = std::isfinite(l);
-        if (!r.ok) r.failure = "non-finite final log-likelihood";
-      }
-      if (--remaining[problems[pi].task] == 0 && progress) progress->advance(1);
-    }
-  };
-
-  pool_->run("em", cost, run_batch);
+    store_results(f, w, o);
+  });
   timing_.repeated = pool_->repeated();
-
-  // Best restart per task (the first of equal log-likelihoods).
-  std::vector<std::string> first_failure(tasks.size());
-  for (std::size_t pi = 0; pi < problems.size(); ++pi) {
-    const std::size_t ti = problems[pi].task;
-    EmResult& r = results[pi];
-    if (!r.ok) {
-      if (first_failure[ti].empty()) first_failure[ti] = r.failure;
-      continue;
-    }
-    if (!out[ti].ok || r.loglik > out[ti].loglik) out[ti] = std::move(r);
-  }
-  for (std::size_t ti = 0; ti < tasks.size(); ++ti)
-    if (!out[ti].ok && out[ti].failure.empty()) out[ti].failure = "every restart failed: " + first_failure[ti];
+  keep_best_restarts(f);
   timing_.seconds = seconds_since(fit_start);
-  return out;
+  return std::move(f.out);
 }
 
 }  // namespace bsdfmix

@@ -86,6 +86,43 @@ struct ChunkLayout {
 // (slice_stride, n_phi, inv_nphi, theta0, dtheta, phi0, dphi).
 void set_grid_args(Routine& routine, const ChunkLayout& layout, const SliceGrid& grid);
 
+// A batch of problems of one K bucket: their indices in the call.
+struct ProblemBatch {
+  int bucket = 0;
+  std::vector<std::size_t> items;
+};
+
+// Groups of problems, in order, each of one K bucket, cut into batches (bucket_batches)
+// after checking that one problem of each fits a device (check_problem_fits).
+std::vector<ProblemBatch> plan_batches(const std::vector<std::pair<int, std::vector<std::size_t>>>& groups,
+                                       std::size_t stride, int extra_rows, std::uint64_t limit,
+                                       std::uint64_t batch_budget);
+
+// One run of a batch, as EmEngine::run_batches hands it to an algorithm's work.
+struct BatchWork {
+  const ProblemBatch& batch;
+  const BatchRun& run;
+  const Device& device;
+  bool fp64;           // the device's real type (EmEngine::uses_fp64)
+  KernelShape shape;   // the device's kernel shape
+  std::size_t size() const { return batch.items.size(); }
+  int bucket() const { return batch.bucket; }
+};
+
+// The slices of a batch's problems as the batch holds them: problem i of the batch reads
+// slice local[i] of the batch's upload, slices numbered in the order they first appear.
+struct BatchSlices {
+  std::vector<int> local;                // per problem of the batch
+  std::map<std::size_t, int> of_slice;   // slice of the call -> its number in the batch
+  // slice_of(i): the slice (of the call) of problem i of the batch, for i < n.
+  BatchSlices(std::size_t n, const std::function<std::size_t(std::size_t)>& slice_of);
+  std::size_t count() const { return of_slice.size(); }
+};
+
+// Checks what every query of a batched routine holds (`what`: "L1 query"): its slice below
+// n_slices, its K within 1..kEmMaxK. ConfigError.
+void check_query(const std::string& what, std::size_t slice, std::size_t n_slices, int k);
+
 // Runs a batch's device work: an OpenCL error becomes a DeviceError naming `what` and the
 // device. True when this run is the first to finish the batch (BatchRun::claim): only then
 // may it write the batch's results.

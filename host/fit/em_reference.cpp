@@ -47,12 +47,94 @@ bool reseed(Gmm& g, std::vector<bool>& empty, int j) {
   return true;
 }
 
+// The E-step constants of every component of g.
+void set_constants(const Gmm& g, std::vector<Comp>& comp) {
+  for (int j = 0; j < g.k(); ++j) {
+    Eigen::Matrix2d cov;
+    cov << g.cov[3 * j], g.cov[3 * j + 1], g.cov[3 * j + 1], g.cov[3 * j + 2];
+    comp[j].mt = g.mean[2 * j];
+    comp[j].mp = g.mean[2 * j + 1];
+    comp[j].inv = cov.inverse();
+    comp[j].c0 = std::log(g.weight[j]) - std::log(kTwoPi) - 0.5 * std::log(cov.determinant());
+  }
+}
+
+// E-step with the statistics centred on the current means: per component j the six sums
+// stats[6 j + q] (responsibility times 1, dt, dp, dt^2, dt dp, dp^2); returns the weighted
+// log-likelihood. `e`: scratch, one value per component.
+double e_step(const SliceGrid& grid, const std::vector<double>& w, const std::vector<Comp>& comp,
+              std::vector<double>& e, std::vector<double>& stats) {
+  const std::size_t np = grid.phi.size(), n = w.size();
+  const int k = static_cast<int>(comp.size());
+  std::fill(stats.begin(), stats.end(), 0.0);
+  double L = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (w[i] <= 0) continue;
+    const double t = grid.theta[i / np], ph = grid.phi[i % np];
+    double m = -std::numeric_limits<double>::infinity();
+    for (int j = 0; j < k; ++j) {
+      const Eigen::Vector2d d(t - comp[j].mt, wrap_diff(ph - comp[j].mp));
+      e[j] = comp[j].c0 - 0.5 * d.dot(comp[j].inv * d);
+      m = std::max(m, e[j]);
+    }
+    double s = 0;
+    for (int j = 0; j < k; ++j) s += (e[j] = std::exp(e[j] - m));
+    L += w[i] * (m + std::log(s));
+    const double f = w[i] / s;
+    for (int j = 0; j < k; ++j) {
+      const double dt = t - comp[j].mt, dp = wrap_diff(ph - comp[j].mp);
+      const double rw = f * e[j];
+      double* a = &stats[6 * j];
+      a[0] += rw;
+      a[1] += rw * dt;
+      a[2] += rw * dp;
+      a[3] += rw * dt * dt;
+      a[4] += rw * dt * dp;
+      a[5] += rw * dp * dp;
+    }
+  }
+  return L;
+}
+
+// M-step from the statistics (as em_mstep): weights, means and floored covariances, empty
+// components re-seeded, weights renormalized. False on a numerical failure (no
+// responsibility mass, or no component left to split).
+bool m_step(Gmm& g, const std::vector<double>& stats, const EmSettings& settings, double floor) {
+  const int k = g.k();
+  double total = 0;
+  for (int j = 0; j < k; ++j) total += stats[6 * j];
+  if (!(total > 0) || !std::isfinite(total)) return false;
+  std::vector<bool> empty(k);
+  for (int j = 0; j < k; ++j) {
+    const double* a = &stats[6 * j];
+    empty[j] = !(a[0] > settings.min_weight * total);
+    if (empty[j]) continue;
+    const double dt = a[1] / a[0], dp = a[2] / a[0];
+    double ctt = std::max(a[3] / a[0] - dt * dt, 0.0);
+    double cpp = std::max(a[5] / a[0] - dp * dp, 0.0);
+    const double lim = std::sqrt(ctt * cpp);
+    double ctp = std::min(std::max(a[4] / a[0] - dt * dp, -lim), lim);
+    floor_covariance(ctt, ctp, cpp, floor);
+    g.weight[j] = a[0] / total;
+    g.mean[2 * j] += dt;
+    g.mean[2 * j + 1] = wrap_phi(g.mean[2 * j + 1] + dp);
+    g.cov[3 * j] = ctt;
+    g.cov[3 * j + 1] = ctp;
+    g.cov[3 * j + 2] = cpp;
+  }
+  for (int j = 0; j < k; ++j)
+    if (empty[j] && !reseed(g, empty, j)) return false;
+  double wsum = 0;
+  for (int j = 0; j < k; ++j) wsum += g.weight[j];
+  for (int j = 0; j < k; ++j) g.weight[j] /= wsum;
+  return true;
+}
+
 }  // namespace
 
 EmResult run_reference(const SliceGrid& grid, const std::vector<double>& w, const Gmm& init,
                        const EmSettings& settings, double* iterate_seconds) {
   const auto start = std::chrono::steady_clock::now();
-  const std::size_t np = grid.phi.size(), n = w.size();
   const int k = init.k();
   const double floor = cov_floor(grid, settings);
   EmResult r;
@@ -63,42 +145,8 @@ EmResult run_reference(const SliceGrid& grid, const std::vector<double>& w, cons
   double lprev = 0;
   bool failed = false;
   for (int it = 1; it <= settings.iterations; ++it) {
-    for (int j = 0; j < k; ++j) {
-      Eigen::Matrix2d cov;
-      cov << g.cov[3 * j], g.cov[3 * j + 1], g.cov[3 * j + 1], g.cov[3 * j + 2];
-      comp[j].mt = g.mean[2 * j];
-      comp[j].mp = g.mean[2 * j + 1];
-      comp[j].inv = cov.inverse();
-      comp[j].c0 = std::log(g.weight[j]) - std::log(kTwoPi) - 0.5 * std::log(cov.determinant());
-    }
-    // E-step with the statistics centred on the current means.
-    std::fill(stats.begin(), stats.end(), 0.0);
-    double L = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (w[i] <= 0) continue;
-      const double t = grid.theta[i / np], ph = grid.phi[i % np];
-      double m = -std::numeric_limits<double>::infinity();
-      for (int j = 0; j < k; ++j) {
-        const Eigen::Vector2d d(t - comp[j].mt, wrap_diff(ph - comp[j].mp));
-        e[j] = comp[j].c0 - 0.5 * d.dot(comp[j].inv * d);
-        m = std::max(m, e[j]);
-      }
-      double s = 0;
-      for (int j = 0; j < k; ++j) s += (e[j] = std::exp(e[j] - m));
-      L += w[i] * (m + std::log(s));
-      const double f = w[i] / s;
-      for (int j = 0; j < k; ++j) {
-        const double dt = t - comp[j].mt, dp = wrap_diff(ph - comp[j].mp);
-        const double rw = f * e[j];
-        double* a = &stats[6 * j];
-        a[0] += rw;
-        a[1] += rw * dt;
-        a[2] += rw * dp;
-        a[3] += rw * dt * dt;
-        a[4] += rw * dt * dp;
-        a[5] += rw * dp * dp;
-      }
-    }
+    set_constants(g, comp);
+    const double L = e_step(grid, w, comp, e, stats);
     if (!std::isfinite(L)) {
       failed = true;
       r.iterations = it - 1;
@@ -110,41 +158,11 @@ EmResult run_reference(const SliceGrid& grid, const std::vector<double>& w, cons
       break;
     }
     lprev = L;
-    // M-step.
-    double total = 0;
-    for (int j = 0; j < k; ++j) total += stats[6 * j];
-    if (!(total > 0) || !std::isfinite(total)) {
+    if (!m_step(g, stats, settings, floor)) {
       failed = true;
       r.iterations = it - 1;
       break;
     }
-    std::vector<bool> empty(k);
-    for (int j = 0; j < k; ++j) {
-      const double* a = &stats[6 * j];
-      empty[j] = !(a[0] > settings.min_weight * total);
-      if (empty[j]) continue;
-      const double dt = a[1] / a[0], dp = a[2] / a[0];
-      double ctt = std::max(a[3] / a[0] - dt * dt, 0.0);
-      double cpp = std::max(a[5] / a[0] - dp * dp, 0.0);
-      const double lim = std::sqrt(ctt * cpp);
-      double ctp = std::min(std::max(a[4] / a[0] - dt * dp, -lim), lim);
-      floor_covariance(ctt, ctp, cpp, floor);
-      g.weight[j] = a[0] / total;
-      g.mean[2 * j] += dt;
-      g.mean[2 * j + 1] = wrap_phi(g.mean[2 * j + 1] + dp);
-      g.cov[3 * j] = ctt;
-      g.cov[3 * j + 1] = ctp;
-      g.cov[3 * j + 2] = cpp;
-    }
-    for (int j = 0; j < k && !failed; ++j)
-      if (empty[j] && !reseed(g, empty, j)) failed = true;
-    if (failed) {
-      r.iterations = it - 1;
-      break;
-    }
-    double wsum = 0;
-    for (int j = 0; j < k; ++j) wsum += g.weight[j];
-    for (int j = 0; j < k; ++j) g.weight[j] /= wsum;
     r.iterations = it;
   }
   if (iterate_seconds)

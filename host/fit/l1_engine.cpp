@@ -38,25 +38,75 @@ EmEngine::L1Slices EmEngine::l1_prepare(const SliceSet& set) {
   return out;
 }
 
-std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vector<L1Query>& queries,
-                                         const L1Objective& objective) {
-  if (!calibrated_) calibrate();
-  const SliceGrid& grid = slices.grid;
-  const ChunkLayout layout(grid);
-  const std::size_t n_cells = layout.cells, n_chunks = layout.chunks, stride = layout.stride;
-  const double area = axis_step(grid.theta) * layout.dphi;
+namespace {
 
+void check_queries(const EmEngine::L1Slices& slices, const std::vector<L1Query>& queries) {
   for (const auto& q : queries) {
-    if (q.slice >= slices.w.size())
-      throw ConfigError("L1 query: slice " + std::to_string(q.slice) + " out of range");
-    if (q.gmm.k() < 1 || q.gmm.k() > kEmMaxK)
-      throw ConfigError("L1 query: K = " + std::to_string(q.gmm.k()) + " outside 1.." + std::to_string(kEmMaxK));
+    check_query("L1 query", q.slice, slices.w.size(), q.gmm.k());
     if (!q.rgb_amp.empty() && q.rgb_amp.size() != 3 * static_cast<std::size_t>(q.gmm.k()))
       throw ConfigError("L1 query: " + std::to_string(q.rgb_amp.size()) + " channel amplitudes, expected " +
                         std::to_string(3 * q.gmm.k()));
     if (!q.rgb_amp.empty() && slices.rgb.empty())
       throw ConfigError("L1 query: channel amplitudes, but the slices have no rgb");
   }
+}
+
+// The inputs of em_l1 for one batch of queries.
+struct L1Batch {
+  bool colour = false;  // the channels' variant of the kernel: some query of the batch has them
+  std::size_t nq = 6;   // sums per component
+  BatchSlices slices;
+  std::vector<int> prob_k, images;
+  std::vector<float> cparams, camp, prob_weights, weights, channels;
+
+  L1Batch(const BatchWork& w, const EmEngine::L1Slices& in, const std::vector<L1Query>& queries,
+          const L1Objective& objective, std::size_t stride)
+      : slices(w.size(), [&](std::size_t i) { return queries[w.batch.items[i]].slice; }) {
+    const std::vector<std::size_t>& items = w.batch.items;
+    const std::size_t P = w.size(), K = static_cast<std::size_t>(w.bucket()), nconst = 6 * K;
+    colour = std::any_of(items.begin(), items.end(), [&](std::size_t i) { return !queries[i].rgb_amp.empty(); });
+    nq = colour ? 9 : 6;
+    prob_k.resize(P);
+    images.assign(P * K, 0);
+    cparams.assign(P * nconst, 0.0f);
+    camp.assign(colour ? P * 3 * K : 1, 0.0f);
+    prob_weights.resize(2 * P);
+    for (std::size_t i = 0; i < P; ++i) {
+      const L1Query& q = queries[items[i]];
+      prob_k[i] = q.gmm.k();
+      const L1Weights lw = l1_weights(objective, !q.rgb_amp.empty());
+      prob_weights[2 * i] = static_cast<float>(lw.kl);
+      prob_weights[2 * i + 1] = static_cast<float>(lw.rgb);
+      // The E-step constants of kernels/em.cl component_constants, in double then float.
+      for (int j = 0; j < q.gmm.k(); ++j) {
+        component_constants(q.gmm, j, static_cast<int>(K), std::log2(q.gmm.weight[j]), &cparams[i * nconst]);
+        images[i * K + j] = l1_images(q.gmm.cov[3 * j + 2]);
+        if (!q.rgb_amp.empty())  // the kernel weighs pi_j N_j: each channel's amplitude over pi_j
+          for (int c = 0; c < 3; ++c)
+            camp[(i * 3 + c) * K + j] = static_cast<float>(q.rgb_amp[c * q.gmm.k() + j] / q.gmm.weight[j]);
+      }
+    }
+    weights.assign(slices.count() * stride, 0.0f);
+    for (const auto& [slice, local] : slices.of_slice)
+      std::copy(in.w[slice].begin(), in.w[slice].end(), weights.begin() + static_cast<std::ptrdiff_t>(local) * stride);
+    channels.assign(colour ? slices.count() * 3 * stride : 1, 0.0f);
+    if (colour)
+      for (const auto& [slice, local] : slices.of_slice)
+        std::copy(in.rgb[slice].begin(), in.rgb[slice].end(),
+                  channels.begin() + static_cast<std::ptrdiff_t>(local) * 3 * stride);
+  }
+};
+
+}  // namespace
+
+std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vector<L1Query>& queries,
+                                         const L1Objective& objective) {
+  if (!calibrated_) calibrate();
+  const SliceGrid& grid = slices.grid;
+  const ChunkLayout layout(grid);
+  const std::size_t n_chunks = layout.chunks, stride = layout.stride;
+  const double area = axis_step(grid.theta) * layout.dphi;
+  check_queries(slices, queries);
   std::vector<L1Value> out(queries.size());
   // Batches: queries of one K bucket, up to the budget.
   std::map<int, std::vector<std::size_t>> groups;
@@ -65,90 +115,51 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
     if (slices.w[queries[i].slice].empty()) continue;  // a zero slice: objective 0
     groups[k_bucket(queries[i].gmm.k())].push_back(i);
   }
-  for (const auto& [bucket, list] : groups) check_problem_fits(stride, bucket, 0, device_limit());
-  const auto batches = bucket_batches(groups, stride, 0, budget());
+  const auto batches = plan_batches({groups.begin(), groups.end()}, stride, 0, device_limit(), budget());
   std::vector<double> cost;
-  for (const auto& [K, items] : batches) cost.push_back(static_cast<double>(items.size()) * stride * K);
+  for (const auto& b : batches) cost.push_back(static_cast<double>(b.items.size()) * stride * b.bucket);
 
-  auto run_batch = [&](const BatchRun& run) {
-    const int K = batches[run.batch].first;
-    const std::vector<std::size_t>& items = batches[run.batch].second;
-    const std::size_t d = run.device;
-    const Device& dev = devices_[d];
-    const bool fp64 = uses_fp64(d);
-    const KernelShape shape = this->shape(d);
-    const std::size_t P = items.size(), real_size = fp64 ? 8 : 4;
-    // The channels' variant of the kernel when some query of the batch has them.
-    const bool colour = std::any_of(items.begin(), items.end(), [&](std::size_t i) { return !queries[i].rgb_amp.empty(); });
-    const std::size_t nq = colour ? 9 : 6;
-    const std::size_t nstat = nq * static_cast<std::size_t>(K) + 1, nconst = 6 * static_cast<std::size_t>(K);
-
-    std::map<std::size_t, int> local_slice;
-    std::vector<int> prob_slice(P), prob_k(P), images(P * K, 0);
-    std::vector<float> cparams(P * nconst, 0.0f), camp(colour ? P * 3 * K : 1, 0.0f), prob_weights(2 * P);
-    for (std::size_t i = 0; i < P; ++i) {
-      const L1Query& q = queries[items[i]];
-      auto it = local_slice.find(q.slice);
-      if (it == local_slice.end()) it = local_slice.emplace(q.slice, static_cast<int>(local_slice.size())).first;
-      prob_slice[i] = it->second;
-      prob_k[i] = q.gmm.k();
-      const L1Weights w = l1_weights(objective, !q.rgb_amp.empty());
-      prob_weights[2 * i] = static_cast<float>(w.kl);
-      prob_weights[2 * i + 1] = static_cast<float>(w.rgb);
-      // The E-step constants of kernels/em.cl component_constants, in double then float.
-      for (int j = 0; j < q.gmm.k(); ++j) {
-        component_constants(q.gmm, j, K, std::log2(q.gmm.weight[j]), &cparams[i * nconst]);
-        images[i * K + j] = l1_images(q.gmm.cov[3 * j + 2]);
-        if (!q.rgb_amp.empty())  // the kernel weighs pi_j N_j: each channel's amplitude over pi_j
-          for (int c = 0; c < 3; ++c)
-            camp[(i * 3 + c) * K + j] = static_cast<float>(q.rgb_amp[c * q.gmm.k() + j] / q.gmm.weight[j]);
-      }
-    }
-    std::vector<float> weights(local_slice.size() * stride, 0.0f);
-    for (const auto& [slice, local] : local_slice)
-      std::copy(slices.w[slice].begin(), slices.w[slice].end(), weights.begin() + static_cast<std::ptrdiff_t>(local) * stride);
-    std::vector<float> channels(colour ? local_slice.size() * 3 * stride : 1, 0.0f);
-    if (colour)
-      for (const auto& [slice, local] : local_slice)
-        std::copy(slices.rgb[slice].begin(), slices.rgb[slice].end(),
-                  channels.begin() + static_cast<std::ptrdiff_t>(local) * 3 * stride);
+  run_batches("l1", batches, cost, [&](const BatchWork& w) {
+    const int K = w.bucket();
+    const std::size_t P = w.size(), real_size = w.fp64 ? 8 : 4;
+    const L1Batch in(w, slices, queries, objective, stride);
+    const std::size_t nstat = in.nq * static_cast<std::size_t>(K) + 1;
     std::vector<unsigned char> partials(P * n_chunks * nstat * real_size);
-    const bool won = run_on_device(run, dev, "L1 evaluation", [&] {
+    const Device& dev = w.device;
+    const bool won = run_on_device(w.run, dev, "L1 evaluation", [&] {
       cl::Program program =
-          build_program(dev, "l1", em_program_options(K, shape, fp64) + (colour ? " -DL1_CH=3" : ""));
-      const cl::CommandQueue& queue = *run.queue;
+          build_program(dev, "l1", em_program_options(K, w.shape, w.fp64) + (in.colour ? " -DL1_CH=3" : ""));
       Routine kern(program, "em_l1");
       set_grid_args(kern, layout, grid);
       cl::Buffer b_partials = device_buffer(dev, "partials", partials.size(), CL_MEM_WRITE_ONLY);
-      kern.set("weights", upload(dev, "weights", weights))
-          .set("prob_slice", upload(dev, "prob_slice", prob_slice))
-          .set("prob_k", upload(dev, "prob_k", prob_k))
-          .set("cparams", upload(dev, "cparams", cparams))
-          .set("prob_images", upload(dev, "prob_images", images))
-          .set("n_cells", static_cast<cl_uint>(n_cells))
+      kern.set("weights", upload(dev, "weights", in.weights))
+          .set("prob_slice", upload(dev, "prob_slice", in.slices.local))
+          .set("prob_k", upload(dev, "prob_k", in.prob_k))
+          .set("cparams", upload(dev, "cparams", in.cparams))
+          .set("prob_images", upload(dev, "prob_images", in.images))
+          .set("n_cells", static_cast<cl_uint>(layout.cells))
           .set("area", static_cast<float>(area))
           .set("eps", static_cast<float>(objective.eps))
-          .set("prob_weights", upload(dev, "prob_weights", prob_weights))
-          .set("channels", upload(dev, "channels", channels))
-          .set("camp", upload(dev, "camp", camp))
+          .set("prob_weights", upload(dev, "prob_weights", in.prob_weights))
+          .set("channels", upload(dev, "channels", in.channels))
+          .set("camp", upload(dev, "camp", in.camp))
           .set("partials", b_partials);
-      kern.run(queue, cl::NDRange(n_chunks * static_cast<std::size_t>(shape.wg), P),
-               cl::NDRange(static_cast<std::size_t>(shape.wg), 1));
-      download(queue, b_partials, partials, true);
+      kern.run(*w.run.queue, cl::NDRange(n_chunks * static_cast<std::size_t>(w.shape.wg), P),
+               cl::NDRange(static_cast<std::size_t>(w.shape.wg), 1));
+      download(*w.run.queue, b_partials, partials, true);
     });
     if (!won) return;  // another device finished this batch first
     for (std::size_t i = 0; i < P; ++i) {
-      L1Value& v = out[items[i]];
-      const int k = prob_k[i];
+      L1Value& v = out[w.batch.items[i]];
+      const int k = in.prob_k[i];
       for (std::size_t g = 0; g < n_chunks; ++g) {
         const std::size_t base = (i * n_chunks + g) * nstat;
-        v.objective += unpack(partials, base + nq * K, fp64);
+        v.objective += unpack(partials, base + in.nq * K, w.fp64);
         for (int q = 0; q < static_cast<int>(v.stats.size()) / k; ++q)
-          for (int j = 0; j < k; ++j) v.stats[q * k + j] += unpack(partials, base + q * K + j, fp64);
+          for (int j = 0; j < k; ++j) v.stats[q * k + j] += unpack(partials, base + q * K + j, w.fp64);
       }
     }
-  };
-  pool_->run("l1", cost, run_batch);
+  });
   return out;
 }
 

@@ -21,40 +21,78 @@ double wrap_diff(double d) { return d - 2 * kPi * std::nearbyint(d / (2 * kPi));
 // exp(x), 0 below the normal range: libm takes a slow path for results that underflow.
 double exp_or_zero(double x) { return x < -708 ? 0.0 : std::exp(x); }
 
+// Per cell i and component j, log N_j(x_i) (nearest image) at logn[i k + j]; per cell the
+// log of the mixture's density, logs[i]; per component its largest log N_j, zmax[j], and
+// its log weight, lw[j].
+struct LogDensities {
+  std::vector<double> logn, logs, zmax, lw;
+  LogDensities(const SliceGrid& grid, std::size_t n, const Gmm& gmm) {
+    const int k = gmm.k();
+    const std::size_t np = grid.phi.size();
+    // Per component: inverse covariance, log normalization.
+    std::vector<double> ia(k), ib(k), ic(k), lnorm(k);
+    lw.resize(k);
+    for (int j = 0; j < k; ++j) {
+      const double a = gmm.cov[3 * j], b = gmm.cov[3 * j + 1], c = gmm.cov[3 * j + 2];
+      const double det = a * c - b * b;
+      ia[j] = c / det;
+      ib[j] = -b / det;
+      ic[j] = a / det;
+      lnorm[j] = -std::log(2 * kPi) - 0.5 * std::log(det);
+      lw[j] = std::log(std::max(gmm.weight[j], std::numeric_limits<double>::min()));
+    }
+    logn.resize(n * static_cast<std::size_t>(k));
+    logs.resize(n);
+    zmax.assign(k, -std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < n; ++i) {
+      const double t = grid.theta[i / np], ph = grid.phi[i % np];
+      double m = -std::numeric_limits<double>::infinity();
+      for (int j = 0; j < k; ++j) {
+        const double dt = t - gmm.mean[2 * j], dp = wrap_diff(ph - gmm.mean[2 * j + 1]);
+        const double l = lnorm[j] - 0.5 * (ia[j] * dt * dt + 2 * ib[j] * dt * dp + ic[j] * dp * dp);
+        logn[i * k + j] = l;
+        zmax[j] = std::max(zmax[j], l);
+        m = std::max(m, lw[j] + l);
+      }
+      double s = 0;
+      for (int j = 0; j < k; ++j) s += exp_or_zero(lw[j] + logn[i * k + j] - m);
+      logs[i] = m + std::log(s);
+    }
+  }
+};
+
+// The pairs (a, b), a < b, of the largest positive overlap cross_ab / sqrt(self_a self_b),
+// at most max_pairs, largest first (ties by index).
+std::vector<std::pair<int, int>> merge_pairs(const std::vector<double>& self, const std::vector<double>& cross, int k,
+                                             std::size_t max_pairs) {
+  std::vector<std::pair<int, int>> out;
+  std::vector<std::pair<double, std::pair<int, int>>> pairs;
+  for (int a = 0; a < k; ++a)
+    for (int b = a + 1; b < k; ++b) {
+      const double d = std::sqrt(self[a] * self[b]);
+      const double c = d > 0 ? cross[static_cast<std::size_t>(a) * k + b] / d : 0.0;
+      if (c > 0) pairs.push_back({c, {a, b}});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) {
+    return x.first != y.first ? x.first > y.first : x.second < y.second;
+  });
+  for (std::size_t p = 0; p < pairs.size() && p < max_pairs; ++p) out.push_back(pairs[p].second);
+  return out;
+}
+
 }  // namespace
 
 ComponentScores score_components(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm,
                                  std::size_t max_pairs) {
   const int k = gmm.k();
   const std::size_t np = grid.phi.size(), n = w.size();
-  // Per component: mean, inverse covariance, log normalization.
-  std::vector<double> ia(k), ib(k), ic(k), lnorm(k), lw(k);
-  for (int j = 0; j < k; ++j) {
-    const double a = gmm.cov[3 * j], b = gmm.cov[3 * j + 1], c = gmm.cov[3 * j + 2];
-    const double det = a * c - b * b;
-    ia[j] = c / det;
-    ib[j] = -b / det;
-    ic[j] = a / det;
-    lnorm[j] = -std::log(2 * kPi) - 0.5 * std::log(det);
-    lw[j] = std::log(std::max(gmm.weight[j], std::numeric_limits<double>::min()));
-  }
   // Pass 1: log N_k(x_i) (nearest image), responsibilities, per-component sums.
-  std::vector<double> logn(n * static_cast<std::size_t>(k)), logs(n);
-  std::vector<double> mass(k, 0.0), zmax(k, -std::numeric_limits<double>::infinity());
-  for (std::size_t i = 0; i < n; ++i) {
-    const double t = grid.theta[i / np], ph = grid.phi[i % np];
-    double m = -std::numeric_limits<double>::infinity();
-    for (int j = 0; j < k; ++j) {
-      const double dt = t - gmm.mean[2 * j], dp = wrap_diff(ph - gmm.mean[2 * j + 1]);
-      const double l = lnorm[j] - 0.5 * (ia[j] * dt * dt + 2 * ib[j] * dt * dp + ic[j] * dp * dp);
-      logn[i * k + j] = l;
-      zmax[j] = std::max(zmax[j], l);
-      m = std::max(m, lw[j] + l);
-    }
-    double s = 0;
-    for (int j = 0; j < k; ++j) s += exp_or_zero(lw[j] + logn[i * k + j] - m);
-    logs[i] = m + std::log(s);
-  }
+  const LogDensities dens(grid, n, gmm);
+  const std::vector<double>& logn = dens.logn;
+  const std::vector<double>& logs = dens.logs;
+  const std::vector<double>& zmax = dens.zmax;
+  const std::vector<double>& lw = dens.lw;
+  std::vector<double> mass(k, 0.0);
   // log Z_k = log sum_i N_k(x_i), and the claimed mass A_k = sum_i w_i r_ik.
   std::vector<double> zsum(k, 0.0);
   for (std::size_t i = 0; i < n; ++i)
@@ -112,17 +150,7 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
     auto kurtosis = [&](int q) { return m2[2 * j + q] > 0 ? m4[2 * j + q] * mass[j] / (m2[2 * j + q] * m2[2 * j + q]) : 3.0; };
     if (mass[j] > 0 && kurtosis(1) < kurtosis(0)) out.axis[j] = 1;
   }
-  std::vector<std::pair<double, std::pair<int, int>>> pairs;
-  for (int a = 0; a < k; ++a)
-    for (int b = a + 1; b < k; ++b) {
-      const double d = std::sqrt(self[a] * self[b]);
-      const double c = d > 0 ? cross[static_cast<std::size_t>(a) * k + b] / d : 0.0;
-      if (c > 0) pairs.push_back({c, {a, b}});
-    }
-  std::sort(pairs.begin(), pairs.end(), [](const auto& x, const auto& y) {
-    return x.first != y.first ? x.first > y.first : x.second < y.second;
-  });
-  for (std::size_t p = 0; p < pairs.size() && p < max_pairs; ++p) out.merge.push_back(pairs[p].second);
+  out.merge = merge_pairs(self, cross, k, max_pairs);
   return out;
 }
 

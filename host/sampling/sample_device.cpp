@@ -2,10 +2,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include "core/error.hpp"
 #include "device/program.hpp"
 #include "device/routine.hpp"
+#include "device/shapes.hpp"
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
@@ -22,8 +24,11 @@ cl::Buffer upload(const Device& device, const std::vector<float>& v) {
   return bsdfmix::upload(device, "sampling input", v.empty() ? std::vector<float>(16, 0.f) : v);
 }
 
-constexpr std::size_t kLocal = 64;
-std::size_t padded(std::size_t n) { return (n + kLocal - 1) / kLocal * kLocal; }
+// A launch of `items` work-items in work-groups of the device's item size (device/shapes.hpp).
+void run_items(Routine& routine, const cl::CommandQueue& queue, const Device& device, std::size_t items) {
+  const std::size_t group = item_group_size(device.info());
+  routine.run(queue, cl::NDRange(item_global_size(items, group)), cl::NDRange(group));
+}
 
 }  // namespace
 
@@ -39,20 +44,14 @@ std::vector<mix::Sample> sample_device(const Device& device, const mix::MixtureS
   cl::Buffer q = upload(device, qm.q), comps = upload(device, qm.comps), pdf = upload(device, qm.pdf);
   const std::size_t batch = std::min<std::size_t>(n, std::size_t(1) << 22);
   cl::Buffer res(device.context(), CL_MEM_WRITE_ONLY, batch * 4 * sizeof(float));
-  cl::Kernel k(program, "sample_mixture");
+  Routine k(program, "sample_mixture");
+  k.set("q", q).set("comps", comps).set("pd", pdf).set("key0", cl_uint(seed)).set("key1", cl_uint(seed >> 32))
+      .set("stream", cl_uint(stream)).set("out", res);
   std::vector<float> host(batch * 4);
   for (std::size_t done = 0; done < n; done += batch) {
     const std::size_t m = std::min(batch, n - done);
-    k.setArg(0, q);
-    k.setArg(1, comps);
-    k.setArg(2, pdf);
-    k.setArg(3, cl_uint(seed));
-    k.setArg(4, cl_uint(seed >> 32));
-    k.setArg(5, cl_uint(stream));
-    k.setArg(6, cl_ulong(first + done));
-    k.setArg(7, cl_uint(m));
-    k.setArg(8, res);
-    launch(queue, k, "sample_mixture", cl::NDRange(padded(m)), cl::NDRange(kLocal));
+    k.set("first", cl_ulong(first + done)).set("n", cl_uint(m));
+    run_items(k, queue, device, m);
     queue.enqueueReadBuffer(res, CL_TRUE, 0, m * 4 * sizeof(float), host.data());
     for (std::size_t i = 0; i < m; ++i) {
       mix::Sample s;
@@ -80,13 +79,9 @@ std::vector<std::pair<double, double>> eval_device(const Device& device, const m
   }
   cl::Buffer q = upload(device, qm.q), pdf = upload(device, qm.pdf), db = upload(device, d);
   cl::Buffer res(device.context(), CL_MEM_WRITE_ONLY, dirs.size() * 2 * sizeof(float));
-  cl::Kernel k(program, "eval_mixture");
-  k.setArg(0, q);
-  k.setArg(1, pdf);
-  k.setArg(2, db);
-  k.setArg(3, cl_uint(dirs.size()));
-  k.setArg(4, res);
-  launch(queue, k, "eval_mixture", cl::NDRange(padded(dirs.size())), cl::NDRange(kLocal));
+  Routine k(program, "eval_mixture");
+  k.set("q", q).set("pd", pdf).set("dirs", db).set("n", cl_uint(dirs.size())).set("out", res);
+  run_items(k, queue, device, dirs.size());
   std::vector<float> host(dirs.size() * 2);
   queue.enqueueReadBuffer(res, CL_TRUE, 0, host.size() * sizeof(float), host.data());
   for (std::size_t i = 0; i < dirs.size(); ++i) out.emplace_back(host[2 * i], host[2 * i + 1]);
@@ -101,7 +96,7 @@ class IntegrateLaunch {
  public:
   IntegrateLaunch(const Device& device, const Problem& p, Estimator e, int runs, std::uint64_t n_max,
                   std::uint64_t seed, std::uint32_t chunk)
-      : runs_(runs), n_max_(n_max) {
+      : runs_(runs), n_max_(n_max), group_(item_group_size(device.info())) {
     if (n_max == 0 || (n_max & (n_max - 1)) != 0)
       throw ConfigError("integrate: the sample count must be a power of two");
     if (runs < 1) throw ConfigError("integrate: runs must be at least 1");
@@ -135,17 +130,17 @@ class IntegrateLaunch {
     items_ = std::size_t(chunks_) * std::size_t(runs);
     if (uses_product(e) && !p.has_product)
       throw ConfigError(std::string("integrate: ") + estimator_name(e) + " needs the lighting's mixture");
-    // kernel argument order: q, comps, pdf, geo, f, marg, cond, sc, env, q2, comps2, pdf2, ls
-    bufs_ = {upload(device, qm.q),          upload(device, qm.comps),         upload(device, qm.pdf),
-             upload(device, p.geometry()),  upload(device, f_dev),            upload(device, p.cdf.marginal),
-             upload(device, p.cdf.conditional), upload(device, p.light.pack()), upload(device, p.light.env),
-             upload(device, p.product_query.q), upload(device, p.product_query.comps),
-             upload(device, p.product_query.pdf), upload(device, p.light_sampler.pack())};
     sums_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, items_ * sizeof(float));
     prefix_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, std::max<std::size_t>(1, std::size_t(runs) * levels_) * sizeof(float));
-    kernel_ = cl::Kernel(program, "integrate_chunks");
-    seed_ = seed;
-    stream_ = estimator_stream(int(e));
+    kernel_ = std::make_unique<Routine>(program, "integrate_chunks");
+    kernel_->set("q", upload(device, qm.q)).set("comps", upload(device, qm.comps)).set("pd", upload(device, qm.pdf))
+        .set("geo", upload(device, p.geometry())).set("f", upload(device, f_dev))
+        .set("marg", upload(device, p.cdf.marginal)).set("cond", upload(device, p.cdf.conditional))
+        .set("sc", upload(device, p.light.pack())).set("env", upload(device, p.light.env))
+        .set("q2", upload(device, p.product_query.q)).set("comps2", upload(device, p.product_query.comps))
+        .set("pd2", upload(device, p.product_query.pdf)).set("ls", upload(device, p.light_sampler.pack()))
+        .set("key0", cl_uint(seed)).set("key1", cl_uint(seed >> 32)).set("stream", cl_uint(estimator_stream(int(e))))
+        .set("levels", levels_).set("sums", sums_).set("prefix", prefix_);
   }
 
   // One timed launch of the full shape (runs x n_max samples); the first call is preceded
@@ -154,13 +149,13 @@ class IntegrateLaunch {
   double timed() {
     if (!warm_) {
       set_args(1, 1, std::min<cl_uint>(chunk_, 64));
-      launch(queue_, kernel_, "integrate_chunks", cl::NDRange(kLocal), cl::NDRange(kLocal));
+      kernel_->run(queue_, cl::NDRange(group_), cl::NDRange(group_));
       queue_.finish();
       warm_ = true;
     }
     set_args(cl_uint(runs_), cl_uint(chunks_), chunk_);
     const auto t0 = std::chrono::steady_clock::now();
-    launch(queue_, kernel_, "integrate_chunks", cl::NDRange(padded(items_)), cl::NDRange(kLocal));
+    kernel_->run(queue_, cl::NDRange(item_global_size(items_, group_)), cl::NDRange(group_));
     queue_.finish();
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -195,30 +190,19 @@ class IntegrateLaunch {
 
  private:
   void set_args(cl_uint n_runs, cl_uint n_chunks, cl_uint n_chunk) {
-    cl_uint a = 0;
-    for (const cl::Buffer& b : bufs_) kernel_.setArg(a++, b);
-    kernel_.setArg(a++, cl_uint(seed_));
-    kernel_.setArg(a++, cl_uint(seed_ >> 32));
-    kernel_.setArg(a++, cl_uint(stream_));
-    kernel_.setArg(a++, n_runs);
-    kernel_.setArg(a++, n_chunks);
-    kernel_.setArg(a++, n_chunk);
-    kernel_.setArg(a++, levels_);
-    kernel_.setArg(a++, sums_);
-    kernel_.setArg(a++, prefix_);
+    kernel_->set("runs", n_runs).set("chunks", n_chunks).set("chunk", n_chunk);
   }
 
   int runs_;
-  std::uint64_t n_max_, chunks_ = 0, seed_ = 0;
-  std::uint32_t chunk_ = 0, stream_ = 0;
+  std::uint64_t n_max_, chunks_ = 0;
+  std::uint32_t chunk_ = 0;
   cl_uint levels_ = 0;
   double unit_ = 1.0;
-  std::size_t items_ = 0;
+  std::size_t items_ = 0, group_;
   bool warm_ = false;
   cl::CommandQueue queue_;
-  std::vector<cl::Buffer> bufs_;
   cl::Buffer sums_, prefix_;
-  cl::Kernel kernel_;
+  std::unique_ptr<Routine> kernel_;
 };
 
 }  // namespace

@@ -148,8 +148,8 @@ struct FiberDeviceTabulator::Impl {
   double noise = 0;
   std::uint64_t seed = 1;
   cl::CommandQueue queue;
-  cl::Kernel k_azimuthal, k_longitudinal, k_combine;
-  cl::Buffer theta_o, phi_o, theta_i, phi_i, h_rule, nbar, m, rgb;
+  std::unique_ptr<Routine> k_azimuthal, k_longitudinal, k_combine;
+  cl::Buffer rgb;
   std::vector<cl::Event> pending;
   ~Impl() {
     // Reads still in flight write into the caller's memory: let them land first.
@@ -200,43 +200,28 @@ FiberDeviceTabulator::FiberDeviceTabulator(const Device& device, const FiberMode
     cl::Program program = build_program(device, "fiber");
     d.queue = device.make_queue();
     const cl::Context& ctx = device.context();
-    d.theta_o = upload(device, "theta_o", to_float(meta.theta_o));
-    d.phi_o = upload(device, "phi_o", to_float(meta.phi_o));
-    d.theta_i = upload(device, "theta_i", to_float(meta.theta_i));
-    d.phi_i = upload(device, "phi_i", to_float(meta.phi_i));
-    d.h_rule = upload(device, "h_rule", rule);
-    d.nbar = cl::Buffer(ctx, CL_MEM_READ_WRITE,
-                        d.max_batch * kFiberChannels * kFiberLobes * meta.phi_i.size() * sizeof(cl_float));
-    d.m = cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.theta_i.size() * sizeof(cl_float));
+    const cl::Buffer theta_o = upload(device, "theta_o", to_float(meta.theta_o));
+    const cl::Buffer phi_o = upload(device, "phi_o", to_float(meta.phi_o));
+    const cl::Buffer theta_i = upload(device, "theta_i", to_float(meta.theta_i));
+    const cl::Buffer phi_i = upload(device, "phi_i", to_float(meta.phi_i));
+    const cl::Buffer nbar = cl::Buffer(
+        ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberChannels * kFiberLobes * meta.phi_i.size() * sizeof(cl_float));
+    const cl::Buffer m =
+        cl::Buffer(ctx, CL_MEM_READ_WRITE, d.max_batch * kFiberLobes * meta.theta_i.size() * sizeof(cl_float));
     d.rgb = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, d.max_batch * cells * kFiberChannels * sizeof(cl_float));
 
-    const cl_uint n_h = cl_uint(rule.size()), n_phi_o = cl_uint(meta.phi_o.size()),
-                  n_theta_i = cl_uint(meta.theta_i.size()), n_phi_i = cl_uint(meta.phi_i.size());
-    d.k_azimuthal = cl::Kernel(program, "fiber_azimuthal");
-    d.k_azimuthal.setArg(0, sizeof(KernelParams), &kp);
-    d.k_azimuthal.setArg(1, d.theta_o);
-    d.k_azimuthal.setArg(2, d.phi_o);
-    d.k_azimuthal.setArg(3, d.phi_i);
-    d.k_azimuthal.setArg(4, d.h_rule);
-    d.k_azimuthal.setArg(5, n_h);
-    d.k_azimuthal.setArg(6, n_phi_o);
-    d.k_azimuthal.setArg(7, n_phi_i);
-    d.k_azimuthal.setArg(10, d.nbar);
-    d.k_longitudinal = cl::Kernel(program, "fiber_longitudinal");
-    d.k_longitudinal.setArg(0, sizeof(KernelParams), &kp);
-    d.k_longitudinal.setArg(1, d.theta_o);
-    d.k_longitudinal.setArg(2, d.theta_i);
-    d.k_longitudinal.setArg(3, n_phi_o);
-    d.k_longitudinal.setArg(4, n_theta_i);
-    d.k_longitudinal.setArg(7, d.m);
-    d.k_combine = cl::Kernel(program, "fiber_combine");
-    d.k_combine.setArg(0, d.m);
-    d.k_combine.setArg(1, d.nbar);
-    d.k_combine.setArg(2, n_theta_i);
-    d.k_combine.setArg(3, n_phi_i);
-    d.k_combine.setArg(6, cl_float(noise));
-    d.k_combine.setArg(7, cl_ulong(seed));
-    d.k_combine.setArg(8, d.rgb);
+    const cl_uint n_phi_o = cl_uint(meta.phi_o.size()), n_theta_i = cl_uint(meta.theta_i.size()),
+                  n_phi_i = cl_uint(meta.phi_i.size());
+    d.k_azimuthal = std::make_unique<Routine>(program, "fiber_azimuthal");
+    d.k_azimuthal->set("prm", kp).set("theta_o", theta_o).set("phi_o", phi_o).set("phi_i", phi_i)
+        .set("h_rule", upload(device, "h_rule", rule)).set("n_h", cl_uint(rule.size())).set("n_phi_o", n_phi_o)
+        .set("n_phi_i", n_phi_i).set("nbar", nbar);
+    d.k_longitudinal = std::make_unique<Routine>(program, "fiber_longitudinal");
+    d.k_longitudinal->set("prm", kp).set("theta_o", theta_o).set("theta_i", theta_i).set("n_phi_o", n_phi_o)
+        .set("n_theta_i", n_theta_i).set("m", m);
+    d.k_combine = std::make_unique<Routine>(program, "fiber_combine");
+    d.k_combine->set("m", m).set("nbar", nbar).set("n_theta_i", n_theta_i).set("n_phi_i", n_phi_i)
+        .set("noise", cl_float(noise)).set("seed", cl_ulong(seed)).set("rgb", d.rgb);
   } catch (const cl::Error& e) {
     throw_device_error(e, "fiber tabulation setup on " + device.info().label());
   }
@@ -255,15 +240,9 @@ void FiberDeviceTabulator::enqueue(std::size_t first, std::size_t count, float* 
   const std::size_t n_ti = d.meta.theta_i.size(), n_pi = d.meta.phi_i.size();
   try {
     const cl_uint first_u = cl_uint(first), count_u = cl_uint(count);
-    d.k_azimuthal.setArg(8, first_u);
-    d.k_azimuthal.setArg(9, count_u);
-    launch(d.queue, d.k_azimuthal, "fiber_azimuthal", cl::NDRange(n_pi, count));
-    d.k_longitudinal.setArg(5, first_u);
-    d.k_longitudinal.setArg(6, count_u);
-    launch(d.queue, d.k_longitudinal, "fiber_longitudinal", cl::NDRange(n_ti, count));
-    d.k_combine.setArg(4, first_u);
-    d.k_combine.setArg(5, count_u);
-    launch(d.queue, d.k_combine, "fiber_combine", cl::NDRange(n_pi, n_ti, count));
+    d.k_azimuthal->set("first_slice", first_u).set("batch", count_u).run(d.queue, cl::NDRange(n_pi, count));
+    d.k_longitudinal->set("first_slice", first_u).set("batch", count_u).run(d.queue, cl::NDRange(n_ti, count));
+    d.k_combine->set("first_slice", first_u).set("batch", count_u).run(d.queue, cl::NDRange(n_pi, n_ti, count));
     cl::Event ev;
     d.queue.enqueueReadBuffer(d.rgb, CL_FALSE, 0, count * n_ti * n_pi * kFiberChannels * sizeof(cl_float), rgb,
                               nullptr, &ev);
