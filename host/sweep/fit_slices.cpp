@@ -1,4 +1,5 @@
-// The in-memory entry to the sweep: slices in, mixtures and report rows out.
+// The in-memory entry to the sweep: slices in, mixtures and report rows out; and the fit
+// on demand that keeps them in the fit's output files.
 #include "sweep/fit_slices.hpp"
 
 #include <yaml-cpp/yaml.h>

@@ -1,6 +1,8 @@
 // The in-memory entry to the sweep: a set of slices in, their mixtures and the rows of
 // the fit report and search CSVs out; no files, no checkpoint. run_sweep (sweep/sweep.hpp)
-// fits its batches with the same batch fitter, so both give the same mixtures.
+// fits its batches with the same batch fitter, so both give the same mixtures. And over
+// it, the fit on demand of a caller that keeps its mixtures in the fit's output files
+// (fit_slices_kept: the render's).
 #pragma once
 
 #include <cstddef>
