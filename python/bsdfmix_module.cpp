@@ -77,28 +77,16 @@ mix::SliceMixture make_slice(const Array& w, const Array& mean, const Array& cov
   const py::ssize_t k = w.size();
   if (w.ndim() != 1 || mean.size() != 2 * k || cov.size() != 3 * k)
     throw std::invalid_argument("bsdfmix.SliceMixture: weights [K], means [K, 2] and covariances [K, 3] disagree");
-  mix::SliceMixture s;
+  Array amplitudes;
+  if (!rgb.is_none()) {
+    amplitudes = Array::ensure(rgb);
+    if (!amplitudes || amplitudes.size() != 3 * k) throw std::invalid_argument("bsdfmix.SliceMixture: rgb must be [K, 3]");
+  }
+  mix::SliceMixture s = mix::slice_from_arrays(std::size_t(k), w.data(), mean.data(), cov.data(),
+                                               rgb.is_none() ? nullptr : amplitudes.data());
   s.theta_o = theta_o;
   s.phi_o = phi_o;
   s.scale = scale;
-  const double *pw = w.data(), *pm = mean.data(), *pc = cov.data();
-  for (py::ssize_t j = 0; j < k; ++j) {
-    mix::Gaussian g;
-    g.weight = pw[j];
-    g.mu_t = pm[2 * j];
-    g.mu_p = pm[2 * j + 1];
-    g.s_tt = pc[3 * j];
-    g.s_tp = pc[3 * j + 1];
-    g.s_pp = pc[3 * j + 2];
-    s.components.push_back(g);
-  }
-  if (!rgb.is_none()) {
-    const Array a = Array::ensure(rgb);
-    if (!a || a.size() != 3 * k) throw std::invalid_argument("bsdfmix.SliceMixture: rgb must be [K, 3]");
-    s.has_rgb = true;
-    for (py::ssize_t j = 0; j < k; ++j)
-      for (int c = 0; c < 3; ++c) s.components[std::size_t(j)].rgb[c] = a.data()[3 * j + c];
-  }
   if (!copies.is_none()) {
     const Array a = Array::ensure(copies);
     if (!s.has_rgb) throw std::invalid_argument("bsdfmix.SliceMixture: colour copies need rgb");
@@ -125,21 +113,8 @@ mix::Domain domain_of(const py::object& d) {
   return d.cast<mix::Domain>();
 }
 
-}  // namespace
-
-PYBIND11_MODULE(bsdfmix, m) {
-  m.doc() =
-      "bsdfmix's Gaussian mixtures from Python: the evaluator, sampler, blend and product of "
-      "include/bsdfmix/mixture.hpp over numpy arrays, and the project's readers of mixture files and "
-      "tables (docs/formats.md). Angles in radians, phi in [-pi, pi).";
-  py::register_exception<bsdfmix::Error>(m, "Error", PyExc_RuntimeError);
-  m.attr("SAMPLE_STREAM") = kSampleStream;
-  m.attr("COPIES") = mix::kCopies;
-
-  py::enum_<mix::Domain>(m, "Domain")
-      .value("fiber", mix::Domain::Fiber)
-      .value("hemisphere", mix::Domain::Hemisphere);
-
+// Module-level functions: the Jacobian, the integrand weights, wrap_phi and the uniforms.
+void bind_functions(py::module_& m) {
   m.def(
       "jacobian", [](const py::object& d, const Array& theta) {
         const mix::Domain dom = domain_of(d);
@@ -167,8 +142,10 @@ PYBIND11_MODULE(bsdfmix, m) {
       },
       py::arg("seed"), py::arg("stream") = kSampleStream, py::arg("n") = 1, py::arg("first") = 0,
       "[n, 4] uniforms of samples first .. first + n - 1 of a Philox stream (the header's `uniforms`)");
+}
 
-  // ---- SliceMixture -----------------------------------------------------------------------
+// SliceMixture: one slice's mixture, its evaluator and sampler, and the product of two.
+void bind_slice_mixture(py::module_& m) {
   py::class_<mix::SliceMixture>(m, "SliceMixture",
                                 "The mixture of one omega_o slice: a density over (theta, phi), prepared "
                                 "(weights normalized).")
@@ -250,10 +227,14 @@ PYBIND11_MODULE(bsdfmix, m) {
       py::arg("a"), py::arg("rotate_a"), py::arg("b"), py::arg("keep") = mix::ProductOptions{}.keep,
       py::arg("max_components") = mix::ProductOptions{}.max_components,
       "a (rotated by rotate_a in phi) times b as a mixture: (SliceMixture, mass, kept share)");
+}
 
-  // ---- MixtureSet ---------------------------------------------------------------------------
-  py::class_<mix::MixtureSet>(m, "MixtureSet",
-                              "All fitted slices of a mixture file on the table's omega_o grid (load_mixture).")
+// MixtureSet: every fitted slice on the table's grid, its blend and evaluators (sampling
+// and products: bind_mixture_set_sampling).
+py::class_<mix::MixtureSet> bind_mixture_set(py::module_& m) {
+  py::class_<mix::MixtureSet> cls(m, "MixtureSet",
+                                  "All fitted slices of a mixture file on the table's omega_o grid (load_mixture).");
+  cls
       .def(py::init([](const py::object& d, bool azimuthal, std::vector<double> grid_theta_o,
                        std::vector<double> grid_phi_o, std::vector<mix::SliceMixture> slices) {
              mix::MixtureSet s;
@@ -298,7 +279,13 @@ PYBIND11_MODULE(bsdfmix, m) {
               s.eval_rgb(a[0].data()[i], a[1].data()[i], a[2].data()[i], a[3].data()[i], o + 3 * i);
             return out;
           },
-          py::arg("theta_o"), py::arg("phi_o"), py::arg("theta"), py::arg("phi"), "eval_f per channel, [..., 3]")
+          py::arg("theta_o"), py::arg("phi_o"), py::arg("theta"), py::arg("phi"), "eval_f per channel, [..., 3]");
+  return cls;
+}
+
+// MixtureSet's samplers, the mixture serving an omega_o, and its product with a lighting.
+void bind_mixture_set_sampling(py::class_<mix::MixtureSet>& cls) {
+  cls
       .def(
           "sample",
           [](const mix::MixtureSet& s, double theta_o, double phi_o, const py::object& u) {
@@ -351,8 +338,10 @@ PYBIND11_MODULE(bsdfmix, m) {
           py::arg("theta_o"), py::arg("phi_o"), py::arg("lighting"), py::arg("keep") = mix::ProductOptions{}.keep,
           py::arg("max_components") = mix::ProductOptions{}.max_components,
           "the blended mixture times a lighting mixture: (SliceMixture, mass, kept share)");
+}
 
-  // ---- files --------------------------------------------------------------------------------
+// The project's readers: mixture files (load_mixture, mixture_info) and tables (Table).
+void bind_files(py::module_& m) {
   m.def(
       "load_mixture", [](const std::string& path) { return to_mixture_set(read_mixture_file(path)); }, py::arg("path"),
       "a mixture file (any storage) as a prepared MixtureSet, read and checked by bsdfmix's reader");
@@ -407,4 +396,26 @@ PYBIND11_MODULE(bsdfmix, m) {
                                       v.data());
           },
           py::arg("t_o"), py::arg("p_o") = 0, "the rgb channel of slice (t_o, p_o), float32 [n_theta_i, n_phi_i, 3]");
+}
+
+}  // namespace
+
+PYBIND11_MODULE(bsdfmix, m) {
+  m.doc() =
+      "bsdfmix's Gaussian mixtures from Python: the evaluator, sampler, blend and product of "
+      "include/bsdfmix/mixture.hpp over numpy arrays, and the project's readers of mixture files and "
+      "tables (docs/formats.md). Angles in radians, phi in [-pi, pi).";
+  py::register_exception<bsdfmix::Error>(m, "Error", PyExc_RuntimeError);
+  m.attr("SAMPLE_STREAM") = kSampleStream;
+  m.attr("COPIES") = mix::kCopies;
+
+  py::enum_<mix::Domain>(m, "Domain")
+      .value("fiber", mix::Domain::Fiber)
+      .value("hemisphere", mix::Domain::Hemisphere);
+
+  bind_functions(m);
+  bind_slice_mixture(m);
+  py::class_<mix::MixtureSet> set = bind_mixture_set(m);
+  bind_mixture_set_sampling(set);
+  bind_files(m);
 }

@@ -1,7 +1,9 @@
 // The shared host primitives: the grid bracket of the header, the number formatter,
-// SplitMix64, the vector operations and the PFM codec (its checks, each error one line
-// naming the file). kernels/common.cl has its own test, tests/rng_test.cpp.
+// SplitMix64, the vector operations, the PFM codec (its checks, each error one line
+// naming the file) and the header's slice mixture from parameter arrays. kernels/common.cl has its own test, tests/rng_test.cpp.
 #include <catch2/catch.hpp>
+
+#include <bsdfmix/mixture.hpp>
 
 #include <cmath>
 #include <cstdint>
@@ -185,4 +187,27 @@ TEST_CASE("PFM: the writer checks the image and writes into an existing director
   fs::remove_all(temp_path("no_such_dir"));
   CHECK_THROWS_AS(write_pfm(nowhere, img), IoError);
   CHECK_FALSE(fs::exists(temp_path("no_such_dir")));
+}
+
+TEST_CASE("the header builds a slice mixture from parameter arrays", "[primitives][header]") {
+  // two components as a mixture file stores them (float), with colour
+  const float w[2] = {3.f, 1.f}, mean[4] = {0.1f, -0.5f, 0.4f, 2.f}, cov[6] = {0.02f, 0.001f, 0.05f, 0.03f, 0.f, 0.1f};
+  const double rgb[6] = {0.5, 0.25, 0.125, 1, 2, 3};
+  mix::SliceMixture s = mix::slice_from_arrays(2, w, mean, cov, rgb);
+  REQUIRE(s.components.size() == 2);
+  CHECK(s.has_rgb);
+  CHECK(s.components[1].weight == 1.0);  // not prepared: as given
+  CHECK(s.components[1].mu_t == double(0.4f));
+  CHECK(s.components[1].mu_p == 2.0);
+  CHECK(s.components[0].s_tp == double(0.001f));
+  CHECK(s.components[1].s_pp == double(0.1f));
+  CHECK(s.components[1].rgb[2] == 3.0);
+  CHECK(s.cdf.empty());
+  CHECK_FALSE(mix::slice_from_arrays(2, w, mean, cov).has_rgb);
+
+  const mix::SliceMixture p = mix::make_slice_mixture({3.0, 1.0}, {0.1, -0.5, 0.4, 2.0}, {0.02, 0.001, 0.05, 0.03, 0, 0.1});
+  CHECK(p.components[0].weight == 0.75);  // prepared: weights normalized
+  CHECK(p.cdf.size() == 2);
+  CHECK_FALSE(p.has_rgb);
+  CHECK_THROWS_AS(mix::make_slice_mixture({1.0}, {0.1}, {0.02, 0, 0.05}), std::invalid_argument);
 }

@@ -699,3 +699,75 @@ TEST_CASE("the summary's sizes are the files' bytes: on disk and as their datase
   CHECK_THAT(text, Catch::Contains("table            file "));
   CHECK_THAT(text, Catch::Contains("symmetry         azimuthal: one stored slice stands for 60 phi_o"));
 }
+
+TEST_CASE("fit_settings_match compares the recorded settings as typed values", "[fit][sweep]") {
+  const FitSection f = fit_settings("match");
+  CHECK(fit_settings_match(fit_settings_json(f), f));
+  FitSection paths = f;  // the paths, the batch and the slices are not fit settings
+  paths.output = "elsewhere.h5";
+  paths.batch = 7;
+  paths.theta_o = {0.5};
+  CHECK(fit_settings_match(fit_settings_json(f), paths));
+  // the record holds 9 significant digits: a setting beyond them matches as recorded
+  FitSection fine = f;
+  fine.k_penalty = 0.0040000000001;
+  CHECK(fit_settings_match(fit_settings_json(fine), f));
+  // the same values written otherwise (spacing, key order, 1e-07 as 0.0000001)
+  std::string text = fit_settings_json(f);
+  const std::string tol = "\"tolerance\": 1e-07";
+  REQUIRE(text.find(tol) != std::string::npos);
+  text.replace(text.find(tol), tol.size(), "\"tolerance\":   0.0000001");
+  CHECK(fit_settings_match(text, f));
+  // any recorded setting that differs
+  std::vector<FitSection> other(8, f);
+  other[0].k_max = 5;
+  other[1].seed = 2;
+  other[2].k_penalty = 0.005;
+  other[3].error_target = 0.02;
+  other[4].search = SearchStrategy::Restarts;
+  other[5].refine = "none";
+  other[6].rgb_copies.reset();
+  other[7].final_iterations = 151;
+  for (const FitSection& o : other) CHECK_FALSE(fit_settings_match(fit_settings_json(o), f));
+  // not a record
+  CHECK_FALSE(fit_settings_match("{}", f));
+  CHECK_FALSE(fit_settings_match("not json: [", f));
+  std::string criterion = fit_settings_json(f);
+  criterion.replace(criterion.find("l1_rel + k_penalty * K"), 6, "loglik");
+  CHECK_FALSE(fit_settings_match(criterion, f));
+}
+
+TEST_CASE("fit_slices_kept fits once, writes the sweep's outputs and serves any part of them", "[fit][sweep]") {
+  Progress::set_enabled(false);
+  const std::string table = mixture_table("kept.h5", 5, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
+    return {{1.0, -0.2 + 0.1 * double(t), 0.4, 0.03, 0.0, 0.06}};
+  });
+  FitSection f = fit_settings("kept");
+  f.k_max = 3;
+  for (const auto* out : {&f.output, &f.report, &f.search_report}) fs::remove(*out);
+  const LoadedTable loaded = load_table(table);
+  const TableSlices source(loaded.reader);
+  const std::vector<SliceRef> all = plan_slices(source.meta(), {}, {});
+  const std::vector<SliceRef> part(all.begin() + 1, all.begin() + 3);
+
+  const MixtureFile fitted = fit_slices_kept(source, table, all, f, "", "test");
+  CHECK(fitted.slices() == 5);
+  const MixtureFile file = read_mixture_file(f.output);
+  CHECK(file.weights == fitted.weights);
+  CHECK(file.theta_o == fitted.theta_o);
+  CHECK(fs::exists(f.report));
+  CHECK(fs::exists(f.search_report));
+
+  // From the file, fitting nothing (a device selector that selects none would fail a fit).
+  const std::string none = "no-such-device";
+  const MixtureFile again = fit_slices_kept(source, table, all, f, none, "test");
+  CHECK(again.weights == fitted.weights);
+  const MixtureFile sub = fit_slices_kept(source, table, part, f, none, "test");
+  REQUIRE(sub.slices() == 2);
+  CHECK(sub.theta_o == std::vector<double>{fitted.theta_o[1], fitted.theta_o[2]});
+  CHECK(sub.k == std::vector<int>{fitted.k[1], fitted.k[2]});
+  // Other settings are fitted anew.
+  FitSection other = f;
+  other.seed = 9;
+  CHECK_THROWS_WITH(fit_slices_kept(source, table, part, other, none, "test"), Catch::Contains("no device matches"));
+}

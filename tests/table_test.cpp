@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/hash.hpp"
 #include "core/progress.hpp"
 #include "io/h5.hpp"
 #include "io/inspect.hpp"
@@ -303,4 +304,58 @@ TEST_CASE("integrand weights follow the domain's measure", "[table][domain]") {
   CHECK(wrap_phi(kPi) == Approx(-kPi));
   CHECK(wrap_phi(3 * kPi + 0.5) == Approx(-kPi + 0.5));
   CHECK(wrap_phi(-kPi - 0.25) == Approx(kPi - 0.25));
+}
+
+TEST_CASE("hash_file_bytes gives hash_file's value", "[table][hash]") {
+  for (const std::size_t n : {std::size_t(0), std::size_t(7), std::size_t(1) << 20, (std::size_t(1) << 20) + 5,
+                              std::size_t(2) << 20}) {
+    INFO("bytes: " << n);
+    std::string bytes(n, '\0');
+    for (std::size_t i = 0; i < n; ++i) bytes[i] = char((i * 131 + 7) & 0xff);
+    const std::string p = temp_path("hash_" + std::to_string(n) + ".bin");
+    std::ofstream(p, std::ios::binary).write(bytes.data(), std::streamsize(n));
+    CHECK(hash_file_bytes(bytes) == hash_file(p));
+    if (n > 0) {
+      bytes[n / 2] = char(bytes[n / 2] ^ 1);
+      CHECK(hash_file_bytes(bytes) != hash_file(p));
+    }
+  }
+}
+
+TEST_CASE("a table loaded once reads as the file does", "[table]") {
+  TableMeta m = make_grid(Domain::Hemisphere, 3, 1, 5, 8, true);
+  m.rgb = true;
+  const std::string p = temp_path("loaded.h5");
+  {
+    TableWriter w(p, m);
+    for (std::size_t t = 0; t < 3; ++t) {
+      const std::vector<float> v = ramp(m.cells_per_slice()), rgb = ramp(3 * m.cells_per_slice());
+      w.write_slice(t, 0, v.data(), rgb.data());
+    }
+    w.commit();
+  }
+  const LoadedTable loaded = load_table(p);
+  const TableReader disk(p);
+  CHECK(loaded.file_hash == hash_file(p));
+  CHECK(loaded.reader.path() == p);
+  CHECK(loaded.reader.meta().theta_o == disk.meta().theta_o);
+  CHECK(loaded.reader.meta().phi_i == disk.meta().phi_i);
+  CHECK(loaded.reader.meta().domain == Domain::Hemisphere);
+  CHECK(loaded.reader.meta().rgb);
+  for (std::size_t t = 0; t < 3; ++t) {
+    CHECK(loaded.reader.read_slice(t, 0) == disk.read_slice(t, 0));
+    CHECK(loaded.reader.read_slice_rgb(t, 0) == disk.read_slice_rgb(t, 0));
+  }
+  // the file gone, the loaded table still reads
+  const std::string moved = temp_path("loaded_moved.h5");
+  fs::rename(p, moved);
+  CHECK(loaded.reader.read_slice(2, 0) == disk.read_slice(2, 0));
+
+  CHECK_THAT(error_of([] { load_table(temp_path("no_such_table.h5")); }), Catch::Contains("cannot open"));
+  const std::string text = temp_path("loaded_text.h5");
+  std::ofstream(text) << "this is not HDF5\n";
+  CHECK_THAT(error_of([&] { load_table(text); }), Catch::Contains("not an HDF5 file"));
+  const std::string empty = temp_path("loaded_empty.h5");
+  { h5::Handle f = h5::create_file(empty); }
+  CHECK_THAT(error_of([&] { load_table(empty); }), Catch::Contains("missing group /table"));
 }

@@ -127,23 +127,12 @@ mix::MixtureSet load_mixture(const std::string& path) {
   }
 
   for (std::size_t s = 0; s < S; ++s) {
-    mix::SliceMixture sm;
+    const std::size_t r = first[s];  // slice s's first row
+    mix::SliceMixture sm = mix::slice_from_arrays(std::size_t(k[s]), w.data() + r, mu.data() + 2 * r,
+                                                  cov.data() + 3 * r, rgb ? amp.data() + 3 * r : nullptr);
     sm.theta_o = theta_o[s];
     sm.phi_o = phi_o[s];
     sm.scale = scale[s];
-    sm.has_rgb = rgb;
-    for (int c = 0; c < k[s]; ++c) {
-      const std::size_t r = first[s] + std::size_t(c);
-      mix::Gaussian gs;
-      gs.weight = w[r];
-      gs.mu_t = mu[2 * r];
-      gs.mu_p = mu[2 * r + 1];
-      gs.s_tt = cov[3 * r];
-      gs.s_tp = cov[3 * r + 1];
-      gs.s_pp = cov[3 * r + 2];
-      for (int q = 0; rgb && q < 3; ++q) gs.rgb[q] = amp[3 * r + std::size_t(q)];
-      sm.components.push_back(gs);
-    }
     if (!copies_offset.empty() && copies_offset[s] >= 0) {
       const std::size_t n = std::size_t(k[s]) * mix::kCopies * 3, at = std::size_t(copies_offset[s]) * mix::kCopies * 3;
       sm.set_copies(std::vector<double>(copies.begin() + long(at), copies.begin() + long(at + n)));

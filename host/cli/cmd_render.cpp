@@ -1,11 +1,21 @@
 // `bsdfmix render CONFIG.yaml`: cloth rendered with the mixtures (docs/render.md).
+#include <filesystem>
+
 #include "cli/commands.hpp"
 #include "config/config.hpp"
 #include "core/progress.hpp"
+#include "core/scripts.hpp"
 #include "pipeline/stages.hpp"
 #include "render/render_run.hpp"
 
 namespace bsdfmix::cli {
+
+void render_figures(const std::string& output, const std::string& summary_figure) {
+  namespace fs = std::filesystem;
+  const std::string summary = (fs::path(output) / summary_figure).string();
+  run_script("render_figures.py", {"--dir", output, "--summary", summary});
+  log_line("render: figures in " + (fs::path(output) / "figures").string() + ", the summary " + summary);
+}
 
 void add_render(CLI::App& app, Common& common) {
   static std::string file;
@@ -23,7 +33,8 @@ void add_render(CLI::App& app, Common& common) {
     const render::RenderSettings settings = render::render_settings(config);  // checked before any work
     const std::string dev = device_for(config, common.device);
     stage_table(config, dev);
-    render::run_render(config, settings, dev, !no_figures);
+    render::run_render(config, settings, dev);
+    if (!no_figures) render_figures(settings.output, settings.summary_figure);
   });
 }
 

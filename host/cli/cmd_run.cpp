@@ -27,7 +27,9 @@ void add_run(CLI::App& app, Common& common) {
     std::optional<render::RenderSettings> render;
     if (config.render) render = render::render_settings(config);  // checked before any work
     run_all(config, common.device, run_environment().engine);
-    if (render) render::run_render(config, *render, device_for(config, common.device));
+    if (!render) return;
+    render::run_render(config, *render, device_for(config, common.device));
+    render_figures(render->output, render->summary_figure);
   });
 }
 

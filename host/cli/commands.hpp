@@ -29,6 +29,10 @@ void add_compare(CLI::App& app, Common& common);
 void add_pack(CLI::App& app, Common& common);
 void add_tune(CLI::App& app, Common& common);
 
+// The render's figures and summary figure (scripts/render_figures.py) over the outputs
+// of a render into `output` (cmd_render.cpp).
+void render_figures(const std::string& output, const std::string& summary_figure);
+
 // Adds --device and --quiet to a subcommand.
 void add_common_options(CLI::App& sub, Common& common);
 

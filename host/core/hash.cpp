@@ -22,6 +22,10 @@ std::uint64_t mix(std::uint64_t x) {
 
 }  // namespace
 
+// hash_file feeds a file to the hash kFileChunk bytes at a time, then what is left (0 to
+// kFileChunk - 1 bytes); the value depends on that split, which hash_file_bytes repeats.
+constexpr std::size_t kFileChunk = 1 << 20;
+
 Hash64& Hash64::update(const void* data, std::size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
   std::size_t i = 0;
@@ -52,11 +56,19 @@ std::uint64_t hash_file(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw IoError(path + ": cannot read for hashing");
   Hash64 h;
-  std::vector<char> buf(1 << 20);
+  std::vector<char> buf(kFileChunk);
   while (f) {
     f.read(buf.data(), std::streamsize(buf.size()));
     h.update(buf.data(), std::size_t(f.gcount()));
   }
+  return h.value();
+}
+
+std::uint64_t hash_file_bytes(const std::string& bytes) {
+  Hash64 h;
+  std::size_t at = 0;
+  for (; at + kFileChunk <= bytes.size(); at += kFileChunk) h.update(bytes.data() + at, kFileChunk);
+  h.update(bytes.data() + at, bytes.size() - at);
   return h.value();
 }
 

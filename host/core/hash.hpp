@@ -32,6 +32,9 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
 // The hash of a whole file's bytes; IoError when it cannot be read.
 std::uint64_t hash_file(const std::string& path);
 
+// hash_file's value for a file whose bytes, already in memory, are `bytes`.
+std::uint64_t hash_file_bytes(const std::string& bytes);
+
 std::string hex64(std::uint64_t v);
 
 }  // namespace bsdfmix

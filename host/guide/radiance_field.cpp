@@ -44,6 +44,26 @@ class LeafSlices final : public SliceSource {
   std::vector<std::vector<double>> grids_;
 };
 
+// A leaf's mixture from slice `slice` of the fitted leaves, no component narrower than a
+// grid cell (narrower ones are the noise of a cell or two), prepared; false when it is no
+// mixture (a covariance or the weights degenerate).
+bool leaf_mixture(const MixtureFile& fitted, std::size_t slice, const FieldSettings& s, mix::SliceMixture& out) {
+  try {
+    out = slice_mixture(fitted, slice);
+    const double ct = kPi / s.grid_theta, cp = 2 * kPi / s.grid_phi;
+    for (mix::Gaussian& g : out.components) {
+      const double rho = g.s_tp / std::sqrt(g.s_tt * g.s_pp);
+      g.s_tt = std::max(g.s_tt, ct * ct);
+      g.s_pp = std::max(g.s_pp, cp * cp);
+      g.s_tp = rho * std::sqrt(g.s_tt * g.s_pp);
+    }
+    out.prepare();
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 double best_share(const mix::SliceMixture& guide, const Sample* begin, const Sample* end, double largest) {
@@ -91,11 +111,14 @@ void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, 
   nodes_.assign(1, Node{});
   leaves_.clear();
   leaf_of_node_count_ = fitted_ = guiding_ = 0;
-  // 1. The tree: a node holding more than leaf_samples vertices is split at the median of
-  // its samples along the longest side of their bounding box.
+  const std::vector<Span> spans = build_tree(samples, s);
+  fit_leaves(samples, spans, s, devices, what);
+  fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::vector<RadianceField::Span> RadianceField::build_tree(std::vector<Sample>& samples, const FieldSettings& s) {
   std::vector<Range> todo{{0, samples.size(), 0, 0}};
-  std::vector<std::pair<std::size_t, std::size_t>> leaf_ranges;  // samples of the leaves to fit
-  std::vector<int> leaf_nodes;
+  std::vector<Span> spans;
   while (!todo.empty()) {
     const Range r = todo.back();
     todo.pop_back();
@@ -118,9 +141,8 @@ void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, 
     if (axis < 0) {
       ++leaf_of_node_count_;
       if (nv >= s.min_vertices) {
-        nodes_[std::size_t(r.node)].leaf = int(leaf_ranges.size());
-        leaf_ranges.push_back({r.begin, r.end});
-        leaf_nodes.push_back(r.node);
+        nodes_[std::size_t(r.node)].leaf = int(spans.size());
+        spans.push_back({r.begin, r.end, r.node});
       }
       continue;
     }
@@ -142,57 +164,44 @@ void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, 
     todo.push_back({c, r.end, r.depth + 1, child + 1});
     todo.push_back({r.begin, c, r.depth + 1, child});
   }
+  return spans;
+}
 
-  // 2. The leaves' grids, fitted as one sweep.
+void RadianceField::fit_leaves(const std::vector<Sample>& samples, const std::vector<Span>& spans,
+                               const FieldSettings& s, const std::vector<Device>& devices, const std::string& what) {
   std::vector<std::vector<double>> grids;
-  grids.reserve(leaf_ranges.size());
-  for (const auto& [b, e] : leaf_ranges)
-    grids.push_back(bin_leaf(samples.data() + b, samples.data() + e, s.grid_theta, s.grid_phi));
+  grids.reserve(spans.size());
+  for (const Span& span : spans)
+    grids.push_back(bin_leaf(samples.data() + span.begin, samples.data() + span.end, s.grid_theta, s.grid_phi));
   leaves_.resize(grids.size());
-  if (!grids.empty()) {
-    const std::size_t n = grids.size();
-    const LeafSlices source(std::move(grids), s.grid_theta, s.grid_phi);
-    std::vector<SliceRef> refs;
-    for (std::size_t i = 0; i < n; ++i) refs.push_back({i, i, 0});
-    const SweepResult fitted = fit_slices(source, refs, s.fit, devices, what);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t slice = std::size_t(std::find(fitted.slice_index.begin(), fitted.slice_index.end(), i) -
-                                            fitted.slice_index.begin());
-      Leaf& leaf = leaves_[i];
-      if (slice >= fitted.mixture.slices() || fitted.mixture.k[slice] <= 0 || fitted.report[slice].failed()) {
-        nodes_[std::size_t(leaf_nodes[i])].leaf = -1;
-        continue;
-      }
-      try {
-        // no component narrower than a grid cell: narrower ones are the noise of a cell or two
-        leaf.mixture = slice_mixture(fitted.mixture, slice);
-        const double ct = kPi / s.grid_theta, cp = 2 * kPi / s.grid_phi;
-        for (mix::Gaussian& g : leaf.mixture.components) {
-          const double rho = g.s_tp / std::sqrt(g.s_tt * g.s_pp);
-          g.s_tt = std::max(g.s_tt, ct * ct);
-          g.s_pp = std::max(g.s_pp, cp * cp);
-          g.s_tp = rho * std::sqrt(g.s_tt * g.s_pp);
-        }
-        leaf.mixture.prepare();
-      } catch (const std::invalid_argument&) {
-        nodes_[std::size_t(leaf_nodes[i])].leaf = -1;
-        continue;
-      }
-      ++fitted_;
-      leaf.share = s.adapt_share ? best_share(leaf.mixture, samples.data() + leaf_ranges[i].first,
-                                              samples.data() + leaf_ranges[i].second, s.share)
-                                 : s.share;
-      if (leaf.share > 0) ++guiding_;
-      for (const mix::Gaussian& g : leaf.mixture.components) {
-        if (g.sigma_max() > s.compact_sigma) continue;
-        mix::Gaussian c = g;
-        c.weight = g.weight / std::max(std::cos(g.mu_t), 0.05);
-        leaf.compact.push_back(c);
-        leaf.compact_share += g.weight;
-      }
+  if (grids.empty()) return;
+  const std::size_t n = grids.size();
+  const LeafSlices source(std::move(grids), s.grid_theta, s.grid_phi);
+  std::vector<SliceRef> refs;
+  for (std::size_t i = 0; i < n; ++i) refs.push_back({i, i, 0});
+  const SweepResult fitted = fit_slices(source, refs, s.fit, devices, what);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t slice = std::size_t(std::find(fitted.slice_index.begin(), fitted.slice_index.end(), i) -
+                                          fitted.slice_index.begin());
+    Leaf& leaf = leaves_[i];
+    if (slice >= fitted.mixture.slices() || fitted.mixture.k[slice] <= 0 || fitted.report[slice].failed() ||
+        !leaf_mixture(fitted.mixture, slice, s, leaf.mixture)) {
+      nodes_[std::size_t(spans[i].node)].leaf = -1;
+      continue;
+    }
+    ++fitted_;
+    leaf.share = s.adapt_share ? best_share(leaf.mixture, samples.data() + spans[i].begin,
+                                            samples.data() + spans[i].end, s.share)
+                               : s.share;
+    if (leaf.share > 0) ++guiding_;
+    for (const mix::Gaussian& g : leaf.mixture.components) {
+      if (g.sigma_max() > s.compact_sigma) continue;
+      mix::Gaussian c = g;
+      c.weight = g.weight / std::max(std::cos(g.mu_t), 0.05);
+      leaf.compact.push_back(c);
+      leaf.compact_share += g.weight;
     }
   }
-  fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 const Leaf* RadianceField::at(const Vec3& p) const {

@@ -106,6 +106,20 @@ class RadianceField {
     int child = 0;  // the first child; the second is child + 1
     int leaf = -1;  // a leaf's index into leaves_ (-1: no mixture)
   };
+  // A leaf to fit: its samples [begin, end) of the reordered array and its node.
+  struct Span {
+    std::size_t begin, end;
+    int node;
+  };
+  // The tree over `samples` (reordered): a node holding more than leaf_samples vertices is
+  // split at the median of its samples along the longest side of their bounding box; the
+  // leaves with at least min_vertices, to fit.
+  std::vector<Span> build_tree(std::vector<Sample>& samples, const FieldSettings& s);
+  // The leaves' grids fitted as one sweep, and each fitted leaf's mixture, share and
+  // compact components; a leaf whose fit failed has none.
+  void fit_leaves(const std::vector<Sample>& samples, const std::vector<Span>& spans, const FieldSettings& s,
+                  const std::vector<Device>& devices, const std::string& what);
+
   std::vector<Node> nodes_;
   std::vector<Leaf> leaves_;
   std::size_t leaf_of_node_count_ = 0, fitted_ = 0, guiding_ = 0;

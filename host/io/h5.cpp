@@ -76,12 +76,13 @@ herr_t probe_object(hid_t root, const char* name, const H5O_info_t*, void*) {
 // Some corrupt metadata (a damaged global heap behind a string attribute) crashes or
 // hangs the HDF5 library itself. Every object's attributes are first read in a child
 // process: a crash or a hang there is reported as a corrupt file, never met here.
-void probe_metadata(const std::string& path) {
+// `name` and `fapl` as H5Fopen takes them; `path` names the file in errors.
+void probe_metadata(const std::string& path, const std::string& name, hid_t fapl) {
   std::fflush(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) return;  // cannot probe: open directly
   if (pid == 0) {
-    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const hid_t f = H5Fopen(name.c_str(), H5F_ACC_RDONLY, fapl);
     if (f >= 0) {
 #if H5_VERSION_GE(1, 12, 0)
       H5Ovisit3(f, H5_INDEX_NAME, H5_ITER_INC, probe_object, nullptr, H5O_INFO_BASIC);
@@ -115,8 +116,29 @@ Handle open_file(const std::string& path) {
   if (!probe) throw InputError(path + ": cannot open (no such file or not readable)");
   std::fclose(probe);
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
-  probe_metadata(path);
+  probe_metadata(path, path, H5P_DEFAULT);
   Handle f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!f.valid()) throw InputError(path + ": cannot open as HDF5 (corrupt or truncated file)");
+  return f;
+}
+
+Handle open_image(const std::string& path, const std::string& bytes) {
+  quiet_errors();
+  // HDF5's signature, at offset 0 or past a user block (512, 1024, 2048, ... bytes)
+  static const char kSignature[] = "\211HDF\r\n\032\n";
+  bool hdf5 = false;
+  for (std::size_t at = 0; !hdf5 && at + 8 <= bytes.size(); at = at ? 2 * at : 512)
+    hdf5 = bytes.compare(at, 8, kSignature, 8) == 0;
+  if (!hdf5) throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  // The core driver over a copy of the bytes, no backing file. It opens only a name that
+  // names no file: one below the file itself, which no file system holds.
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS));
+  if (!fapl.valid() || H5Pset_fapl_core(fapl.get(), 1 << 20, 0) < 0 ||
+      H5Pset_file_image(fapl.get(), const_cast<char*>(bytes.data()), bytes.size()) < 0)
+    throw InputError(path + ": cannot open its bytes in memory as HDF5");
+  const std::string name = path + "/in-memory";
+  probe_metadata(path, name, fapl.get());
+  Handle f(H5Fopen(name.c_str(), H5F_ACC_RDONLY, fapl.get()));
   if (!f.valid()) throw InputError(path + ": cannot open as HDF5 (corrupt or truncated file)");
   return f;
 }

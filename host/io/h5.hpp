@@ -41,6 +41,9 @@ class Handle {
 void quiet_errors();
 
 Handle open_file(const std::string& path);    // read-only; InputError if missing or not HDF5
+// The file `path` from its bytes, already in memory: read-only, the same checks as
+// open_file, and nothing more read from the disk.
+Handle open_image(const std::string& path, const std::string& bytes);
 Handle create_file(const std::string& path);  // truncates; IoError on failure
 bool exists(hid_t loc, const std::string& name);
 Handle open_group(hid_t loc, const std::string& name, const std::string& where);

@@ -431,24 +431,13 @@ namespace {
 
 // Slice s as stored, not yet prepared.
 mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
-  const std::size_t K = static_cast<std::size_t>(m.kmax);
-  mix::SliceMixture sm;
+  const std::size_t r = s * static_cast<std::size_t>(m.kmax);  // the slice's first row
+  mix::SliceMixture sm = mix::slice_from_arrays(std::size_t(m.k[s]), m.weights.data() + r, m.means.data() + 2 * r,
+                                                m.covariances.data() + 3 * r,
+                                                m.has_rgb() ? m.rgb_scale.data() + 3 * r : nullptr);
   sm.theta_o = m.theta_o[s];
   sm.phi_o = m.phi_o[s];
   sm.scale = m.scale[s];
-  sm.has_rgb = m.has_rgb();
-  for (int j = 0; j < m.k[s]; ++j) {
-    mix::Gaussian g;
-    g.weight = m.weights[s * K + j];
-    g.mu_t = m.means[(s * K + j) * 2];
-    g.mu_p = m.means[(s * K + j) * 2 + 1];
-    g.s_tt = m.covariances[(s * K + j) * 3];
-    g.s_tp = m.covariances[(s * K + j) * 3 + 1];
-    g.s_pp = m.covariances[(s * K + j) * 3 + 2];
-    if (sm.has_rgb)
-      for (int c = 0; c < 3; ++c) g.rgb[c] = m.rgb_scale[(s * K + j) * 3 + c];
-    sm.components.push_back(g);
-  }
   const std::vector<double> copies = m.slice_copies(s);
   if (!copies.empty()) sm.set_copies(copies);
   return sm;

@@ -7,6 +7,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/hash.hpp"
 #include "io/h5.hpp"
 
 namespace bsdfmix {
@@ -100,12 +101,24 @@ struct TableReader::Impl {
   std::string path;
   TableMeta meta;
   h5::Handle file, group, values, rgb;
+  // Checks the open file's structure, shapes, axes and attributes; reads the meta.
+  void open();
 };
 
 TableReader::TableReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
-  Impl& im = *impl_;
-  im.path = path;
-  im.file = h5::open_file(path);
+  impl_->path = path;
+  impl_->file = h5::open_file(path);
+  impl_->open();
+}
+
+TableReader::TableReader(const std::string& path, const std::string& bytes) : impl_(std::make_unique<Impl>()) {
+  impl_->path = path;
+  impl_->file = h5::open_image(path, bytes);
+  impl_->open();
+}
+
+void TableReader::Impl::open() {
+  Impl& im = *this;
   im.group = h5::open_group(im.file.get(), "table", path);
   const std::string where = path + ": /table";
   hid_t g = im.group.get();
@@ -152,6 +165,12 @@ TableReader::TableReader(const std::string& path) : impl_(std::make_unique<Impl>
       throw InputError(where + "/rgb: shape " + dims_text(rdims) + ", expected " + dims_text(rwant));
     m.rgb = true;
   }
+}
+
+LoadedTable load_table(const std::string& path) {
+  const std::optional<std::string> bytes = read_text(path);
+  if (!bytes) throw InputError(path + ": cannot open (no such file or not readable)");
+  return LoadedTable{hash_file_bytes(*bytes), TableReader(path, *bytes)};
 }
 
 TableReader::~TableReader() = default;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,6 +38,9 @@ TableMeta make_grid(Domain domain, std::size_t n_theta_o, std::size_t n_phi_o, s
 class TableReader {
  public:
   explicit TableReader(const std::string& path);
+  // The table file `path` from its bytes, already in memory (load_table): nothing more
+  // is read from the disk.
+  TableReader(const std::string& path, const std::string& bytes);
   ~TableReader();
   TableReader(TableReader&&) noexcept;
   TableReader& operator=(TableReader&&) noexcept;
@@ -52,6 +56,14 @@ class TableReader {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// A table file read once: the hash of its bytes (hash_file's value) and a reader over
+// them, in memory.
+struct LoadedTable {
+  std::uint64_t file_hash = 0;
+  TableReader reader;
+};
+LoadedTable load_table(const std::string& path);
 
 // Writes a table slice by slice under a temporary name; commit() checks that
 // every slice was written and renames it into place. Without commit() nothing

@@ -64,9 +64,9 @@ Partial read_partial(const std::string& path, const std::string& key, int width,
 
 }  // namespace
 
-std::string scene_key(const RenderSettings& s, const std::string& table) {
+std::string scene_key(const RenderSettings& s, const std::string& table, std::uint64_t table_hash) {
   std::ostringstream k;
-  k << "table " << table << " " << hex64(hash_file(table)) << "\nsize " << s.width << "x" << s.height << "\ndepth "
+  k << "table " << table << " " << hex64(table_hash) << "\nsize " << s.width << "x" << s.height << "\ndepth "
     << s.max_depth << " " << s.rr_depth << "\nseed " << s.seed << "\ncamera";
   for (int i = 0; i < 3; ++i) k << " " << s.camera.position[i] << " " << s.camera.look_at[i] << " " << s.camera.up[i];
   k << " " << s.camera.fov_deg << "\ncloth " << s.cloth.weave << " " << s.cloth.size << " " << s.cloth.yarn_spacing << " "

@@ -5,6 +5,7 @@
 // killed render resumes to the same image an uninterrupted one makes.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "render/integrator.hpp"
@@ -12,8 +13,10 @@
 namespace bsdfmix {
 namespace render {
 
-// Everything a render's pixels depend on but the estimator and the sample count.
-std::string scene_key(const RenderSettings& s, const std::string& table);
+// Everything a render's pixels depend on but the estimator and the sample count; the
+// table by its path and the hash of its file's bytes (hash_file's value, as load_table
+// gives it).
+std::string scene_key(const RenderSettings& s, const std::string& table, std::uint64_t table_hash);
 
 // The converged image: read from <output>/reference.pfm when <output>/reference.key holds `key`,
 // else rendered (resuming from <output>/reference.partial.h5 when it was made under the

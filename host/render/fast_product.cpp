@@ -115,7 +115,30 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
   for (auto* v : {&lw_, &lmt_, &lmp_, &ltt_, &ltp_, &lpp_, &litt_, &litp_, &lipp_, &w_, &wn_, &mt_, &mp_, &itt_, &ipp_, &ctt_, &cpt_, &cpp_, &cdf_, &wide_cut_})
     v->clear();
   wide_.clear();
-  // 1. The lighting in the frame: carry_lighting's map, from the precomputed directions.
+  carry_lighting(src, f);
+  const std::size_t nb = a.size(), nl = lw_.size(), nc = 3 * nb * nl;
+  if (nb == 0 || nl == 0) return false;
+  // 2. Every pair's weight w_i w_j N(m_i; m_j, S_i + S_j) at the three nearest phi
+  // images, over the bsdf's components in one loop the compiler vectorizes.
+  cand_.resize(nc);
+  for (std::size_t j = 0; j < nl; ++j) {
+    const float lt = lmt_[j], lp = lmp_[j], tt = ltt_[j], tp = ltp_[j], pp = lpp_[j], lw = lw_[j];
+    float *out0 = &cand_[nb * j], *out1 = out0 + nb * nl, *out2 = out1 + nb * nl;
+    pair_weights(a, nb, lt, lp, tt, tp, pp, lw, out0, out1, out2);
+  }
+  double total = 0;
+  for (float c : cand_) total += double(c);
+  if (!(total > 0) || !std::isfinite(total)) return false;  // no overlap, or a degenerate pair: light sampling alone
+  const std::size_t top = keep_heaviest(total, o);
+  const double acc = add_pairs(a, top);
+  if (w_.empty()) return false;
+  term_.resize(w_.size());
+  normalize(acc);
+  return true;
+}
+
+// 1. The lighting in the frame: carry_lighting's map, from the precomputed directions.
+void FastProduct::carry_lighting(const CarrySource& src, const LocalAxes& f) {
   const bool fiber = f.domain == Domain::Fiber;
   const double sgn = fiber ? 1.0 : -1.0, cap = 4 * kPi * kPi;
   for (const CarrySource::Lobe& g : src.lobes) {
@@ -152,25 +175,16 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
     litp_.push_back(float(-s_tp / det));
     lipp_.push_back(float(s_tt / det));
   }
-  const std::size_t nb = a.size(), nl = lw_.size(), nc = 3 * nb * nl;
-  if (nb == 0 || nl == 0) return false;
-  // 2. Every pair's weight w_i w_j N(m_i; m_j, S_i + S_j) at the three nearest phi
-  // images, over the bsdf's components in one loop the compiler vectorizes.
-  cand_.resize(nc);
-  for (std::size_t j = 0; j < nl; ++j) {
-    const float lt = lmt_[j], lp = lmp_[j], tt = ltt_[j], tp = ltp_[j], pp = lpp_[j], lw = lw_[j];
-    float *out0 = &cand_[nb * j], *out1 = out0 + nb * nl, *out2 = out1 + nb * nl;
-    pair_weights(a, nb, lt, lp, tt, tp, pp, lw, out0, out1, out2);
-  }
-  double total = 0;
-  for (float c : cand_) total += double(c);
-  if (!(total > 0) || !std::isfinite(total)) return false;  // no overlap, or a degenerate pair: light sampling alone
-  // 3. The pairs kept: the heaviest, all but at most 1 - keep of the mass, found without
-  // sorting. Each candidate falls into a bucket by its float exponent below the heaviest
-  // (a factor 2 per bucket); whole buckets are dropped from the lightest up while what
-  // they hold together stays within 1 - keep of the total. This keeps the header's pairs
-  // (heaviest first to `keep`) and at most those within a factor 2 of its lightest; more
-  // than max_components are cut to the heaviest by a selection.
+}
+
+// 3. The pairs kept: the heaviest, all but at most 1 - keep of the mass, found without
+// sorting. Each candidate falls into a bucket by its float exponent below the heaviest
+// (a factor 2 per bucket); whole buckets are dropped from the lightest up while what
+// they hold together stays within 1 - keep of the total. This keeps the header's pairs
+// (heaviest first to `keep`) and at most those within a factor 2 of its lightest; more
+// than max_components are cut to the heaviest by a selection.
+std::size_t FastProduct::keep_heaviest(double total, const mix::ProductOptions& o) {
+  const std::size_t nc = cand_.size();
   float wmax = 0;
   for (float c : cand_) wmax = std::max(wmax, c);
   double bucket[kBuckets] = {};
@@ -194,9 +208,14 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
                      [](const std::pair<float, int>& p, const std::pair<float, int>& q) {
                        return p.first > q.first || (p.first == q.first && p.second < q.second);
                      });
-  const std::size_t top = std::min(order_.size(), max_k);
-  // 4. The kept pairs' Gaussians: precision P = P_i + P_j, mean P^-1 (P_i m_i + P_j m_j),
-  // and the Cholesky factor of P^-1 that both the sampler and the density use.
+  return std::min(order_.size(), max_k);
+}
+
+// 4. The kept pairs' Gaussians: precision P = P_i + P_j, mean P^-1 (P_i m_i + P_j m_j),
+// and the Cholesky factor of P^-1 that both the sampler and the density use; the sum of
+// their weights.
+double FastProduct::add_pairs(const ProductFactor& a, std::size_t top) {
+  const std::size_t nb = a.size(), nl = lw_.size();
   double acc = 0;
   for (std::size_t r = 0; r < top; ++r) {
     const int idx = order_[r].second;
@@ -222,10 +241,12 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
     itt_.push_back(1.f / ftt);  // the inverse factor's diagonal: z0 = dt / l_tt, z1 = (dp - l_pt z0) / l_pp
     ipp_.push_back(1.f / fpp);
   }
-  if (w_.empty()) return false;
-  term_.resize(w_.size());
-  // 5. Normalized weights, the CDF, each component's weight over its 2 pi det(L), and the
-  // components whose phi spread reaches images beyond the nearest three (9 sigma >= 3 pi).
+  return acc;
+}
+
+// 5. Normalized weights, the CDF, each component's weight over its 2 pi det(L), and the
+// components whose phi spread reaches images beyond the nearest three (9 sigma >= 3 pi).
+void FastProduct::normalize(double acc) {
   float run = 0;
   const float inv = float(1 / acc), inv_2pi = float(1 / (2 * kPi));
   wn_.resize(w_.size());
@@ -241,7 +262,6 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
     }
   }
   cdf_.back() = 1.f;
-  return true;
 }
 
 mix::Sample FastProduct::sample(Domain d, double u1, double u2, double u3) const {

@@ -65,6 +65,14 @@ class FastProduct {
   mix::SliceMixture mixture() const;
 
  private:
+  // The steps of build: the lighting carried into the frame (lw_ ... lipp_); the
+  // candidates kept (order_'s first entries, their count returned); their Gaussians (the
+  // sum of their weights returned); the normalized weights, CDF and wide components.
+  void carry_lighting(const CarrySource& src, const LocalAxes& f);
+  std::size_t keep_heaviest(double total, const mix::ProductOptions& o);
+  double add_pairs(const ProductFactor& a, std::size_t top);
+  void normalize(double acc);
+
   // the carried lighting: weight, mean, covariance, precision
   std::vector<float> lw_, lmt_, lmp_, ltt_, ltp_, lpp_, litt_, litp_, lipp_;
   // candidates: weight per (image k, lighting j, bsdf i), index (k n_light + j) n_bsdf + i

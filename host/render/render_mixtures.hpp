@@ -1,6 +1,6 @@
 // The mixtures a render uses: the theta_o slices its camera sees (a pre-pass), fitted by
-// the sweep's in-memory entry, only those, and kept in the config's fit output so that a
-// second render of the same scene reuses them.
+// the sweep, only those, and kept in the config's fit output so that a second render of
+// the same scene reuses them.
 #pragma once
 
 #include <cstddef>
@@ -20,10 +20,11 @@ namespace render {
 // InputError naming `where` when no fiber is visible.
 std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta& meta, const std::string& where);
 
-// The mixtures of `need` (theta_o slice indices of `table`): read from fit.output when it
-// holds exactly those slices, else fitted on `device_selector` and written there with the
-// fit report and search CSVs.
-MixtureFile render_mixtures(const std::string& table, const FitSection& fit, const std::vector<std::size_t>& need,
+// The mixtures of `need` (theta_o slice indices of `table`, a reader of the table in
+// memory): the sweep's fit_slices_kept, read from fit.output when it holds those slices of
+// this table fitted with these settings, else fitted on `device_selector` and written
+// there with the fit report and search CSVs.
+MixtureFile render_mixtures(const TableReader& table, const FitSection& fit, const std::vector<std::size_t>& need,
                             const std::string& device_selector);
 
 }  // namespace render

@@ -4,12 +4,13 @@
 #include <algorithm>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/output_lock.hpp"
 #include "core/progress.hpp"
-#include "core/scripts.hpp"
+#include "io/table.hpp"
 #include "render/comparisons.hpp"
 #include "render/light_carry.hpp"
 #include "render/converged_image.hpp"
@@ -68,7 +69,7 @@ GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std
   return g;
 }
 
-void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector, bool figures) {
+void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector) {
   namespace fs = std::filesystem;
   fs::create_directories(s.output);
   // one render per output directory at a time (a second one fails at once, naming the first)
@@ -78,7 +79,11 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   prepare_output(csv);
   prepare_output(json);
 
-  TableBsdf bsdf(config.table);
+  // The table, read once into memory: the BSDF's cells, the slices the mixtures are
+  // fitted to, and the hash in the reference's key. Let go once the mixtures are made.
+  std::optional<LoadedTable> table = load_table(config.table);
+  const std::uint64_t table_hash = table->file_hash;
+  TableBsdf bsdf(table->reader);
   // is_rgl, mis_light_rgl: the file's own sampler (f stays the table's, for every estimator)
   std::unique_ptr<RglBrdf> rgl;
   if (needs_rgl(s)) {
@@ -92,7 +97,8 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   // 1. The slices the camera needs; 2. their mixtures.
   const TableMeta& meta = bsdf.meta();
   const std::vector<std::size_t> need = slices_needed(scene.prepass_view(s), meta, config.file);
-  const MixtureFile mixtures = render_mixtures(config.table, *config.fit, need, device_selector);
+  const MixtureFile mixtures = render_mixtures(table->reader, *config.fit, need, device_selector);
+  table.reset();
   bsdf.set_mixture(to_mixture_set(mixtures));
 
   // mis_product's lighting, over world directions
@@ -105,11 +111,11 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
 
   // 3. The converged image (cached under its key); 4. the comparisons against it, the
   // guided estimators learning with the leaves' fit settings.
-  const Image converged = converged_image(view, s, scene_key(s, config.table));
+  const Image converged = converged_image(view, s, scene_key(s, config.table, table_hash));
   const GuideSetup guide = guide_setup(s, *config.fit, device_selector);
   const Comparisons comparisons = run_comparisons(view, s, converged, guide);
 
-  // 5. The report, the cloth's pixels and the figures.
+  // 5. The report and the cloth's pixels (the figures are the command's).
   write_pfm((fs::path(s.output) / "cloth_mask.pfm").string(), scene.cloth_mask());
   RenderFacts facts;
   facts.scene = s.room.enabled ? s.lighting.name + "_room" : s.lighting.name;  // the lighting, through a window
@@ -122,11 +128,6 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   facts.fibers = scene.cloth().fibers.size();
   facts.segments = scene.cloth().segments();
   write_render_report(csv, json, s, facts, comparisons);
-  if (figures) {
-    const std::string summary = (fs::path(s.output) / s.summary_figure).string();
-    run_script("render_figures.py", {"--dir", s.output, "--summary", summary});
-    log_line("render: figures in " + (fs::path(s.output) / "figures").string() + ", the summary " + summary);
-  }
 }
 
 }  // namespace render

@@ -1,7 +1,7 @@
 // `bsdfmix render CONFIG.yaml` (docs/render.md), as stages over the layers below: the
 // slices the camera needs (a pre-pass), the mixtures of only those slices, the converged
 // reference, every estimator at equal samples and at equal time with the stand-in against
-// the table, then render.csv, render.json and the figures.
+// the table, then render.csv and render.json.
 #pragma once
 
 #include <string>
@@ -27,9 +27,10 @@ bool needs_rgl(const RenderSettings& s);
 // on the devices of `device_selector` when some estimator is guided.
 GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std::string& device_selector);
 
-// Renders the config's scene; its table must exist (the CLI makes it first).
-void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector,
-                bool figures = true);
+// Renders the config's scene into s.output (images, render.csv, render.json); its table
+// must exist (the CLI makes it first) and is read once. The figures are the command's
+// (scripts/render_figures.py over s.output).
+void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector);
 
 }  // namespace render
 }  // namespace bsdfmix

@@ -33,11 +33,12 @@ HitFrame::HitFrame(const Vec3& axis, const Vec3& wo, Domain domain) {
   a.e2 = cross(a.axis, a.e1);
 }
 
-TableBsdf::TableBsdf(const std::string& table_path) {
-  const TableReader table(table_path);
+TableBsdf::TableBsdf(const std::string& table_path) : TableBsdf(TableReader(table_path)) {}
+
+TableBsdf::TableBsdf(const TableReader& table) {
   meta_ = table.meta();
   if (!meta_.azimuthal)
-    throw InputError(table_path + ": the renderer needs a table with azimuthal symmetry (one phi_o)");
+    throw InputError(table.path() + ": the renderer needs a table with azimuthal symmetry (one phi_o)");
   uniform_pdf_ = meta_.domain == Domain::Fiber ? kUniformPdfSphere : kUniformPdfHemisphere;
   const std::size_t cells = meta_.cells_per_slice(), no = meta_.theta_o.size();
   f_.resize(no * cells);

@@ -39,6 +39,7 @@ class TableBsdf {
   // Reads every slice of the (azimuthal) table; `set` may be empty (no mixture
   // samplers, no stand-in) until set_mixture.
   explicit TableBsdf(const std::string& table_path);
+  explicit TableBsdf(const TableReader& table);
   void set_mixture(const mix::MixtureSet& set);
   // The RGL file the (hemisphere) table was imported from: BsdfSampler::Rgl samples the
   // light direction with its warps. `rgl` must outlive this object; nullptr: none.

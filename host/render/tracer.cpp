@@ -120,60 +120,53 @@ struct Tracer::Impl {
     return normalized(d);
   }
 
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
+  // The Embree device (its default configuration: its own worker threads for the build)
+  // and an empty scene. Embree's builders are deterministic for a given input except in
+  // high-quality (spatial split) mode, so the scene keeps the medium build quality.
+  void create_scene() {
+    device = rtcNewDevice(nullptr);
+    if (!device) throw Error(std::string("render: cannot create an Embree device: ") + error_name(rtcGetDeviceError(nullptr)));
+    rtcSetDeviceErrorFunction(device, remember_error, &last_error);
+    if (!rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
+      throw Error("render: this Embree build has no filter functions (EMBREE_FILTER_FUNCTION), needed against self-hits");
+    scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+    check("create the scene");
   }
-};
 
-Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, const SurfaceMesh* surface,
-               const SurfaceMesh* room)
-    : impl_(std::make_unique<Impl>()) {
-  Impl& m = *impl_;
-  m.type = type;
-  // Embree's default configuration (its own worker threads for the build). Its builders
-  // are deterministic for a given input except in high-quality (spatial split) mode, so
-  // the scene keeps the medium build quality below.
-  m.device = rtcNewDevice(nullptr);
-  if (!m.device) throw Error(std::string("render: cannot create an Embree device: ") + error_name(rtcGetDeviceError(nullptr)));
-  rtcSetDeviceErrorFunction(m.device, remember_error, &m.last_error);
-  if (!rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
-    throw Error("render: this Embree build has no filter functions (EMBREE_FILTER_FUNCTION), needed against self-hits");
-  m.scene = rtcNewScene(m.device);
-  rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_MEDIUM);
-  m.check("create the scene");
+  // Every fiber of `cloth` as one curve geometry (kCurveGeom), with the self-hit filter.
+  // Linear: a fiber of n points is n - 1 segments, each indexed by its first vertex.
+  // B-spline: the points are the control points, with a phantom point mirrored past each
+  // end (2 p0 - p1) so the curve starts and ends exactly at the end points, with a nonzero
+  // tangent there; n - 1 windows of four control points.
+  void attach_curves(const Cloth& cloth) {
+    std::size_t vertex_count = 0, segment_count = 0;
+    for (std::size_t f = 0; f < cloth.fibers.size(); ++f) {
+      const std::size_t n = cloth.fibers[f].points.size();
+      if (n < 2)
+        throw Error("render: fiber " + std::to_string(f) + " has " + std::to_string(n) + " point(s), a curve needs 2");
+      vertex_count += bspline() ? n + 2 : n;
+      segment_count += n - 1;
+    }
+    if (vertex_count > std::numeric_limits<std::int32_t>::max() ||
+        cloth.fibers.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+      throw Error("render: the cloth has too many fibers or points for one Embree geometry");
+    if (segment_count == 0) return;
 
-  // Curves. Linear: a fiber of n points is n - 1 segments, each indexed by its first
-  // vertex. B-spline: the points are the control points, with a phantom point mirrored
-  // past each end (2 p0 - p1) so the curve starts and ends exactly at the end points, with
-  // a nonzero tangent there; n - 1 windows of four control points.
-  std::size_t vertex_count = 0, segment_count = 0;
-  for (std::size_t f = 0; f < cloth.fibers.size(); ++f) {
-    const std::size_t n = cloth.fibers[f].points.size();
-    if (n < 2)
-      throw Error("render: fiber " + std::to_string(f) + " has " + std::to_string(n) + " point(s), a curve needs 2");
-    vertex_count += m.bspline() ? n + 2 : n;
-    segment_count += n - 1;
-  }
-  if (vertex_count > std::numeric_limits<std::int32_t>::max() ||
-      cloth.fibers.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
-    throw Error("render: the cloth has too many fibers or points for one Embree geometry");
-
-  if (segment_count > 0) {
     static const RTCGeometryType kTypes[] = {RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE, RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE,
                                              RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE, RTC_GEOMETRY_TYPE_ROUND_BSPLINE_CURVE};
-    RTCGeometry g = rtcNewGeometry(m.device, kTypes[static_cast<int>(type)]);
+    RTCGeometry g = rtcNewGeometry(device, kTypes[static_cast<int>(type)]);
     float* vb = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
                                                              4 * sizeof(float), vertex_count));
     unsigned* ib = static_cast<unsigned*>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), segment_count));
     // Linear curves: flags telling Embree which segments continue a neighbour, so round
     // curves join without inner end caps.
-    unsigned char* fb = m.bspline() ? nullptr
-                                    : static_cast<unsigned char*>(rtcSetNewGeometryBuffer(
-                                          g, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, 1, segment_count));
-    m.check("allocate the curve buffers");
-    m.fiber_of.resize(segment_count);
+    unsigned char* fb = bspline() ? nullptr
+                                  : static_cast<unsigned char*>(rtcSetNewGeometryBuffer(
+                                        g, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, 1, segment_count));
+    check("allocate the curve buffers");
+    fiber_of.resize(segment_count);
 
     std::size_t v = 0, s = 0;
     auto put = [&](const Vec3& p, double r) {
@@ -185,66 +178,82 @@ Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, co
       const std::vector<Vec3>& pts = cloth.fibers[f].points;
       const double r = cloth.fibers[f].radius;
       const std::size_t n = pts.size(), first = v;
-      if (m.bspline()) put(sub(pts[0], sub(pts[1], pts[0])), r);
+      if (bspline()) put(sub(pts[0], sub(pts[1], pts[0])), r);
       for (const Vec3& p : pts) put(p, r);
-      if (m.bspline()) put(sub(pts[n - 1], sub(pts[n - 2], pts[n - 1])), r);
+      if (bspline()) put(sub(pts[n - 1], sub(pts[n - 2], pts[n - 1])), r);
       for (std::size_t k = 0; k + 1 < n; ++k, ++s) {
         ib[s] = static_cast<unsigned>(first + k);
-        m.fiber_of[s] = static_cast<std::int32_t>(f);
+        fiber_of[s] = static_cast<std::int32_t>(f);
         if (fb) fb[s] = (k > 0 ? RTC_CURVE_FLAG_NEIGHBOR_LEFT : 0) | (k + 2 < n ? RTC_CURVE_FLAG_NEIGHBOR_RIGHT : 0);
       }
     }
-    m.vertices = vb;
-    m.indices = ib;
+    vertices = vb;
+    indices = ib;
     rtcSetGeometryIntersectFilterFunction(g, self_hit_filter);
     rtcSetGeometryOccludedFilterFunction(g, self_hit_filter);
     rtcCommitGeometry(g);
-    rtcAttachGeometryByID(m.scene, g, kCurveGeom);
+    rtcAttachGeometryByID(scene, g, kCurveGeom);
     rtcReleaseGeometry(g);  // the scene holds it (and its buffers) from here
-    m.check("build the curve geometry");
+    check("build the curve geometry");
   }
 
-  if (ground.enabled) {
-    m.ground = true;
-    m.ground_z = ground.z;
-    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  // The ground square as two triangles (kGroundGeom).
+  void attach_ground(const GroundPlane& plane) {
+    ground = true;
+    ground_z = plane.z;
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     float* vb = static_cast<float*>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
     unsigned* ib = static_cast<unsigned*>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 2));
-    m.check("allocate the ground buffers");
-    const float h = static_cast<float>(ground.half), z = static_cast<float>(ground.z);
+    check("allocate the ground buffers");
+    const float h = static_cast<float>(plane.half), z = static_cast<float>(plane.z);
     const float corners[12] = {-h, -h, z, h, -h, z, h, h, z, -h, h, z};
     std::copy(corners, corners + 12, vb);
     const unsigned tris[6] = {0, 1, 2, 0, 2, 3};
     std::copy(tris, tris + 6, ib);
     rtcCommitGeometry(g);
-    rtcAttachGeometryByID(m.scene, g, kGroundGeom);
+    rtcAttachGeometryByID(scene, g, kGroundGeom);
     rtcReleaseGeometry(g);
-    m.check("build the ground geometry");
+    check("build the ground geometry");
   }
 
+  // The room's triangles (kRoomGeom), and each one's unit normal and first vertex, from
+  // the float vertices Embree holds.
+  void attach_room(const SurfaceMesh& room) {
+    attach_mesh(room, kRoomGeom, "room");
+    for (const auto& tri : room.triangles) {
+      Vec3 p[3];
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) p[c][d] = static_cast<float>(room.vertices[tri[std::size_t(c)]][d]);
+      const Vec3 n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+      if (!(dot(n, n) > 0)) throw Error("render: a room triangle has no area");
+      room_normal.push_back(normalized(n));
+      room_point.push_back(p[0]);
+    }
+  }
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+Tracer::Tracer(const Cloth& cloth, const GroundPlane& ground, CurveType type, const SurfaceMesh* surface,
+               const SurfaceMesh* room)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.type = type;
+  m.create_scene();
+  m.attach_curves(cloth);
+  if (ground.enabled) m.attach_ground(ground);
   if (surface && !surface->triangles.empty()) {
     m.surface = *surface;
     if (m.surface.normals.size() != m.surface.vertices.size())
       throw Error("render: the surface needs one normal per vertex");
     m.attach_mesh(m.surface, kSurfaceGeom, "surface");
   }
-
-  if (room && !room->triangles.empty()) {
-    m.attach_mesh(*room, kRoomGeom, "room");
-    // each triangle's unit normal and first vertex, from the float vertices Embree holds
-    for (const auto& tri : room->triangles) {
-      Vec3 p[3];
-      for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) p[c][d] = static_cast<float>(room->vertices[tri[std::size_t(c)]][d]);
-      const Vec3 n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-      if (!(dot(n, n) > 0)) throw Error("render: a room triangle has no area");
-      m.room_normal.push_back(normalized(n));
-      m.room_point.push_back(p[0]);
-    }
-  }
-
+  if (room && !room->triangles.empty()) m.attach_room(*room);
   rtcCommitScene(m.scene);
   m.check("commit the scene");
 }

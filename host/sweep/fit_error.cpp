@@ -37,23 +37,6 @@ WeightedSlice pool_slice(const WeightedSlice& s, std::size_t f) {
   return out;
 }
 
-mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const std::vector<double>& mean,
-                                     const std::vector<double>& cov) {
-  mix::SliceMixture m;
-  for (std::size_t j = 0; j < weight.size(); ++j) {
-    mix::Gaussian g;
-    g.weight = weight[j];
-    g.mu_t = mean[2 * j];
-    g.mu_p = mean[2 * j + 1];
-    g.s_tt = cov[3 * j];
-    g.s_tp = cov[3 * j + 1];
-    g.s_pp = cov[3 * j + 2];
-    m.components.push_back(g);
-  }
-  m.prepare();
-  return m;
-}
-
 namespace {
 
 // A Gaussian's mean density over a dtheta x dphi cell centered at (theta, phi): its density

@@ -20,9 +20,8 @@ struct WeightedSlice {
 // weights summed. `factor` must divide both axis lengths (else the slice is returned as is).
 WeightedSlice pool_slice(const WeightedSlice& s, std::size_t factor);
 
-// A mixture from parameter arrays (weights K, means 2K, covariances 3K), prepared.
-mix::SliceMixture make_slice_mixture(const std::vector<double>& weight, const std::vector<double>& mean,
-                                     const std::vector<double>& cov);
+// A mixture from parameter arrays (weights K, means 2K, covariances 3K), prepared: the header's.
+using mix::make_slice_mixture;
 
 // sum_i |w_i - W m_i| / W, W = sum w, m_i the mixture's mass in cell i: the relative L1
 // error of the mixture as a stand-in for the slice (0 to 2). m_i is the density at the

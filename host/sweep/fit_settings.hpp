@@ -20,6 +20,9 @@ const char* search_name(SearchStrategy s);
 // The strategy a config name stands for; nullopt when it names none.
 std::optional<SearchStrategy> search_strategy(const std::string& name);
 
+// The criterion every fit chooses K by (sweep/criterion.hpp), as the files record it.
+inline constexpr const char* kCriterion = "l1_rel + k_penalty * K";
+
 struct FitSettings {
   std::string output, report, search_report;
   int k_min = 1, k_max = 32;

@@ -1,11 +1,21 @@
-// The in-memory entry to the sweep: slices in, mixtures and report rows out.
+// The in-memory entry to the sweep: slices in, mixtures and report rows out; and the fit
+// on demand that keeps them in the fit's output files.
 #include "sweep/fit_slices.hpp"
 
-#include <algorithm>
+#include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+
+#include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/output_lock.hpp"
 #include "core/progress.hpp"
 #include "sweep/batch_fitter.hpp"
+#include "sweep/sweep.hpp"
+#include "sweep/sweep_outputs.hpp"
 
 namespace bsdfmix {
 
@@ -36,6 +46,117 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
   }
   progress.finish();
   return result;
+}
+
+namespace {
+
+// A fit-settings record (fit_settings_json's text) as typed values: the settings in a
+// FitSettings (paths, batch and slices left at their defaults) and the criterion it names.
+struct RecordedSettings {
+  FitSettings fit;
+  std::string criterion;
+};
+
+std::optional<RecordedSettings> read_record(const std::string& json) {
+  try {
+    const YAML::Node n = YAML::Load(json);
+    if (!n.IsMap()) return std::nullopt;
+    RecordedSettings r;
+    FitSettings& f = r.fit;
+    f.k_min = n["k_min"].as<int>();
+    f.k_max = n["k_max"].as<int>();
+    f.seed = n["seed"].as<std::uint64_t>();
+    f.restarts = n["restarts"].as<int>();
+    f.final_restarts = n["final_restarts"].as<int>();
+    f.iterations = n["iterations"].as<int>();
+    f.final_iterations = n["final_iterations"].as<int>();
+    f.tolerance = n["tolerance"].as<double>();
+    f.k_penalty = n["k_penalty"].as<double>();
+    f.error_target.reset();
+    if (!n["error_target"].IsNull()) f.error_target = n["error_target"].as<double>();
+    f.search_pool = n["search_pool"].as<int>();
+    const std::optional<SearchStrategy> search = search_strategy(n["search"].as<std::string>());
+    if (!search) return std::nullopt;
+    f.search = *search;
+    f.refine = n["refine"].as<std::string>();
+    f.refine_evaluations = n["refine_evaluations"].as<int>();
+    f.refine_kl = n["refine_kl"].as<double>();
+    f.refine_rgb = n["refine_rgb"].as<double>();
+    f.rgb_copies.reset();
+    if (!n["rgb_copies"].IsNull()) f.rgb_copies = n["rgb_copies"].as<double>();
+    r.criterion = n["criterion"].as<std::string>();
+    return r;
+  } catch (const YAML::Exception&) {
+    return std::nullopt;
+  }
+}
+
+// A number of a record (fit_settings_json: 9 significant digits) against the setting's.
+bool same_number(double recorded, double value) {
+  return recorded == value || std::abs(recorded - value) <= 1e-8 * std::abs(value);
+}
+bool same_number(const std::optional<double>& recorded, const std::optional<double>& value) {
+  return recorded.has_value() == value.has_value() && (!recorded || same_number(*recorded, *value));
+}
+
+// Every setting a record holds against the settings of a fit, field by field.
+bool same_settings(const RecordedSettings& a, const FitSettings& y) {
+  const FitSettings& x = a.fit;
+  return x.k_min == y.k_min && x.k_max == y.k_max && x.seed == y.seed && x.restarts == y.restarts &&
+         x.final_restarts == y.final_restarts && x.iterations == y.iterations &&
+         x.final_iterations == y.final_iterations && same_number(x.tolerance, y.tolerance) &&
+         same_number(x.k_penalty, y.k_penalty) && same_number(x.error_target, y.error_target) &&
+         x.search_pool == y.search_pool && x.search == y.search && x.refine == y.refine &&
+         x.refine_evaluations == y.refine_evaluations && same_number(x.refine_kl, y.refine_kl) &&
+         same_number(x.refine_rgb, y.refine_rgb) && same_number(x.rgb_copies, y.rgb_copies) &&
+         a.criterion == kCriterion;
+}
+
+// The mixtures of `want` ((theta_o, phi_o) of each slice, in order) out of the file at
+// `path`, when it was fitted to a table of source `source` with the settings of `fit`;
+// nullopt when it holds some other fit or lacks one of those slices.
+std::optional<MixtureFile> kept_slices(const std::string& path, const std::string& source, const FitSettings& fit,
+                                       const std::vector<std::pair<double, double>>& want) {
+  MixtureFile mf = read_mixture_file(path);
+  if (mf.table_source != source || !fit_settings_match(mf.fit_settings, fit)) return std::nullopt;
+  std::vector<std::pair<double, double>> held;
+  for (std::size_t i = 0; i < mf.slices(); ++i) held.push_back({mf.theta_o[i], mf.phi_o[i]});
+  if (held == want) return mf;
+  MixtureFile sub = mf.header_only();
+  for (const auto& w : want) {
+    const auto at = std::find(held.begin(), held.end(), w);
+    if (at == held.end()) return std::nullopt;
+    sub.add_slice_from(mf, std::size_t(at - held.begin()));
+  }
+  return sub;
+}
+
+}  // namespace
+
+bool fit_settings_match(const std::string& recorded, const FitSettings& fit) {
+  const std::optional<RecordedSettings> a = read_record(recorded);
+  return a && same_settings(*a, fit);
+}
+
+MixtureFile fit_slices_kept(const SliceSource& source, const std::string& table_path,
+                            const std::vector<SliceRef>& slices, const FitSettings& fit,
+                            const std::string& device_selector, const std::string& who) {
+  const TableMeta& meta = source.meta();
+  std::vector<std::pair<double, double>> want;
+  for (const SliceRef& r : slices) want.push_back({meta.theta_o[r.t_o], meta.phi_o[r.p_o]});
+  const OutputLock lock(fit.output);  // a fit of the same output elsewhere fails here, at once
+  if (std::filesystem::exists(fit.output))
+    if (std::optional<MixtureFile> kept = kept_slices(fit.output, meta.source, fit, want)) {
+      log_line(who + ": the " + std::to_string(want.size()) + " slices needed, from " + fit.output);
+      return std::move(*kept);
+    }
+  for (const auto* out : {&fit.output, &fit.report, &fit.search_report}) prepare_output(*out, 1 << 20);
+  const std::vector<Device> devices = select_devices(device_selector);
+  log_line(who + ": fitting " + std::to_string(slices.size()) + " slice(s) of " + table_path + ", K in [" +
+           std::to_string(fit.k_min) + ", " + std::to_string(fit.k_max) + "]");
+  SweepResult result = fit_slices(source, slices, fit, devices, "fit " + table_path);
+  write_outputs(result, table_path, meta, fit);
+  return std::move(result.mixture);
 }
 
 }  // namespace bsdfmix

@@ -1,6 +1,8 @@
 // The in-memory entry to the sweep: a set of slices in, their mixtures and the rows of
 // the fit report and search CSVs out; no files, no checkpoint. run_sweep (sweep/sweep.hpp)
-// fits its batches with the same batch fitter, so both give the same mixtures.
+// fits its batches with the same batch fitter, so both give the same mixtures. And over
+// it, the fit on demand of a caller that keeps its mixtures in the fit's output files
+// (fit_slices_kept: the render's).
 #pragma once
 
 #include <cstddef>
@@ -51,5 +53,22 @@ struct SweepResult {
 // mixtures are the same as the file sweep's. Prints a progress line labelled `what`.
 SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSettings& fit,
                        const std::vector<Device>& devices, const std::string& what, const EngineOptions& engine = {});
+
+// The mixtures of `slices` of `source` (sorted, unique), kept in fit.output for the next
+// caller: read from there when it holds them fitted to this table (the same
+// meta().source) with the same settings (fit_settings_match): as it is when it holds
+// exactly those slices, else those taken out of it (a sweep of every slice serves any
+// subset); else fitted on the devices of `device_selector` and written there with the fit
+// report and search CSVs by the sweep's outputs (write_outputs; `table_path`: the table
+// file whose sizes they report). A fit of the same output elsewhere fails at once (its
+// lock). Log lines begin with `who`.
+MixtureFile fit_slices_kept(const SliceSource& source, const std::string& table_path,
+                            const std::vector<SliceRef>& slices, const FitSettings& fit,
+                            const std::string& device_selector, const std::string& who);
+
+// Whether the fit settings a mixture file records (its fit_settings attribute, the text
+// of fit_settings_json) are those of `fit`, compared as typed values: every setting the
+// record holds, at the precision it holds them. False for a text that is not such a record.
+bool fit_settings_match(const std::string& recorded, const FitSettings& fit);
 
 }  // namespace bsdfmix

@@ -252,6 +252,39 @@ struct SliceMixture {
   }
 };
 
+// A slice mixture from the parameter arrays of its k components, row-major as a mixture
+// file stores them: weights [k], means [k][2] (mu_theta, mu_phi), covariances [k][3]
+// (s_tt, s_tp, s_pp) and, when `rgb` is not null, the channel amplitudes [k][3] (has_rgb);
+// float or double. Not prepared: give it its colour copies (set_copies) if it has some,
+// then prepare().
+template <typename T, typename A = double>
+SliceMixture slice_from_arrays(std::size_t k, const T* weight, const T* mean, const T* cov, const A* rgb = nullptr) {
+  SliceMixture m;
+  m.has_rgb = rgb != nullptr;
+  for (std::size_t j = 0; j < k; ++j) {
+    Gaussian g;
+    g.weight = weight[j];
+    g.mu_t = mean[2 * j];
+    g.mu_p = mean[2 * j + 1];
+    g.s_tt = cov[3 * j];
+    g.s_tp = cov[3 * j + 1];
+    g.s_pp = cov[3 * j + 2];
+    for (int c = 0; rgb && c < 3; ++c) g.rgb[c] = rgb[3 * j + std::size_t(c)];
+    m.components.push_back(g);
+  }
+  return m;
+}
+
+// The same from vectors (weights K, means 2K, covariances 3K), prepared.
+inline SliceMixture make_slice_mixture(const std::vector<double>& weight, const std::vector<double>& mean,
+                                       const std::vector<double>& cov) {
+  if (mean.size() != 2 * weight.size() || cov.size() != 3 * weight.size())
+    throw std::invalid_argument("bsdfmix::mix::make_slice_mixture: weights K, means 2K and covariances 3K disagree");
+  SliceMixture m = slice_from_arrays(weight.size(), weight.data(), mean.data(), cov.data());
+  m.prepare();
+  return m;
+}
+
 // How product() prunes: the heaviest component pairs are kept until they hold `keep` of
 // the product's mass, and at most `max_components` of them.
 struct ProductOptions {
