@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The fiber table generator's time, size and peak memory (docs/fiber.md, "Generating"):
+"""The fiber table generator's time, size and peak memory (docs/fiber.md):
 the default table (180 x 90 x 180, one phi_o by symmetry), best of RUNS runs, and the
 full 90 x 180 x 90 x 180 table without symmetry (noise on), once. Peak memory is the
 child process's largest resident set (getrusage). The tables are written to a work

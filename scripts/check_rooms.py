@@ -8,7 +8,9 @@
 - every folder under host/ has a row;
 - no file under host/ is longer than 500 lines, none under host/cli/ than 250;
 - include/bsdfmix/mixture.hpp includes only the C++ standard library;
-- the kernels define Philox in kernels/common.cl alone.
+- the kernels define Philox in kernels/common.cl alone;
+- kernel arguments are set (`setArg`) in host/device/routine.* alone: every launch goes
+  through the routine layer.
 Prints one line per violation and exits 1 when there is any; prints a summary otherwise.
 """
 import argparse
@@ -82,6 +84,14 @@ def main():
         for n, line in enumerate(cl.read_text().splitlines(), 1):
             if philox_def.match(line):
                 problems.append(f"{cl.relative_to(root)}:{n}: Philox is defined in kernels/common.cl alone")
+    set_arg = re.compile(r"\bsetArg\s*\(")
+    for f in sorted((root / "host").rglob("*")):
+        if f.suffix not in (".cpp", ".hpp", ".h") or f.parent.name == "device" and f.stem == "routine":
+            continue
+        for n, line in enumerate(f.read_text().splitlines(), 1):
+            if set_arg.search(line):
+                problems.append(f"{f.relative_to(root)}:{n}: kernel arguments are set through Routine "
+                                f"(host/device/routine.hpp) alone")
     for p in problems:
         print(p)
     if problems:

@@ -19,7 +19,7 @@ import tempfile
 
 PROFILES = {
     "oclgrind": [],
-    # 96 KiB of global memory: a batch may hold 96 KiB / 16 point-components (docs/em.md),
+    # 96 KiB of global memory: a batch may hold 96 KiB / 16 point-components (docs/studies/em_kernels.md),
     # so the fit's problems are cut into many batches.
     "gpu-like": ["--max-wgsize", "256", "--local-mem-size", "32768", "--global-mem-size", str(96 * 1024)],
 }

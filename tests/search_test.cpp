@@ -414,7 +414,7 @@ TEST_CASE("the search method is a fit key: smem by default, restarts, nothing el
 // A measurement (hidden: run it by its tag): lobes c standard deviations inside the theta
 // border, fitted by both search methods, the walk with and without the L1 refinement. With
 // BSDFMIX_MEASURE_CSV set it also writes its rows there (bench/reproduce.sh theta_border:
-// bench/results/theta_border.csv, the table of docs/fitting.md "The theta border").
+// bench/results/theta_border.csv, the table of docs/studies/theta_border.md).
 TEST_CASE("measure: lobes near the theta border", "[.measure]") {
   const std::vector<double> cs = {0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0};
   std::vector<Known> known;
@@ -492,7 +492,7 @@ TEST_CASE("seeding at the residual puts a component on the sharp peak a mixture 
   CHECK(seed_at_residual(grid, w, truth, 2, 1e-6).k() == 2);
 }
 
-// bench/hard_table.py's shape (docs/fitting.md, "A walk that does not give up"): a sharp
+// bench/hard_table.py's shape (CHANGELOG.md, "A walk that does not give up"): a sharp
 // peak 30x a broad base, with fringes. Before the walk restarted from its best fit and
 // seeded at the residual, it stopped at K = 5 and 6 on these two slices, at 17.5% and
 // 19.7% L1, where a fit pinned at K = 8 or 16 reaches 8.5% and 7.3%.

@@ -178,7 +178,7 @@ double table_integral(const std::string& path, std::size_t t, std::size_t p, mix
   return sum;
 }
 
-// The `energy` column of compare's CSV row `slice` (docs/formats.md, "Compare CSV").
+// The `energy` column of compare's CSV row `slice` (docs/formats.md, "Compare").
 double compare_energy(const std::string& path, std::size_t slice) {
   std::ifstream in(path);
   std::string line;

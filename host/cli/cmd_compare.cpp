@@ -20,7 +20,7 @@ void add_compare(CLI::App& app, Common& common) {
       "included (blended as the header blends them): luminance and per-channel relative L1, RGB error, energy");
   sub->add_option("mixture", args->mixture, "mixture file (HDF5)")->required()->check(CLI::ExistingFile);
   sub->add_option("table", args->table, "the table it was fitted to (HDF5)")->required()->check(CLI::ExistingFile);
-  sub->add_option("--csv", args->csv, "write one row per table slice here (docs/formats.md, \"Compare CSV\")");
+  sub->add_option("--csv", args->csv, "write one row per table slice here (docs/formats.md, \"Compare\")");
   add_common_options(*sub, common);
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);

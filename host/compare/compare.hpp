@@ -1,4 +1,4 @@
-// `bsdfmix compare MIXTURE TABLE` (docs/fitting.md, "Checking a stand-in"): the stand-in's
+// `bsdfmix compare MIXTURE TABLE` (docs/guide_fit.md): the stand-in's
 // error against the table at every slice of the table, the slices between fitted ones
 // included (blended as the header blends them, thesis eq. 3.7): what a renderer that
 // evaluates the mixture file through include/bsdfmix/mixture.hpp gets, cell by cell.
@@ -37,7 +37,7 @@ struct Comparison {
 // do not describe the same function (domain, symmetry, omega_o axes).
 Comparison compare_stand_in(const std::string& mixture, const std::string& table);
 
-// The CSV (docs/formats.md, "Compare CSV") and the printed summary (medians and 90th
+// The CSV (docs/formats.md, "Compare") and the printed summary (medians and 90th
 // percentiles over all slices, and over the fitted and the blended ones).
 std::string comparison_csv(const Comparison& c);
 std::string comparison_summary(const Comparison& c);

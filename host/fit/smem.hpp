@@ -2,7 +2,7 @@
 // which component fits its cells worst, which pairs share their cells, and the
 // mixtures that split, merge or both. The host picks the moves; the EM that
 // follows each move runs as an ordinary batched EmTask with an explicit start.
-// docs/fitting.md describes how the Gaussian-count search uses them.
+// docs/studies/search.md, "The walk, step by step", describes how the search uses them.
 #pragma once
 
 #include <functional>

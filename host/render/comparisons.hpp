@@ -12,7 +12,7 @@
 namespace bsdfmix {
 namespace render {
 
-// One row of render.csv (docs/formats.md, "Render CSV").
+// One row of render.csv (docs/render.md, "Outputs").
 struct RenderRow {
   std::string estimator, mode, image;
   int spp = 0;

@@ -1,4 +1,4 @@
-// What a render reports (docs/formats.md, "Render CSV" and "Render JSON"): render.csv, one
+// What a render reports (docs/render.md, "Outputs"): render.csv, one
 // row per image and per progress point, and render.json, the scene, the sizes of the
 // table and of the mixtures, and the stand-in's differences; both written atomically.
 #pragma once

@@ -147,10 +147,10 @@ void end_walk(Batch& b, const Walk& wk, std::size_t s) {
 
 }  // namespace
 
-// The walk over K (docs/fitting.md). Every slice of the batch walks the candidate Ks
-// upwards together: the first K starts from k-means++ restarts, each later K from the
-// previous K's fit grown by splitting its worst-fitting components; after EM,
-// split-and-merge rounds move components out of local optima. Each step is a batched
+// The walk over K (docs/studies/search.md, "The walk, step by step"). Every slice of the
+// batch walks the candidate Ks upwards together: the first K starts from k-means++
+// restarts, each later K from the previous K's fit grown by splitting its worst-fitting
+// components; after EM, split-and-merge rounds move components out of local optima. Each step is a batched
 // engine call over the slices still walking. A slice stops walking once no larger K can
 // win: its best score is at most k_penalty times the next K (l1_rel >= 0), or, with an
 // error target, once a K meets it; and (a heuristic) when its best score has not

@@ -1,7 +1,7 @@
 // The fiber presets. Parameters follow the ranges of Chiang et al. 2016 and of the
 // textile literature; each absorption is sigma_a_from_color (Chiang et al. 2016, section
 // 4.2) of the preset's colour at its beta_n, to 4 significant digits (tests/fiber_test.cpp
-// checks it). docs/fiber.md has the table, where each colour comes from and why.
+// checks it). docs/fiber.md has the table; docs/studies/fiber_colour.md where each colour comes from.
 #include "tables/fiber_presets.hpp"
 
 #include "core/domain.hpp"
