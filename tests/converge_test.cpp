@@ -144,7 +144,7 @@ Lighting map(Domain d) {
 mix::SliceMixture light_mixture(const Fixture& fx, const Lighting& light) {
   Progress::set_enabled(false);
   const TableReader table(fx.table);
-  FitSection fit;
+  FitSettings fit;
   fit.k_min = 1;
   fit.k_max = 8;
   fit.restarts = 1;
