@@ -112,7 +112,7 @@ void bench_em(const EmBenchOptions& o, const std::string& device_selector, bool 
                       ? "; PoCL: LLVM for the host CPU"
                       : "") +
                  "); host: " + kHostBuild;
-  EmEngine engine(std::move(devices), o.queues, parse_precision(o.precision));
+  EmEngine engine(std::move(devices), o.queues, EngineOptions{parse_precision(o.precision), o.pool_log});
 
   // Warm-up (kernel build), then the timed fit.
   {

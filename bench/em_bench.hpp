@@ -16,6 +16,7 @@ struct EmBenchOptions {
   int queues = 1;
   int repeat = 3;
   std::string precision = "auto";
+  bool pool_log = false;  // print every batch run of the work queues (device/batch_pool.hpp)
   bool peers = true;
   bool reference = true;
   std::uint64_t seed = 1;

@@ -262,11 +262,11 @@ void bench_sampling(const SamplingPeersOptions& o, const std::string& device, bo
   }
   std::vector<LightMixture> light_mix(lights.size());
   for (std::size_t l = 1; l < lights.size(); ++l) {
-    FitSection fit;
+    FitSettings fit;
     fit.k_max = 16;  // as `converge` without a fit section
     const std::string cache = !o.light_cache.empty() ? o.light_cache
                                                      : (std::filesystem::path(o.csv).parent_path() / "light_mixtures").string();
-    light_mix[l] = lighting_mixture(lights[l], table.meta(), fit, cache, device);
+    light_mix[l] = lighting_mixture(lights[l], table.meta(), fit, cache, device, o.light_engine);
     if (!quiet)
       log_line("bench sampling: lighting '" + lights[l].name + "': K " + std::to_string(light_mix[l].k) + " (" +
                light_mix[l].path + ")");

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "fit/em.hpp"
 #include "sampling/sampling.hpp"
 
 namespace bsdfmix {
@@ -29,6 +30,7 @@ struct SamplingPeersOptions {
   std::string mixture, table, csv;
   std::vector<std::string> scenes;  // scene files studied besides constant light
   std::string light_cache;          // the lighting mixtures' cache ("": <csv dir>/light_mixtures)
+  EngineOptions light_engine;       // how the engine of the lighting fits runs
   int directions = 20;
   std::uint64_t samples = 65536;
   std::uint64_t seed = 1;

@@ -69,13 +69,13 @@ void tune_shapes(const TuneOptions& o, const std::string& device_selector) {
     const ShapeChoice current = choose_shape(info);
     std::printf("[%d] %s, driver %s: now %s (%s)\n", info.index, info.name.c_str(), info.driver.c_str(),
                 current.shape.label().c_str(), current.source.c_str());
-    EmEngine reference_engine({dev});  // the device's shape from its table row or tuned entry
+    EmEngine reference_engine({dev}, 1, o.engine);  // the device's shape from its table row or tuned entry
     std::vector<EmResult> reference;
     best_seconds(reference_engine, set, tasks, 0, reference);
     KernelShape best;
     double best_s = 1e300;
     for (const KernelShape& shape : shape_candidates(info)) {
-      EmEngine engine({dev});
+      EmEngine engine({dev}, 1, o.engine);
       engine.set_shape(shape);
       std::vector<EmResult> results;
       double s = 0;

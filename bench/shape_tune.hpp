@@ -5,11 +5,14 @@
 
 #include <string>
 
+#include "fit/em.hpp"
+
 namespace bsdfmix::bench {
 
 struct TuneOptions {
   int k = 16, slices = 32, runs = 3, theta = 90;  // slices of theta x 2 theta cells
   std::string out;                                // shapes file to record in ("" prints only)
+  EngineOptions engine;                           // how the timed engines run
 };
 
 // Throws DeviceError when no candidate runs on a device.

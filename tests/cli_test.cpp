@@ -82,6 +82,15 @@ TEST_CASE("errors are one line on stderr with a non-zero exit", "[cli]") {
   CHECK(bad_env.code != 0);
   CHECK(lines(bad_env.err) == 1);
   CHECK_THAT(bad_env.err, Catch::Contains("BSDFMIX_PRECISION"));
+  for (const char* command : {"render", "converge", "run"}) {  // every command whose fits it tunes
+    setenv("BSDFMIX_PRECISION", "fp16", 1);
+    const Run bad = run(std::string(command) + " nowhere.yaml");
+    unsetenv("BSDFMIX_PRECISION");
+    INFO(command);
+    CHECK(bad.code != 0);
+    CHECK(lines(bad.err) == 1);
+    CHECK_THAT(bad.err, Catch::Contains("BSDFMIX_PRECISION"));
+  }
 
   const Run bad_dev = run("devices --check --device no-such-device-xyz");
   CHECK(bad_dev.code == 1);

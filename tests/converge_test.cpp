@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -144,7 +145,7 @@ Lighting map(Domain d) {
 mix::SliceMixture light_mixture(const Fixture& fx, const Lighting& light) {
   Progress::set_enabled(false);
   const TableReader table(fx.table);
-  FitSection fit;
+  FitSettings fit;
   fit.k_min = 1;
   fit.k_max = 8;
   fit.restarts = 1;
@@ -347,6 +348,30 @@ TEST_CASE("bsdfmix converge writes the convergence CSV with the exact columns", 
   std::ofstream(cfg) << "table: " << fiber().table << "\nconverge:\n  mixture: " << fiber().mixture
                      << "\n  estimators: [us_tab, magic]\n  csv: " << csv << "\n";
   CHECK(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg + " 2>/dev/null").c_str()) != 0);
+}
+
+TEST_CASE("bsdfmix converge fits the lighting as BSDFMIX_POOL_LOG says", "[converge][cli]") {
+  // The variable, read once by the command, reaches the engine of the lighting's fit.
+  const fs::path dir = temp_dir();
+  const std::string cfg = (dir / "pool_cfg.yaml").string(), err = (dir / "pool.log").string();
+  const fs::path cache = dir / "pool_light_cache";
+  fs::remove_all(cache);
+  std::ofstream(cfg) << "table: " << fiber().table << "\nconverge:\n  mixture: " << fiber().mixture
+                     << "\n  theta_o: [0.5]\n  samples_max: 16\n  runs: 2\n  csv: " << (dir / "pool.csv").string()
+                     << "\n  light_mixture_dir: " << cache.string()
+                     << "\n  scene:\n    - {name: sky, constant: 0.5, gradient: {zenith: 1, horizon: 0.5, ground: 0.1}}\n"
+                        "  estimators: [mis_product]\n";
+  const std::string converge = std::string(BSDFMIX_BINARY) + " converge -q " + cfg + " 2> " + err;
+  const auto pool_lines = [&err] {
+    std::ifstream in(err);
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    return text.find("pool em batch") != std::string::npos;
+  };
+  REQUIRE(std::system(("BSDFMIX_POOL_LOG=1 " + converge).c_str()) == 0);
+  CHECK(pool_lines());
+  fs::remove_all(cache);
+  REQUIRE(std::system(converge.c_str()) == 0);  // without it: the same fit, no pool lines
+  CHECK_FALSE(pool_lines());
 }
 
 namespace {

@@ -2,7 +2,8 @@
 // header, render.json, the images), a reference killed by SIGKILL after its first
 // checkpoint resumes to the same image an uninterrupted run makes, a second render of the
 // same output directory is refused while the first holds it, and the figure script writes
-// the figures and the summary figure where the config names it.
+// the figures and the summary figure where the config names it, and the render's fits
+// (the mixtures', the guide's) run as BSDFMIX_PRECISION and BSDFMIX_POOL_LOG say.
 // labels: render cli
 #include <catch2/catch.hpp>
 
@@ -37,8 +38,9 @@ std::string slurp(const fs::path& p) {
 }
 
 // A config: a small silk table, K <= 4, a 16 x 16 render whose reference takes 256 passes;
-// `render_extra`: more keys of the render section, indented.
-std::string config(const std::string& name, bool stand_in = false, const std::string& render_extra = "") {
+// `render_extra`: more keys of the render section, indented; `estimators`: the list compared.
+std::string config(const std::string& name, bool stand_in = false, const std::string& render_extra = "",
+                   const std::string& estimators = "[uniform, mis_light_gmm]") {
   const fs::path d = temp_dir();
   const std::string out = (d / name).string();
   const std::string cfg = (d / (name + ".yaml")).string();
@@ -48,7 +50,7 @@ std::string config(const std::string& name, bool stand_in = false, const std::st
     << "fit: {output: " << (d / (name + "_mixture.h5")).string() << ", report: " << (d / (name + "_fit.csv")).string()
     << ", search_report: " << (d / (name + "_search.csv")).string() << ", k_max: 4, restarts: 1, final_restarts: 1}\n"
     << "render:\n  output: " << out << "\n  width: 16\n  height: 16\n  spp: 4\n  reference_spp: 256\n"
-    << "  reference_estimator: mis_light_gmm\n  estimators: [uniform, mis_light_gmm]\n  stand_in: "
+    << "  reference_estimator: mis_light_gmm\n  estimators: " << estimators << "\n  stand_in: "
     << (stand_in ? "true\n  stand_in_spp: 4\n" : "false\n") << "  scene: " << BSDFMIX_SOURCE_DIR
     << "/configs/scenes/sky.yaml\n  threads: 1\n  prepass: 8\n"
     << render_extra;
@@ -163,4 +165,39 @@ TEST_CASE("bsdfmix render writes its figures and the summary where the config na
   const std::string png = slurp(out / "story.png");
   CHECK(png.size() > 10000);
   CHECK(png.rfind("\x89PNG", 0) == 0);
+}
+
+TEST_CASE("the render's fits run as the environment says", "[render][cli]") {
+  // BSDFMIX_PRECISION and BSDFMIX_POOL_LOG, read once by the command, reach the engines of
+  // the render's fits: the mixtures' (first run) and the guide's leaves' (second run, the
+  // mixtures kept from the first).
+  const std::string cfg = config("environment", false, "", "[uniform, guided]");
+  const fs::path d = temp_dir(), out = d / "environment", log = d / "environment.log";
+  fs::remove(d / "environment_mixture.h5");
+  fs::remove_all(out);
+  const std::string render = std::string(BSDFMIX_BINARY) + " render --no-figures " + cfg + " > /dev/null 2> " + log.string();
+
+  REQUIRE(std::system(("BSDFMIX_PRECISION=fp16 " + render).c_str()) != 0);
+  const std::string bad = slurp(log);
+  INFO(bad);
+  CHECK(std::count(bad.begin(), bad.end(), '\n') == 1);
+  CHECK(bad.find("BSDFMIX_PRECISION") != std::string::npos);
+  CHECK_FALSE(fs::exists(out));
+
+  REQUIRE(std::system(("BSDFMIX_POOL_LOG=1 " + render).c_str()) == 0);
+  const std::string first = slurp(log);
+  INFO(first);
+  CHECK(first.find("render: fitting") != std::string::npos);
+  CHECK(first.find("\npool ") != std::string::npos);
+
+  fs::remove_all(out);
+  REQUIRE(std::system(("BSDFMIX_POOL_LOG=1 " + render).c_str()) == 0);
+  const std::string second = slurp(log);
+  INFO(second);
+  CHECK(second.find("render: fitting") == std::string::npos);
+  CHECK(second.find("learn the radiance") != std::string::npos);
+  CHECK(second.find("\npool ") != std::string::npos);
+
+  REQUIRE(std::system(render.c_str()) == 0);  // without the variable: no pool lines
+  CHECK(slurp(log).find("\npool ") == std::string::npos);
 }

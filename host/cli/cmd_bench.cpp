@@ -66,15 +66,18 @@ void add_bench(CLI::App& app, Common& common) {
       return;
     }
     if (common.quiet) Progress::set_enabled(false);
-    bench::bench_sampling(args->s, common.device, common.quiet);
+    bench::SamplingPeersOptions s = args->s;
+    s.light_engine = run_environment().engine;
+    bench::bench_sampling(s, common.device, common.quiet);
   });
   sub->require_subcommand(1);
   em->callback([args, &common] {
     if (common.quiet) Progress::set_enabled(false);
     bench::EmBenchOptions o = args->o;
+    const EngineOptions engine = run_environment().engine;
     // BSDFMIX_PRECISION sets a precision left at auto
-    if (parse_precision(o.precision) == EmPrecision::Auto)
-      o.precision = precision_name(run_environment().engine.precision);
+    if (parse_precision(o.precision) == EmPrecision::Auto) o.precision = precision_name(engine.precision);
+    o.pool_log = engine.pool_log;
     bench::bench_em(o, common.device, common.quiet);
   });
 }

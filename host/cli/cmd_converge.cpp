@@ -1,5 +1,8 @@
 // `bsdfmix converge CONFIG.yaml`: the Monte Carlo convergence study (docs/sampling.md).
+#include <memory>
+
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "config/config.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
@@ -8,14 +11,18 @@
 namespace bsdfmix::cli {
 
 void add_converge(CLI::App& app, Common& common) {
-  static std::string file;
+  struct Args {  // the options, kept alive by the callback
+    std::string file;
+  };
+  const auto args = std::make_shared<Args>();
   auto* sub = add_config_command(app, common, "converge", "the Monte Carlo convergence study, writing the convergence CSV",
-                                 file);
-  sub->callback([&common] {
+                                 args->file);
+  sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
-    const Config c = load_config(file);
-    if (!c.converge) throw ConfigError(file + ": converge: section missing");
-    stage_converge(c, device_for(c, common.device));
+    const RunEnvironment env = run_environment();
+    const Config c = load_config(args->file);
+    if (!c.converge) throw ConfigError(args->file + ": converge: section missing");
+    stage_converge(c, device_for(c, common.device), env.engine);
   });
 }
 

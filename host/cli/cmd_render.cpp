@@ -1,7 +1,9 @@
 // `bsdfmix render CONFIG.yaml`: cloth rendered with the mixtures (docs/render.md).
 #include <filesystem>
+#include <memory>
 
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "config/config.hpp"
 #include "core/progress.hpp"
 #include "core/scripts.hpp"
@@ -17,24 +19,39 @@ void render_figures(const std::string& output, const std::string& summary_figure
   log_line("render: figures in " + (fs::path(output) / "figures").string() + ", the summary " + summary);
 }
 
+render::RenderInputs render_inputs(const Config& config, const std::string& device_selector,
+                                   const EngineOptions& engine) {
+  render::RenderInputs in;
+  in.table = config.table;
+  if (config.import) in.rgl = config.import->rgl;
+  in.fit = *config.fit;  // render_settings checked that the config has one
+  in.device_selector = device_selector;
+  in.engine = engine;
+  return in;
+}
+
 void add_render(CLI::App& app, Common& common) {
-  static std::string file;
-  static bool no_figures = false;
+  struct Args {  // the options, kept alive by the callback
+    std::string file;
+    bool no_figures = false;
+  };
+  const auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand(
       "render",
       "render fiber cloth with the table and the mixtures (Embree): the reference, every estimator at equal "
       "samples and equal time, the stand-in against the table; EXR/PFM images, render.csv, render.json, figures");
-  sub->add_option("config", file, "config YAML with table, fit and render sections (docs/render.md)")->required();
-  sub->add_flag("--no-figures", no_figures, "skip scripts/render_figures.py");
+  sub->add_option("config", args->file, "config YAML with table, fit and render sections (docs/render.md)")->required();
+  sub->add_flag("--no-figures", args->no_figures, "skip scripts/render_figures.py");
   add_common_options(*sub, common);
-  sub->callback([&common] {
+  sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
-    const Config config = load_config(file);
+    const RunEnvironment env = run_environment();
+    const Config config = load_config(args->file);
     const render::RenderSettings settings = render::render_settings(config);  // checked before any work
     const std::string dev = device_for(config, common.device);
     stage_table(config, dev);
-    render::run_render(config, settings, dev);
-    if (!no_figures) render_figures(settings.output, settings.summary_figure);
+    render::run_render(settings, render_inputs(config, dev, env.engine));
+    if (!args->no_figures) render_figures(settings.output, settings.summary_figure);
   });
 }
 

@@ -23,12 +23,13 @@ void add_run(CLI::App& app, Common& common) {
                                  args->file);
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
+    const RunEnvironment env = run_environment();
     const Config config = load_config(args->file);
     std::optional<render::RenderSettings> render;
     if (config.render) render = render::render_settings(config);  // checked before any work
-    run_all(config, common.device, run_environment().engine);
+    run_all(config, common.device, env.engine);
     if (!render) return;
-    render::run_render(config, *render, device_for(config, common.device));
+    render::run_render(*render, render_inputs(config, device_for(config, common.device), env.engine));
     render_figures(render->output, render->summary_figure);
   });
 }

@@ -5,6 +5,7 @@
 
 #include "bench/shape_tune.hpp"
 #include "cli/commands.hpp"
+#include "cli/environment.hpp"
 #include "core/error.hpp"
 #include "device/shapes.hpp"
 
@@ -29,7 +30,9 @@ void add_tune(CLI::App& app, Common& common) {
       std::printf("%s", shape_table_text().c_str());
       return;
     }
-    bench::tune_shapes(args->o, common.device);
+    bench::TuneOptions o = args->o;
+    o.engine = run_environment().engine;
+    bench::tune_shapes(o, common.device);
   });
 }
 

@@ -6,6 +6,14 @@
 #include <cstddef>
 #include <string>
 
+namespace bsdfmix {
+struct Config;
+struct EngineOptions;
+namespace render {
+struct RenderInputs;
+}
+}  // namespace bsdfmix
+
 namespace bsdfmix::cli {
 
 // Options every subcommand shares.
@@ -32,6 +40,12 @@ void add_tune(CLI::App& app, Common& common);
 // The render's figures and summary figure (scripts/render_figures.py) over the outputs
 // of a render into `output` (cmd_render.cpp).
 void render_figures(const std::string& output, const std::string& summary_figure);
+
+// What the render of `config` reads besides its render settings (checked first by
+// render::render_settings): the config's table, RGL file and fit settings, the device
+// selector in force and the engine options (cmd_render.cpp).
+render::RenderInputs render_inputs(const Config& config, const std::string& device_selector,
+                                   const EngineOptions& engine);
 
 // Adds --device and --quiet to a subcommand.
 void add_common_options(CLI::App& sub, Common& common);

@@ -140,7 +140,7 @@ void read_inputs(const StudySpec& spec, StudyInputs& in) {
       const std::string cache = spec.light_cache_dir.empty()
                                     ? (std::filesystem::path(spec.csv).parent_path() / "light_mixtures").string()
                                     : spec.light_cache_dir;
-      in.light_mix[s] = lighting_mixture(l, in.table.meta(), spec.light_fit, cache, spec.device);
+      in.light_mix[s] = lighting_mixture(l, in.table.meta(), spec.light_fit, cache, spec.device, spec.light_engine);
       const LightMixture& m = in.light_mix[s];
       log_line("converge: lighting '" + l.name + "': K " + std::to_string(m.k) + ", L1 " + short_num(m.l1_rel) +
                (m.cached ? ", read from " + m.path + " (its fit took " + fixed(m.fit_seconds, 1) + " s)"

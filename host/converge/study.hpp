@@ -9,8 +9,9 @@
 #include <utility>
 #include <vector>
 
-#include "config/config.hpp"
+#include "fit/em.hpp"
 #include "sampling/sampling.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 
@@ -26,9 +27,10 @@ struct StudySpec {
   MisOptions mis;      // the MIS estimators' fractions and heuristic, the product's pruning
   bool product_auto = false;  // mis_product's fractions by tune_product_fractions, per direction and scene
   // product and mis_product: the lighting mixtures are fitted with these settings and
-  // cached in light_cache_dir (scene/light_mixture.hpp)
-  FitSection light_fit;
+  // cached in light_cache_dir (scene/light_mixture.hpp), their engine run as light_engine says
+  FitSettings light_fit;
   std::string light_cache_dir;
+  EngineOptions light_engine;
   // The estimators that need one (kNeedsRgl): the RGL file (.bsdf) the table was imported
   // from (its source's sha256 must match); "" when no estimator needs one
   std::string rgl;

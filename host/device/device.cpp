@@ -12,7 +12,7 @@ namespace bsdfmix {
 
 namespace {
 
-const char* kNoPlatform =
+constexpr const char* kNoPlatform =
     "no OpenCL platform found: install one, for example PoCL for the CPU "
     "(apt-get install pocl-opencl-icd), or your GPU vendor's OpenCL driver";
 

@@ -106,13 +106,13 @@ std::vector<double> bin_leaf(const Sample* begin, const Sample* end, int grid_th
 }
 
 void RadianceField::learn(std::vector<Sample>& samples, const FieldSettings& s, const std::vector<Device>& devices,
-                          const std::string& what) {
+                          const std::string& what, const EngineOptions& engine) {
   const auto t0 = std::chrono::steady_clock::now();
   nodes_.assign(1, Node{});
   leaves_.clear();
   leaf_of_node_count_ = fitted_ = guiding_ = 0;
   const std::vector<Span> spans = build_tree(samples, s);
-  fit_leaves(samples, spans, s, devices, what);
+  fit_leaves(samples, spans, s, devices, what, engine);
   fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -168,7 +168,8 @@ std::vector<RadianceField::Span> RadianceField::build_tree(std::vector<Sample>& 
 }
 
 void RadianceField::fit_leaves(const std::vector<Sample>& samples, const std::vector<Span>& spans,
-                               const FieldSettings& s, const std::vector<Device>& devices, const std::string& what) {
+                               const FieldSettings& s, const std::vector<Device>& devices, const std::string& what,
+                               const EngineOptions& engine) {
   std::vector<std::vector<double>> grids;
   grids.reserve(spans.size());
   for (const Span& span : spans)
@@ -179,7 +180,7 @@ void RadianceField::fit_leaves(const std::vector<Sample>& samples, const std::ve
   const LeafSlices source(std::move(grids), s.grid_theta, s.grid_phi);
   std::vector<SliceRef> refs;
   for (std::size_t i = 0; i < n; ++i) refs.push_back({i, i, 0});
-  const SweepResult fitted = fit_slices(source, refs, s.fit, devices, what);
+  const SweepResult fitted = fit_slices(source, refs, s.fit, devices, what, engine);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t slice = std::size_t(std::find(fitted.slice_index.begin(), fitted.slice_index.end(), i) -
                                           fitted.slice_index.begin());

@@ -20,10 +20,11 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
 #include "core/domain.hpp"
 #include "core/vec3.hpp"
 #include "device/device.hpp"
+#include "fit/em.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 namespace guide {
@@ -61,7 +62,7 @@ struct FieldSettings {
   double compact_sigma = 0.5;          // components this compact (sigma_max, radians) are carried
   double share = 0.5;                  // the largest share of a vertex's directions drawn from the guide
   bool adapt_share = true;             // each leaf picks its share (Leaf::share); false: every leaf takes `share`
-  FitSection fit;                      // the leaves' sweep settings (output paths unused)
+  FitSettings fit;                     // the leaves' sweep settings (output paths unused)
 };
 
 // A leaf's fitted radiance: the mixture over world (theta, phi), prepared, and the
@@ -86,9 +87,10 @@ class RadianceField {
   RadianceField() = default;
 
   // Learns the field from `samples` (reordered): builds the tree over the vertices'
-  // positions and fits every leaf with enough vertices on `devices`.
+  // positions and fits every leaf with enough vertices on `devices`, the engine run as
+  // `engine` says.
   void learn(std::vector<Sample>& samples, const FieldSettings& s, const std::vector<Device>& devices,
-             const std::string& what);
+             const std::string& what, const EngineOptions& engine = {});
 
   // The leaf mixture at `p`, or null where the leaf has none.
   const Leaf* at(const Vec3& p) const;
@@ -118,7 +120,7 @@ class RadianceField {
   // The leaves' grids fitted as one sweep, and each fitted leaf's mixture, share and
   // compact components; a leaf whose fit failed has none.
   void fit_leaves(const std::vector<Sample>& samples, const std::vector<Span>& spans, const FieldSettings& s,
-                  const std::vector<Device>& devices, const std::string& what);
+                  const std::vector<Device>& devices, const std::string& what, const EngineOptions& engine);
 
   std::vector<Node> nodes_;
   std::vector<Leaf> leaves_;

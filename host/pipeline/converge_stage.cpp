@@ -11,7 +11,7 @@
 
 namespace bsdfmix {
 
-void stage_converge(const Config& config, const std::string& device_selector) {
+void stage_converge(const Config& config, const std::string& device_selector, const EngineOptions& engine) {
   const ConvergeSection& c = *config.converge;
   StudySpec spec;
   spec.table = config.table;
@@ -54,6 +54,7 @@ void stage_converge(const Config& config, const std::string& device_selector) {
   if (config.fit) spec.light_fit = *config.fit;
   else spec.light_fit.k_max = 16;
   spec.light_cache_dir = converge_light_mixture_dir(c);
+  spec.light_engine = engine;
   spec.device = device_selector;
   spec.cpu = c.cpu;
   spec.csv = c.csv;

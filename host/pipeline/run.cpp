@@ -8,7 +8,7 @@ void run_all(const Config& config, const std::string& device_selector, const Eng
   const std::string dev = device_for(config, device_selector);
   stage_table(config, dev);
   if (config.fit) stage_fit(config, dev, SweepOptions{SIZE_MAX, nullptr, engine});
-  if (config.converge) stage_converge(config, dev);
+  if (config.converge) stage_converge(config, dev, engine);
   if (config.charts) stage_charts(config, dev, engine);
   log_line("run " + config.file + ": done");
 }

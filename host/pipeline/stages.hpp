@@ -18,8 +18,9 @@ void stage_table(const Config& config, const std::string& device_selector);
 // The fitting sweep of the `fit` section (options: sweep/sweep.hpp SweepOptions).
 void stage_fit(const Config& config, const std::string& device_selector, const SweepOptions& options = {});
 
-// The convergence study of the `converge` section.
-void stage_converge(const Config& config, const std::string& device_selector);
+// The convergence study of the `converge` section; its lighting fits' engines run as
+// `engine` says.
+void stage_converge(const Config& config, const std::string& device_selector, const EngineOptions& engine = {});
 
 // The charts of the stages that ran (matplotlib through /usr/bin/python3); the fit
 // charts time fits with an engine run as `engine` says.

@@ -29,7 +29,8 @@ void GuideTrainer::after_pass(int done) {
   ++iteration_;
   field_.learn(samples, setup_.field, setup_.devices,
                what_ + ": learn the radiance (iteration " + std::to_string(iteration_) + " of " +
-                   std::to_string(setup_.iterations) + ")");
+                   std::to_string(setup_.iterations) + ")",
+               setup_.engine);
   log_line("render: " + what_ + ": iteration " + std::to_string(iteration_) + ": " + std::to_string(n) +
            " samples, " + std::to_string(field_.leaves()) + " leaves, " + std::to_string(field_.fitted()) +
            " fitted, " + std::to_string(field_.guiding()) + " guiding, mean K " + format_number(field_.mean_k(), "%.2f") + ", " +

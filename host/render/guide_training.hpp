@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "device/device.hpp"
+#include "fit/em.hpp"
 #include "guide/radiance_field.hpp"
 #include "render/integrator.hpp"
 
@@ -17,11 +18,12 @@ namespace render {
 
 // What a guided render learns with: the field's settings (its leaves' fit and the largest
 // share of guided directions among them), the training iterations, the path vertices
-// guided, the devices that fit.
+// guided, the devices that fit and how their engine runs.
 struct GuideSetup {
   guide::FieldSettings field;
   int iterations = 4, depth = 1;
   std::vector<Device> devices;
+  EngineOptions engine;
 };
 
 class GuideTrainer {

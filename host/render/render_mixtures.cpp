@@ -26,11 +26,11 @@ std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta
   return {need.begin(), need.end()};
 }
 
-MixtureFile render_mixtures(const TableReader& table, const FitSection& fit, const std::vector<std::size_t>& need,
-                            const std::string& device_selector) {
+MixtureFile render_mixtures(const TableReader& table, const FitSettings& fit, const std::vector<std::size_t>& need,
+                            const std::string& device_selector, const EngineOptions& engine) {
   std::vector<SliceRef> slices;  // the renderer's tables are azimuthal: one phi_o
   for (std::size_t i : need) slices.push_back({table.meta().slice_index(i, 0), i, 0});
-  return fit_slices_kept(TableSlices(table), table.path(), slices, fit, device_selector, "render");
+  return fit_slices_kept(TableSlices(table), table.path(), slices, fit, device_selector, "render", engine);
 }
 
 }  // namespace render

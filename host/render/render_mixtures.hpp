@@ -7,10 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "fit/em.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 #include "render/integrator.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -22,10 +23,10 @@ std::vector<std::size_t> slices_needed(const SceneView& prepass, const TableMeta
 
 // The mixtures of `need` (theta_o slice indices of `table`, a reader of the table in
 // memory): the sweep's fit_slices_kept, read from fit.output when it holds those slices of
-// this table fitted with these settings, else fitted on `device_selector` and written
-// there with the fit report and search CSVs.
-MixtureFile render_mixtures(const TableReader& table, const FitSection& fit, const std::vector<std::size_t>& need,
-                            const std::string& device_selector);
+// this table fitted with these settings, else fitted on `device_selector` (the engine run
+// as `engine` says) and written there with the fit report and search CSVs.
+MixtureFile render_mixtures(const TableReader& table, const FitSettings& fit, const std::vector<std::size_t>& need,
+                            const std::string& device_selector, const EngineOptions& engine = {});
 
 }  // namespace render
 }  // namespace bsdfmix

@@ -23,35 +23,20 @@
 namespace bsdfmix {
 namespace render {
 
-RenderSettings render_settings(const Config& config) {
-  if (!config.render) throw ConfigError(config.file + ": render: missing (the render command needs a render section)");
-  if (!config.fit) throw ConfigError(config.file + ": fit: missing (the render fits the mixtures the scene needs)");
-  RenderSettings s = parse_render(*config.render);
-  // is_rgl and mis_light_rgl sample with the warps of the RGL file the table came from
-  std::vector<PathEstimator> all = s.estimators;
-  all.push_back(s.reference_estimator);
-  if (s.stand_in) all.push_back(s.stand_in_estimator);
-  for (const PathEstimator e : all)
-    if (uses_rgl(e) && !(config.import && !config.import->rgl.empty()))
-      throw ConfigError(config.file + ": render: estimator '" + path_estimator_name(e) +
-                        "' samples with an RGL file's own warps and needs a measured surface imported from one "
-                        "(import.rgl); this config's table '" + config.table + "' is not");
-  return s;
-}
-
 bool needs_rgl(const RenderSettings& s) {
   return std::any_of(s.estimators.begin(), s.estimators.end(), uses_rgl) || uses_rgl(s.reference_estimator) ||
          (s.stand_in && uses_rgl(s.stand_in_estimator));
 }
 
-GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std::string& device_selector) {
+GuideSetup guide_setup(const RenderSettings& s, const FitSettings& fit, const std::string& device_selector,
+                       const EngineOptions& engine) {
   GuideSetup g;
   g.field = s.guide;
   g.iterations = s.guide_iterations;
   g.depth = s.guide_depth;
   // a leaf's grid is small and noisy: the search up to k_max with one restart, EM's fits
   // (no L1 refinement), the config's seed, penalty and search strategy
-  FitSection& f = g.field.fit;
+  FitSettings& f = g.field.fit;
   f = fit;
   f.output = f.report = f.search_report = "";
   f.theta_o.clear();
@@ -66,10 +51,11 @@ GuideSetup guide_setup(const RenderSettings& s, const FitSection& fit, const std
   g.field.compact_sigma = kBroadSigma;
   const bool guided = std::any_of(s.estimators.begin(), s.estimators.end(), is_guided);
   if (guided) g.devices = select_devices(device_selector);
+  g.engine = engine;
   return g;
 }
 
-void run_render(const Config& config, const RenderSettings& s, const std::string& device_selector) {
+void run_render(const RenderSettings& s, const RenderInputs& in) {
   namespace fs = std::filesystem;
   fs::create_directories(s.output);
   // one render per output directory at a time (a second one fails at once, naming the first)
@@ -81,23 +67,23 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
 
   // The table, read once into memory: the BSDF's cells, the slices the mixtures are
   // fitted to, and the hash in the reference's key. Let go once the mixtures are made.
-  std::optional<LoadedTable> table = load_table(config.table);
+  std::optional<LoadedTable> table = load_table(in.table);
   const std::uint64_t table_hash = table->file_hash;
   TableBsdf bsdf(table->reader);
   // is_rgl, mis_light_rgl: the file's own sampler (f stays the table's, for every estimator)
   std::unique_ptr<RglBrdf> rgl;
   if (needs_rgl(s)) {
-    rgl = std::make_unique<RglBrdf>(config.import->rgl);
+    rgl = std::make_unique<RglBrdf>(in.rgl);
     bsdf.set_rgl(rgl.get());
   }
-  const RenderScene scene(s, bsdf, config.file);
+  const RenderScene scene(s, bsdf, s.file);
   log_line("render: " + scene.describe() + ", lighting '" + s.lighting.name + "', " + std::to_string(s.width) + " x " +
            std::to_string(s.height));
 
   // 1. The slices the camera needs; 2. their mixtures.
   const TableMeta& meta = bsdf.meta();
-  const std::vector<std::size_t> need = slices_needed(scene.prepass_view(s), meta, config.file);
-  const MixtureFile mixtures = render_mixtures(table->reader, *config.fit, need, device_selector);
+  const std::vector<std::size_t> need = slices_needed(scene.prepass_view(s), meta, s.file);
+  const MixtureFile mixtures = render_mixtures(table->reader, in.fit, need, in.device_selector, in.engine);
   table.reset();
   bsdf.set_mixture(to_mixture_set(mixtures));
 
@@ -105,21 +91,21 @@ void run_render(const Config& config, const RenderSettings& s, const std::string
   SceneView view = scene.view();
   std::vector<mix::Gaussian> compact;
   if (needs_world_lighting(s)) {
-    compact = world_lighting(s, *config.fit, device_selector);
+    compact = world_lighting(s, in.fit, in.device_selector, in.engine);
     view.world_light = &compact;
   }
 
   // 3. The converged image (cached under its key); 4. the comparisons against it, the
   // guided estimators learning with the leaves' fit settings.
-  const Image converged = converged_image(view, s, scene_key(s, config.table, table_hash));
-  const GuideSetup guide = guide_setup(s, *config.fit, device_selector);
+  const Image converged = converged_image(view, s, scene_key(s, in.table, table_hash));
+  const GuideSetup guide = guide_setup(s, in.fit, in.device_selector, in.engine);
   const Comparisons comparisons = run_comparisons(view, s, converged, guide);
 
   // 5. The report and the cloth's pixels (the figures are the command's).
   write_pfm((fs::path(s.output) / "cloth_mask.pfm").string(), scene.cloth_mask());
   RenderFacts facts;
   facts.scene = s.room.enabled ? s.lighting.name + "_room" : s.lighting.name;  // the lighting, through a window
-  facts.fiber = fs::path(config.table).stem().string();
+  facts.fiber = fs::path(in.table).stem().string();
   facts.table_bytes = bsdf.table_bytes();
   facts.full_table_bytes = std::uint64_t(bsdf.table_bytes()) * meta.phi_i.size();
   facts.mixture_bytes = mixtures.payload_bytes();

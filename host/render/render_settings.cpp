@@ -97,6 +97,22 @@ Lighting parse_lighting(const RenderSection& section, const ConfigNode& n) {
 
 }  // namespace
 
+RenderSettings render_settings(const Config& config) {
+  if (!config.render) throw ConfigError(config.file + ": render: missing (the render command needs a render section)");
+  if (!config.fit) throw ConfigError(config.file + ": fit: missing (the render fits the mixtures the scene needs)");
+  RenderSettings s = parse_render(*config.render);
+  // is_rgl and mis_light_rgl sample with the warps of the RGL file the table came from
+  std::vector<PathEstimator> all = s.estimators;
+  all.push_back(s.reference_estimator);
+  if (s.stand_in) all.push_back(s.stand_in_estimator);
+  for (const PathEstimator e : all)
+    if (uses_rgl(e) && !(config.import && !config.import->rgl.empty()))
+      throw ConfigError(config.file + ": render: estimator '" + path_estimator_name(e) +
+                        "' samples with an RGL file's own warps and needs a measured surface imported from one "
+                        "(import.rgl); this config's table '" + config.table + "' is not");
+  return s;
+}
+
 RenderSettings parse_render(const RenderSection& section) {
   const ConfigNode n(section.file, "render", section.node);
   RenderSettings r;

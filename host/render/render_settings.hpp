@@ -68,5 +68,11 @@ struct RenderSettings {
 
 RenderSettings parse_render(const RenderSection& section);
 
+// The render settings of a config, checked before any work: ConfigError when the config
+// has no render or no fit section, or names a bad render setting, or an estimator that
+// samples with an RGL file's warps (is_rgl, mis_light_rgl) where the table was not
+// imported from one (import.rgl).
+RenderSettings render_settings(const Config& config);
+
 }  // namespace render
 }  // namespace bsdfmix

@@ -19,13 +19,13 @@ bool needs_world_lighting(const RenderSettings& s) {
          (s.stand_in && is(s.stand_in_estimator));
 }
 
-std::vector<mix::Gaussian> world_lighting(const RenderSettings& s, const FitSection& fit,
-                                          const std::string& device_selector) {
+std::vector<mix::Gaussian> world_lighting(const RenderSettings& s, const FitSettings& fit,
+                                          const std::string& device_selector, const EngineOptions& engine) {
   Lighting world = s.lighting;
   world.domain = Domain::Fiber;
   set_frame(world, {0, 0, 1}, {1, 0, 0}, s.file + ": render.scene");
-  const LightMixture m = lighting_mixture(world, world_lighting_grid(), fit,
-                                    (std::filesystem::path(s.output) / "light_mixtures").string(), device_selector);
+  const std::string cache = (std::filesystem::path(s.output) / "light_mixtures").string();
+  const LightMixture m = lighting_mixture(world, world_lighting_grid(), fit, cache, device_selector, engine);
   std::vector<mix::Gaussian> compact = compact_components(m.mixture);
   log_line("render: the lighting '" + s.lighting.name + "' over world directions: K " + std::to_string(m.k) + " (" +
            std::to_string(compact.size()) + " compact), L1 " + format_number(100 * m.l1_rel, "%.2f") + "%" +

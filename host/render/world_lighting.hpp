@@ -7,9 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "fit/em.hpp"
 #include "render/render_settings.hpp"
 #include "scene/light_mixture.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 namespace render {
@@ -22,9 +23,10 @@ TableMeta world_lighting_grid();
 bool needs_world_lighting(const RenderSettings& s);
 
 // The compact components (render/light_carry.hpp) of the lighting of `s` fitted with
-// `fit`'s settings, or read from its cache under s.output.
-std::vector<mix::Gaussian> world_lighting(const RenderSettings& s, const FitSection& fit,
-                                          const std::string& device_selector);
+// `fit`'s settings on `device_selector` (the engine run as `engine` says), or read from
+// its cache under s.output.
+std::vector<mix::Gaussian> world_lighting(const RenderSettings& s, const FitSettings& fit,
+                                          const std::string& device_selector, const EngineOptions& engine = {});
 
 }  // namespace render
 }  // namespace bsdfmix

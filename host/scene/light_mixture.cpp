@@ -71,8 +71,9 @@ class LightingSlices final : public SliceSource {
 
 }  // namespace
 
-LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSection& fit,
-                              const std::string& cache_dir, const std::string& device_selector) {
+LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSettings& fit,
+                              const std::string& cache_dir, const std::string& device_selector,
+                              const EngineOptions& engine) {
   // The cache key: everything the fit depends on.
   Hash64 h;
   const std::vector<float> packed = light.pack();
@@ -95,8 +96,8 @@ LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, cons
     log_line("converge: fitting the lighting of scene '" + light.name + "' (" + out.path + ")");
     const auto t0 = std::chrono::steady_clock::now();
     const LightingSlices cells(light, grid, name);
-    SweepResult fitted =
-        fit_slices(cells, {SliceRef{0, 0, 0}}, fit, select_devices(device_selector), "fit the lighting '" + name + "'");
+    SweepResult fitted = fit_slices(cells, {SliceRef{0, 0, 0}}, fit, select_devices(device_selector),
+                                    "fit the lighting '" + name + "'", engine);
     out.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     write_mixture_file(out.path, fitted.mixture);
     write_text_atomic(stem + "_seconds.txt", std::to_string(out.fit_seconds) + "\n");

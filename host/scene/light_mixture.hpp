@@ -10,9 +10,10 @@
 
 #include <string>
 
-#include "config/config.hpp"
+#include "fit/em.hpp"
 #include "io/table.hpp"
 #include "sampling/lighting.hpp"
+#include "sweep/fit_settings.hpp"
 
 namespace bsdfmix {
 
@@ -30,8 +31,10 @@ struct LightMixture {
 std::vector<double> lighting_cell_weights(const Lighting& light, const TableMeta& grid);
 
 // Reads `<cache_dir>/light_<scene>_<hash>.h5` when it is there, else fits it with
-// `fit` (its output paths replaced) on `device_selector` and writes it there.
-LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSection& fit,
-                              const std::string& cache_dir, const std::string& device_selector);
+// `fit` (its output paths replaced) on `device_selector`, the engine run as `engine` says,
+// and writes it there.
+LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSettings& fit,
+                              const std::string& cache_dir, const std::string& device_selector,
+                              const EngineOptions& engine = {});
 
 }  // namespace bsdfmix

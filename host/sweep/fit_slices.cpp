@@ -140,7 +140,8 @@ bool fit_settings_match(const std::string& recorded, const FitSettings& fit) {
 
 MixtureFile fit_slices_kept(const SliceSource& source, const std::string& table_path,
                             const std::vector<SliceRef>& slices, const FitSettings& fit,
-                            const std::string& device_selector, const std::string& who) {
+                            const std::string& device_selector, const std::string& who,
+                            const EngineOptions& engine) {
   const TableMeta& meta = source.meta();
   std::vector<std::pair<double, double>> want;
   for (const SliceRef& r : slices) want.push_back({meta.theta_o[r.t_o], meta.phi_o[r.p_o]});
@@ -154,7 +155,7 @@ MixtureFile fit_slices_kept(const SliceSource& source, const std::string& table_
   const std::vector<Device> devices = select_devices(device_selector);
   log_line(who + ": fitting " + std::to_string(slices.size()) + " slice(s) of " + table_path + ", K in [" +
            std::to_string(fit.k_min) + ", " + std::to_string(fit.k_max) + "]");
-  SweepResult result = fit_slices(source, slices, fit, devices, "fit " + table_path);
+  SweepResult result = fit_slices(source, slices, fit, devices, "fit " + table_path, engine);
   write_outputs(result, table_path, meta, fit);
   return std::move(result.mixture);
 }

@@ -50,7 +50,8 @@ struct SweepResult {
 
 // Fits `slices` of `source` (sorted, unique) with the settings of `fit` (its output paths,
 // theta_o and phi_o are not read) on `devices`, in the same batches as run_sweep, so the
-// mixtures are the same as the file sweep's. Prints a progress line labelled `what`.
+// mixtures are the same as the file sweep's, the engine run as `engine` says. Prints a
+// progress line labelled `what`.
 SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& slices, const FitSettings& fit,
                        const std::vector<Device>& devices, const std::string& what, const EngineOptions& engine = {});
 
@@ -60,11 +61,12 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
 // exactly those slices, else those taken out of it (a sweep of every slice serves any
 // subset); else fitted on the devices of `device_selector` and written there with the fit
 // report and search CSVs by the sweep's outputs (write_outputs; `table_path`: the table
-// file whose sizes they report). A fit of the same output elsewhere fails at once (its
-// lock). Log lines begin with `who`.
+// file whose sizes they report), the engine run as `engine` says. A fit of the same output
+// elsewhere fails at once (its lock). Log lines begin with `who`.
 MixtureFile fit_slices_kept(const SliceSource& source, const std::string& table_path,
                             const std::vector<SliceRef>& slices, const FitSettings& fit,
-                            const std::string& device_selector, const std::string& who);
+                            const std::string& device_selector, const std::string& who,
+                            const EngineOptions& engine = {});
 
 // Whether the fit settings a mixture file records (its fit_settings attribute, the text
 // of fit_settings_json) are those of `fit`, compared as typed values: every setting the

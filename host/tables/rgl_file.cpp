@@ -22,8 +22,8 @@ std::size_t rgl_dtype_size(std::uint8_t code) {
 }
 
 std::string rgl_dtype_name(std::uint8_t code) {
-  static const char* names[] = {"invalid", "uint8", "int8", "uint16", "int16", "uint32",
-                                "int32", "uint64", "int64", "float16", "float32", "float64"};
+  static constexpr const char* names[] = {"invalid", "uint8", "int8", "uint16", "int16", "uint32",
+                                          "int32", "uint64", "int64", "float16", "float32", "float64"};
   return code <= 11 ? names[code] : "dtype code " + std::to_string(code);
 }
 
@@ -220,7 +220,7 @@ std::string sha256_hex(const std::vector<std::uint8_t>& data) {
     }
     h[0] += a; h[1] += b; h[2] += c; h[3] += d; h[4] += e; h[5] += f; h[6] += g; h[7] += hh;
   }
-  static const char* hex = "0123456789abcdef";
+  static constexpr const char* hex = "0123456789abcdef";
   std::string out;
   for (std::uint32_t v : h)
     for (int k = 7; k >= 0; --k) out += hex[(v >> (4 * k)) & 15];
