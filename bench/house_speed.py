@@ -5,9 +5,9 @@ path vertex, rounds alternating old and new, each row keeping its best run.
     bench/house_speed.py --old OLD/bsdfmix --new build/bsdfmix [--rounds 5] [--csv FILE]
 
 EM: `bsdfmix bench em` at K 8 and 16 (64 slices of 90 x 180, 20 iterations, no peers, no
-reference): updates per second. Render: a 64 x 64 silk cloth under the sky at 8 samples
-per pixel, every estimator's equal-sample ns per vertex from render.csv (the fit and the
-converged image are made once per build, before the timed rounds). The CSV has one row a
+reference): updates per second. Render: a 96 x 96 silk cloth under the sky at 8 samples
+per pixel on one thread, every estimator's equal-sample ns per vertex from render.csv
+(the fit and the converged image are made in the first round and reused after). The CSV has one row a
 measurement: what, old, new and new / old (above 1: the new build is faster for EM,
 slower for ns per vertex), with the machine's CPU.
 """
@@ -37,13 +37,13 @@ fit:
 render:
   output: images
   scene: {ROOT}/configs/scenes/sky.yaml
-  width: 64
-  height: 64
+  width: 96
+  height: 96
   spp: 8
   seconds: 0.01
   reference_spp: 16
   stand_in: false
-  threads: 2
+  threads: 1
   estimators: [uniform, mis_tab, cdf_tab, mis_light_cdf, mis_light_gmm, mis_product]
 """
 
@@ -69,7 +69,7 @@ def em_rate(binary, k, where):
 def render_ns(binary, where):
     where.mkdir(parents=True, exist_ok=True)
     (where / "render.yaml").write_text(RENDER)
-    done = subprocess.run([binary, "render", "render.yaml"], cwd=where, capture_output=True, text=True)
+    done = subprocess.run([binary, "render", "render.yaml", "--no-figures"], cwd=where, capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"house_speed: {binary} render failed:\n{done.stderr[-2000:]}")
     ns = {}

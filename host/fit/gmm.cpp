@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core/domain.hpp"
 
@@ -11,9 +12,10 @@ namespace bsdfmix {
 
 namespace {
 
-// log of weight_k * N(theta, phi + 2 pi m) for each component and image, into `out`.
-void component_logs(const Gmm& g, double theta, double phi, std::vector<double>& out) {
-  out.clear();
+// log of weight_k * N(theta, phi + 2 pi m) for each component and image, into `out`
+// (room for 3 K values); returns how many it wrote.
+std::size_t component_logs(const Gmm& g, double theta, double phi, double* out) {
+  std::size_t n = 0;
   for (int k = 0; k < g.k(); ++k) {
     const double a = g.cov[3 * k], b = g.cov[3 * k + 1], c = g.cov[3 * k + 2];
     const double det = a * c - b * b;
@@ -24,21 +26,28 @@ void component_logs(const Gmm& g, double theta, double phi, std::vector<double>&
     for (int m = -1; m <= 1; ++m) {
       const double dp = d0 + 2 * kPi * m;
       const double q = (c * dt * dt - 2 * b * dt * dp + a * dp * dp) / det;
-      out.push_back(lognorm - 0.5 * q);
+      out[n++] = lognorm - 0.5 * q;
     }
   }
+  return n;
 }
 
 }  // namespace
 
 double gmm_log_density(const Gmm& gmm, double theta, double phi) {
-  thread_local std::vector<double> logs;
-  component_logs(gmm, theta, phi, logs);
-  if (logs.empty()) return -std::numeric_limits<double>::infinity();
-  const double m = *std::max_element(logs.begin(), logs.end());
+  // The logs on the stack for the fits' K (at most kEmMaxK), on the heap past it.
+  constexpr std::size_t kStack = 3 * 128;
+  double stack[kStack];
+  std::vector<double> heap;
+  const std::size_t room = 3 * std::size_t(std::max(gmm.k(), 0));
+  if (room > kStack) heap.resize(room);
+  double* logs = room > kStack ? heap.data() : stack;
+  const std::size_t n = component_logs(gmm, theta, phi, logs);
+  if (n == 0) return -std::numeric_limits<double>::infinity();
+  const double m = *std::max_element(logs, logs + n);
   if (!std::isfinite(m)) return m;
   double s = 0;
-  for (double l : logs) s += std::exp(l - m);
+  for (std::size_t i = 0; i < n; ++i) s += std::exp(logs[i] - m);
   return m + std::log(s);
 }
 
