@@ -5,12 +5,13 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <optional>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/output_lock.hpp"
 #include "core/progress.hpp"
 #include "sweep/batch_fitter.hpp"
@@ -91,25 +92,15 @@ std::optional<RecordedSettings> read_record(const std::string& json) {
   }
 }
 
-// A number of a record (fit_settings_json: 9 significant digits) against the setting's.
-bool same_number(double recorded, double value) {
-  return recorded == value || std::abs(recorded - value) <= 1e-8 * std::abs(value);
-}
-bool same_number(const std::optional<double>& recorded, const std::optional<double>& value) {
-  return recorded.has_value() == value.has_value() && (!recorded || same_number(*recorded, *value));
-}
+// A number as a record keeps it (fit_settings_json: 9 significant digits).
+double as_recorded(double v) { return std::strtod(format_number(v, "%.9g").c_str(), nullptr); }
 
-// Every setting a record holds against the settings of a fit, field by field.
-bool same_settings(const RecordedSettings& a, const FitSettings& y) {
-  const FitSettings& x = a.fit;
-  return x.k_min == y.k_min && x.k_max == y.k_max && x.seed == y.seed && x.restarts == y.restarts &&
-         x.final_restarts == y.final_restarts && x.iterations == y.iterations &&
-         x.final_iterations == y.final_iterations && same_number(x.tolerance, y.tolerance) &&
-         same_number(x.k_penalty, y.k_penalty) && same_number(x.error_target, y.error_target) &&
-         x.search_pool == y.search_pool && x.search == y.search && x.refine == y.refine &&
-         x.refine_evaluations == y.refine_evaluations && same_number(x.refine_kl, y.refine_kl) &&
-         same_number(x.refine_rgb, y.refine_rgb) && same_number(x.rgb_copies, y.rgb_copies) &&
-         a.criterion == kCriterion;
+// The settings as a record of them reads back: its numbers at the record's digits.
+FitSettings as_recorded(FitSettings f) {
+  for (double* v : {&f.tolerance, &f.k_penalty, &f.refine_kl, &f.refine_rgb}) *v = as_recorded(*v);
+  for (std::optional<double>* v : {&f.error_target, &f.rgb_copies})
+    if (*v) **v = as_recorded(**v);
+  return f;
 }
 
 // The mixtures of `want` ((theta_o, phi_o) of each slice, in order) out of the file at
@@ -135,7 +126,7 @@ std::optional<MixtureFile> kept_slices(const std::string& path, const std::strin
 
 bool fit_settings_match(const std::string& recorded, const FitSettings& fit) {
   const std::optional<RecordedSettings> a = read_record(recorded);
-  return a && same_settings(*a, fit);
+  return a && a->criterion == kCriterion && same_result_settings(a->fit, as_recorded(fit));
 }
 
 MixtureFile fit_slices_kept(const SliceSource& source, const std::string& table_path,
