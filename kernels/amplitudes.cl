@@ -48,7 +48,10 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
 
   for (uint it = 0; it < CPW; ++it) {
     floatv t, ph;
-    const uint c0 = grid_cell(&grid, g, it, lid, &t, &ph);
+    const uint c0 = grid_cell_angles(&grid, g, it, lid, &t, &ph);
+    floatv x, y;
+    map_point(t, ph, &x, &y);
+    const floatv jac = plane_jacobian(x, y);
     const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c0 + LANES < (float)n_cells);
     floatv r[CH_MAX];
     for (int c = 0; c < n_channels; ++c) r[c] = VLOADV(0, w + c * slice_stride + c0);
@@ -57,11 +60,13 @@ void amp_basis(const uint slice_stride, const uint n_phi, const float inv_nphi,
       floatv v = (floatv)0.f;
       for (int sa = -s; sa <= s; ++sa)
         for (int sb = -s; sb <= s; ++sb) {
-          const floatv dt = t + (float)sa * (dtheta / 3.f) - cp[0 * K_MAX + j];
-          const floatv d0 = wrap_diff(ph + (float)sb * (dphi / 3.f) - cp[1 * K_MAX + j]);
+          floatv px = x, py = y;
+          if (s) map_point(t + (float)sa * (dtheta / 3.f), ph + (float)sb * (dphi / 3.f), &px, &py);
+          const floatv dt = px - cp[0 * K_MAX + j];
+          const floatv d0 = wrap_diff(py - cp[1 * K_MAX + j]);
           for (int img = -n; img <= n; ++img) v += exp2(component_log2(cp, j, dt, image_offset(d0, img)));
         }
-      if (s) v *= 1.f / 9.f;
+      v *= s ? jac * (1.f / 9.f) : jac;
       VSTOREV(v, bp + j * slice_stride + c0);
       for (int c = 0; c < n_channels; ++c) r[c] = fma((floatv)(-amp[c * K_MAX + j]), v, r[c]);
     }

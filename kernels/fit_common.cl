@@ -17,6 +17,8 @@
 //   CPW     cell vectors per work-item per chunk
 //   EM_FP64 1: statistics above the lane level, the M-step and the state in double
 //   BSDFMIX_FP64 whether the device has cl_khr_fp64 (added by the host)
+//   MAP     the plane of the Gaussians (include/bsdfmix/mixture.hpp, Map): 0 (theta, phi),
+//           1 Lambert's disk (hemisphere), 2 the cylinder (sin theta, phi) (fiber)
 
 #ifndef K_MAX
 #define K_MAX 16
@@ -32,6 +34,9 @@
 #endif
 #ifndef EM_FP64
 #define EM_FP64 0
+#endif
+#ifndef MAP
+#define MAP 0
 #endif
 #ifndef BSDFMIX_FP64
 #define BSDFMIX_FP64 0
@@ -179,6 +184,35 @@ inline uint chunk_cell(uint g, uint it, uint lid) {
   return g * (WG * CPW * VEC) + (it * WG + lid) * VEC;
 }
 
+// Cells (theta, phi) as points (x, y) of the map's plane (MAP; the header's to_map).
+inline void map_point(floatv t, floatv ph, floatv* x, floatv* y) {
+#if MAP == 1
+  const floatv r = 2.f * sin(0.5f * t);
+  *x = r * cos(ph);
+  *y = r * sin(ph);
+#elif MAP == 2
+  *x = sin(t);
+  *y = ph;
+#else
+  *x = t;
+  *y = ph;
+#endif
+}
+
+// A cell's area in the plane over dtheta dphi at its point (x, y): its solid angle's
+// J(theta): sin theta = r sqrt(1 - r^2 / 4) on the disk, cos theta = sqrt(1 - x^2) on the
+// cylinder; 1 on (theta, phi).
+inline floatv plane_jacobian(floatv x, floatv y) {
+#if MAP == 1
+  const floatv r2 = fma(x, x, y * y);
+  return sqrt(r2 * fmax(1.f - 0.25f * r2, 0.f));
+#elif MAP == 2
+  return sqrt(fmax(1.f - x * x, 0.f));
+#else
+  return (floatv)1.f;
+#endif
+}
+
 // A slice grid as the kernels' grid arguments give it (n_phi as a float).
 typedef struct {
   float inv_nphi, nphi, theta0, dtheta, phi0, dphi;
@@ -190,10 +224,18 @@ inline slice_grid make_grid(uint n_phi, float inv_nphi, float theta0, float dthe
 }
 
 // The first cell of vector `it` of work-item `lid` in chunk g (chunk_cell), and the
-// coordinates of its VEC cells (cell_coords).
-inline uint grid_cell(const slice_grid* grid, uint g, uint it, uint lid, floatv* t, floatv* ph) {
+// angles (theta, phi) of its VEC cells (cell_coords).
+inline uint grid_cell_angles(const slice_grid* grid, uint g, uint it, uint lid, floatv* t, floatv* ph) {
   const uint c = chunk_cell(g, it, lid);
   cell_coords(c, grid->inv_nphi, grid->nphi, grid->theta0, grid->dtheta, grid->phi0, grid->dphi, t, ph);
+  return c;
+}
+
+// The same with the cells as points of the map's plane (map_point).
+inline uint grid_cell(const slice_grid* grid, uint g, uint it, uint lid, floatv* x, floatv* y) {
+  floatv t, ph;
+  const uint c = grid_cell_angles(grid, g, it, lid, &t, &ph);
+  map_point(t, ph, x, y);
   return c;
 }
 

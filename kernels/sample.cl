@@ -15,13 +15,18 @@
 // Defines: HEMISPHERE (0: fiber domain, theta in [-pi/2, pi/2], J = cos theta;
 // 1: hemisphere, theta in [0, pi/2], J = sin theta); ESTIMATOR (integrate_chunks only:
 // 0 us_tab, 1 us_gmm, 2 is_tab, 3 is_gmm, 4 mis_tab, 5 cdf_tab, 6 light, 7 mis_light_cdf,
-// 8 mis_light_gmm, 9 product, 10 mis_product).
+// 8 mis_light_gmm, 9 product, 10 mis_product); MAP (the plane of the Gaussians, the header's
+// Map: 0 (theta, phi), 1 Lambert's disk, 2 the cylinder (sin theta, phi)): the components'
+// (mu_t, mu_p) and the pdf blocks are in that plane.
 
 #ifndef HEMISPHERE
 #define HEMISPHERE 0
 #endif
 #ifndef ESTIMATOR
 #define ESTIMATOR 0
+#endif
+#ifndef MAP
+#define MAP 0
 #endif
 
 #define S_PI 3.14159265358979323846f
@@ -169,12 +174,49 @@ float2 mixture_sums(__global const float* q, __global const VF* pd, const float 
 
 bool theta_inside(const float theta) { return theta >= THETA_LO && theta <= THETA_HI; }
 
+// The map's point (x, y) of direction (theta, phi) (the header's to_map).
+float2 plane_of(const float theta, const float phi) {
+#if MAP == 1
+  const float r = 2.0f * sin(0.5f * theta);
+  return (float2)(r * cos(phi), r * sin(phi));
+#elif MAP == 2
+  return (float2)(sin(theta), phi);
+#else
+  return (float2)(theta, phi);
+#endif
+}
+
+// The direction (theta, phi) of map point (x, y) (the header's from_map); theta past
+// THETA_HI when the point leaves the domain.
+float2 direction_of(const float x, const float y) {
+#if MAP == 1
+  const float r2 = fma(x, x, y * y);
+  if (!(r2 <= 2.0f)) return (float2)(THETA_HI + 1.0f, 0.0f);
+  return (float2)(2.0f * asin(fmin(0.5f * sqrt(r2), 1.0f)), r2 > 0.0f ? atan2(y, x) : 0.0f);
+#elif MAP == 2
+  if (!(fabs(x) <= 1.0f)) return (float2)(THETA_HI + 1.0f, 0.0f);
+  return (float2)(asin(x), y);
+#else
+  return (float2)(x, y);
+#endif
+}
+
+// (pdf, stand-in f [cos]) per steradian at (theta, phi), phi in the slice frame: the
+// mixture's sums at the map's point; on (theta, phi) over the Jacobian (0 where it is 0).
+float2 mixture_omega(__global const float* q, __global const VF* pd, const float theta, const float phi) {
+#if MAP
+  const float2 p = plane_of(theta, phi);
+  return mixture_sums(q, pd, p.x, wrap_phi(p.y));
+#else
+  const float j = jacobian(theta);
+  return j > 0.0f ? mixture_sums(q, pd, theta, phi) / j : (float2)(0.0f, 0.0f);
+#endif
+}
+
 // pdf per steradian of the mixture sampler at (theta, phi) (phi in the world frame).
 float mixture_pdf_omega(__global const float* q, __global const VF* pd, const float theta, const float phi) {
   if (!theta_inside(theta)) return 0.0f;
-  const float j = jacobian(theta);
-  if (!(j > 0.0f)) return 0.0f;
-  return mixture_sums(q, pd, theta, wrap_phi(phi - q[Q_ROTATE])).x / j;
+  return mixture_omega(q, pd, theta, wrap_phi(phi - q[Q_ROTATE])).x;
 }
 
 // Draws a point from the blended mixture with uniforms u (u.x slice, u.y component,
@@ -196,9 +238,14 @@ float2 mixture_draw(__global const float* q, __global const float16* comps, cons
   const float r = sqrt(-2.0f * log_unit(1.0f - u.z));
   const float2 sc = sincos_turn(u.w);
   const float z0 = r * sc.y, z1 = r * sc.x;
+#if MAP
+  const float2 d = direction_of(mad(g.s5, z0, g.s0), wrap_phi(g.s1 + g.s6 * z0 + g.s7 * z1));
+  return (float2)(d.x, wrap_phi(d.y + q[Q_ROTATE]));
+#else
   const float theta = mad(g.s5, z0, g.s0);
   const float phi = wrap_phi(g.s1 + g.s6 * z0 + g.s7 * z1 + q[Q_ROTATE]);
   return (float2)(theta, phi);
+#endif
 }
 
 // `n` samples first..first+n-1 of `stream`: (theta, phi, pdf_omega, valid).
@@ -222,13 +269,10 @@ __kernel void eval_mixture(__global const float* q, __global const VF* pd, __glo
   const float theta = dirs[i].x, phi = dirs[i].y;
   float2 r = (float2)(0.0f, 0.0f);
   if (theta_inside(theta)) {
-    const float j = jacobian(theta);
-    if (j > 0.0f) {
-      r = mixture_sums(q, pd, theta, wrap_phi(phi - q[Q_ROTATE])) / j;
+    r = mixture_omega(q, pd, theta, wrap_phi(phi - q[Q_ROTATE]));
 #if HEMISPHERE
-      r.y /= cos(theta);
+    if (r.y != 0.0f) r.y /= cos(theta);
 #endif
-    }
   }
   out[i] = r;
 }
@@ -537,10 +581,9 @@ float estimate_uniform(ESTIMATE_PARAMS) {
 #if ESTIMATOR == 0
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
 #else
-  const float j = jacobian(d.x);
-  float fv = j > 0.0f ? mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate)).y / j : 0.0f;
+  float fv = mixture_omega(q, pd, d.x, wrap_phi(d.y - rotate)).y;
 #if HEMISPHERE
-  fv = j > 0.0f ? fv / cos(d.x) : 0.0f;
+  fv = fv != 0.0f ? fv / cos(d.x) : 0.0f;
 #endif
 #endif
   if (fv == 0.0f) return 0.0f;
@@ -552,17 +595,14 @@ float estimate_mixture(ESTIMATE_PARAMS) {
   const float rotate = q[Q_ROTATE];
   const float2 d = mixture_draw(q, comps, u);
   if (!theta_inside(d.x)) return 0.0f;
-  const float j = jacobian(d.x);
-  if (!(j > 0.0f)) return 0.0f;
-  const float2 s = mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate));
+  const float2 s = mixture_omega(q, pd, d.x, wrap_phi(d.y - rotate));
   if (!(s.x > 0.0f)) return 0.0f;
 #if ESTIMATOR == 2
-  // f c / pdf_omega = f c J / pdf_param
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
-  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) * j / s.x;
+  return radiance(sc, env, d.x, d.y) * fv * cos_factor(d.x) / s.x;
 #else
-  // the stand-in: f c J = sum w scale p_param, so f c / pdf_omega = sums.y / sums.x
+  // the stand-in: f c = sum w scale p_omega, so f c / pdf_omega = sums.y / sums.x
   return radiance(sc, env, d.x, d.y) * s.y / s.x;
 #endif
 }
@@ -580,8 +620,7 @@ float estimate_defensive(ESTIMATE_PARAMS) {
   }
   const float fv = table_f(geo, f, d.x, wrap_phi(d.y - rotate));
   if (fv == 0.0f) return 0.0f;
-  const float j = jacobian(d.x);
-  const float pm = j > 0.0f ? mixture_sums(q, pd, d.x, wrap_phi(d.y - rotate)).x / j : 0.0f;
+  const float pm = mixture_omega(q, pd, d.x, wrap_phi(d.y - rotate)).x;
   const float pdf = alpha * UNIFORM_PDF + (1.0f - alpha) * pm;
   return by_pdf(sc, env, d, fv, pdf);
 }
@@ -666,8 +705,7 @@ float estimate_mis(ESTIMATE_PARAMS) {
 #if ESTIMATOR == 7
   const float3 pdf = (float3)(pli, cdf_pdf(geo, marg, cond, d.x, pl), 0.0f);
 #elif ESTIMATOR == 8
-  const float j = jacobian(d.x);
-  const float pm = j > 0.0f ? mixture_sums(q, pd, d.x, pl).x / j : 0.0f;
+  const float pm = mixture_omega(q, pd, d.x, pl).x;
   const float3 pdf = (float3)(pli, pm, UNIFORM_PDF);
 #else
   const float3 pdf = (float3)(mixture_pdf_omega(q2, pd2, d.x, d.y), pli, UNIFORM_PDF);

@@ -150,14 +150,21 @@ void bind_slice_mixture(py::module_& m) {
                                 "The mixture of one omega_o slice: a density over (theta, phi), prepared "
                                 "(weights normalized).")
       .def(py::init([](const Array& w, const Array& mean, const Array& cov, double scale, const py::object& rgb,
-                       const py::object& copies, double theta_o, double phi_o) {
-             return make_slice(w, mean, cov, scale, rgb, copies, theta_o, phi_o);
+                       const py::object& copies, double theta_o, double phi_o, const std::string& map) {
+             mix::SliceMixture s = make_slice(w, mean, cov, scale, rgb, copies, theta_o, phi_o);
+             s.map = mix::map_from_name(map);
+             return s;
            }),
            py::arg("weights"), py::arg("means"), py::arg("covariances"), py::arg("scale") = 1.0,
            py::arg("rgb") = py::none(), py::arg("copies") = py::none(), py::arg("theta_o") = 0.0,
-           py::arg("phi_o") = 0.0,
-           "weights [K], means [K, 2] (mu_theta, mu_phi), covariances [K, 3] (s_tt, s_tp, s_pp); optional rgb "
-           "amplitudes [K, 3] and colour copies' amplitudes [K, 4, 3]")
+           py::arg("phi_o") = 0.0, py::arg("map") = "theta_phi",
+           "weights [K], means [K, 2] (the map's x, y: mu_theta, mu_phi on theta_phi), covariances [K, 3] "
+           "(s_tt, s_tp, s_pp); optional rgb amplitudes [K, 3] and colour copies' amplitudes [K, 4, 3]; map: "
+           "theta_phi, disk or cylinder (docs/formats.md, \"Maps\")")
+      .def_property_readonly("map", [](const mix::SliceMixture& s) { return map_name(s.map); },
+                             "the plane of the components: theta_phi, disk or cylinder")
+      .def("pdf_map", py::vectorize(&mix::SliceMixture::pdf_map), py::arg("x"), py::arg("y"),
+           "density per unit of the map's (x, y) (per steradian on disk and cylinder)")
       .def_readonly("theta_o", &mix::SliceMixture::theta_o)
       .def_readonly("phi_o", &mix::SliceMixture::phi_o)
       .def_readonly("scale", &mix::SliceMixture::scale)
@@ -236,9 +243,10 @@ py::class_<mix::MixtureSet> bind_mixture_set(py::module_& m) {
                                   "All fitted slices of a mixture file on the table's omega_o grid (load_mixture).");
   cls
       .def(py::init([](const py::object& d, bool azimuthal, std::vector<double> grid_theta_o,
-                       std::vector<double> grid_phi_o, std::vector<mix::SliceMixture> slices) {
+                       std::vector<double> grid_phi_o, std::vector<mix::SliceMixture> slices, const std::string& map) {
              mix::MixtureSet s;
              s.domain = domain_of(d);
+             s.map = parse_map(map, s.domain, "MixtureSet map");
              s.azimuthal = azimuthal;
              s.grid_theta_o = std::move(grid_theta_o);
              s.grid_phi_o = std::move(grid_phi_o);
@@ -246,8 +254,12 @@ py::class_<mix::MixtureSet> bind_mixture_set(py::module_& m) {
              s.prepare();
              return s;
            }),
-           py::arg("domain"), py::arg("azimuthal"), py::arg("grid_theta_o"), py::arg("grid_phi_o"), py::arg("slices"))
+           py::arg("domain"), py::arg("azimuthal"), py::arg("grid_theta_o"), py::arg("grid_phi_o"), py::arg("slices"),
+           py::arg("map") = "theta_phi")
       .def_readonly("domain", &mix::MixtureSet::domain)
+      .def_property_readonly("map", [](const mix::MixtureSet& s) { return map_name(s.map); },
+                             "the plane of the slices' components: theta_phi (files before format version 2), disk "
+                             "(hemisphere) or cylinder (fiber)")
       .def_readonly("azimuthal", &mix::MixtureSet::azimuthal)
       .def_property_readonly("grid_theta_o", [](const mix::MixtureSet& s) { return Array(py::ssize_t(s.grid_theta_o.size()), s.grid_theta_o.data()); })
       .def_property_readonly("grid_phi_o", [](const mix::MixtureSet& s) { return Array(py::ssize_t(s.grid_phi_o.size()), s.grid_phi_o.data()); })
@@ -351,6 +363,7 @@ void bind_files(py::module_& m) {
         const MixtureFile f = read_mixture_file(path);
         py::dict d;
         d["domain"] = domain_name(f.domain);
+        d["map"] = map_name(f.map);
         d["azimuthal"] = f.azimuthal;
         d["storage"] = storage_name(f.storage);
         d["table_source"] = f.table_source;

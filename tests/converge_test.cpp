@@ -151,6 +151,7 @@ mix::SliceMixture light_mixture(const Fixture& fx, const Lighting& light) {
   fit.restarts = 1;
   fit.final_restarts = 1;
   fit.final_iterations = 100;
+  fit.map = "theta_phi";  // the fixture's mixtures are in (theta, phi): the product needs one plane
   Lighting l = light;
   l.domain = fx.domain;
   return lighting_mixture(l, table.meta(), fit, (temp_dir() / "light_cache").string(), "").mixture;

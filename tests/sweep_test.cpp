@@ -93,6 +93,7 @@ std::string mixture_table(const std::string& name, std::size_t n_theta_o, std::s
 
 FitSettings fit_settings(const std::string& stem) {
   FitSettings f;
+  f.map = "theta_phi";  // the tables are Gaussians in (theta, phi): their true K is known there
   f.output = (temp_dir() / (stem + "_mixture.h5")).string();
   f.report = (temp_dir() / (stem + "_fit.csv")).string();
   f.search_report = (temp_dir() / (stem + "_search.csv")).string();

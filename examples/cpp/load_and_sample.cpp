@@ -97,6 +97,8 @@ mix::MixtureSet load_mixture(const std::string& path) {
   mix::MixtureSet set;
   set.domain = read_string_attr(g.id, "domain") == "hemisphere" ? mix::Domain::Hemisphere : mix::Domain::Fiber;
   set.azimuthal = read_string_attr(g.id, "symmetry") == "azimuthal";
+  // The plane of the Gaussians; files before format version 2 have no `map`: (theta, phi).
+  if (H5Aexists(g.id, "map") > 0) set.map = mix::map_from_name(read_string_attr(g.id, "map"));
   // optional: how omega_o between fitted slices is served (absent: blend)
   if (H5Aexists(g.id, "interpolation") > 0 && read_string_attr(g.id, "interpolation") == "displace")
     set.interpolation = mix::Interpolation::Displace;

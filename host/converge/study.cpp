@@ -133,6 +133,8 @@ void read_inputs(const StudySpec& spec, StudyInputs& in) {
   // The lighting mixtures, one per scene, for the product estimators.
   in.product = any_estimator(spec, uses_product);
   in.light_mix.resize(spec.scenes.size());
+  FitSettings light_fit = spec.light_fit;  // the lighting in the mixtures' own map: the product needs one plane
+  light_fit.map = in.set.map == mix::Map::ThetaPhi ? "theta_phi" : "equal_area";
   if (in.product)
     for (std::size_t s = 0; s < spec.scenes.size(); ++s) {
       Lighting l = spec.scenes[s];
@@ -140,7 +142,7 @@ void read_inputs(const StudySpec& spec, StudyInputs& in) {
       const std::string cache = spec.light_cache_dir.empty()
                                     ? (std::filesystem::path(spec.csv).parent_path() / "light_mixtures").string()
                                     : spec.light_cache_dir;
-      in.light_mix[s] = lighting_mixture(l, in.table.meta(), spec.light_fit, cache, spec.device, spec.light_engine);
+      in.light_mix[s] = lighting_mixture(l, in.table.meta(), light_fit, cache, spec.device, spec.light_engine);
       const LightMixture& m = in.light_mix[s];
       log_line("converge: lighting '" + l.name + "': K " + std::to_string(m.k) + ", L1 " + short_num(m.l1_rel) +
                (m.cached ? ", read from " + m.path + " (its fit took " + fixed(m.fit_seconds, 1) + " s)"

@@ -15,6 +15,22 @@ Domain parse_domain(const std::string& name, const std::string& where) {
   throw InputError(where + ": unknown domain '" + name + "' (expected fiber or hemisphere)");
 }
 
+std::string map_name(Map m) {
+  return m == Map::Disk ? "disk" : (m == Map::Cylinder ? "cylinder" : "theta_phi");
+}
+
+Map parse_map(const std::string& name, Domain d, const std::string& where) {
+  Map m;
+  if (name == "theta_phi") m = Map::ThetaPhi;
+  else if (name == "disk") m = Map::Disk;
+  else if (name == "cylinder") m = Map::Cylinder;
+  else throw InputError(where + ": unknown map '" + name + "' (expected theta_phi, disk or cylinder)");
+  if (m != Map::ThetaPhi && m != mix::equal_area_map(d))
+    throw InputError(where + ": map '" + name + "' does not fit the " + domain_name(d) + " domain (expected " +
+                     map_name(mix::equal_area_map(d)) + " or theta_phi)");
+  return m;
+}
+
 std::vector<double> uniform_centers(double lo, double hi, std::size_t n) {
   std::vector<double> c(n);
   const double step = (hi - lo) / static_cast<double>(n);

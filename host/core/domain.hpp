@@ -17,6 +17,7 @@ namespace bsdfmix {
 using mix::bracket;
 using mix::Bracket;
 using mix::Domain;
+using mix::Map;
 using mix::jacobian;
 using mix::kPi;
 using mix::theta_hi;
@@ -26,6 +27,12 @@ using mix::wrap_phi;
 // "fiber" / "hemisphere"; parse_domain throws InputError naming `where` on anything else.
 std::string domain_name(Domain d);
 Domain parse_domain(const std::string& name, const std::string& where);
+
+// "theta_phi" / "disk" / "cylinder" (docs/formats.md, "Maps"); parse_map throws InputError
+// naming `where` on anything else, and on a map that does not fit the domain (disk: the
+// hemisphere; cylinder: the fiber sphere).
+std::string map_name(Map m);
+Map parse_map(const std::string& name, Domain d, const std::string& where);
 
 // n cell centers splitting [lo, hi] evenly: lo + (i + 1/2) (hi - lo) / n.
 std::vector<double> uniform_centers(double lo, double hi, std::size_t n);

@@ -133,7 +133,7 @@ std::vector<AmplitudeSums> EmEngine::amplitude_sums(const AmpSlices& slices, con
     std::vector<unsigned char> l1_parts(P * n_chunks * kMaxChannels * real_size), sums(P * per_problem * real_size);
     const Device& dev = w.device;
     const bool won = run_on_device(w.run, dev, "amplitude sums", [&] {
-      cl::Program program = build_program(dev, "amplitudes", em_program_options(K, w.shape, w.fp64));
+      cl::Program program = build_program(dev, "amplitudes", em_program_options(K, w.shape, w.fp64, layout.map));
       const cl::CommandQueue& queue = *w.run.queue;
       cl::Buffer b_channels = upload(dev, "channels", in.channels), b_slice = upload(dev, "prob_slice", in.slices.local),
                  b_k = upload(dev, "prob_k", in.prob_k);

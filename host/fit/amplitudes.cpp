@@ -34,6 +34,33 @@ double in_domain_mass(Domain d, double mu_t, double s_tt) {
   return 0.5 * (std::erf((theta_hi(d) - mu_t) / sd) - std::erf((theta_lo(d) - mu_t) / sd));
 }
 
+double in_domain_mass(const SliceGrid& grid, const Gmm& g, int j) {
+  const double mu_t = g.mean[2 * std::size_t(j)], s_tt = g.cov[3 * std::size_t(j)];
+  if (grid.map != Map::Disk) {
+    const bool cyl = grid.map == Map::Cylinder;
+    const double lo = cyl ? -1.0 : theta_lo(grid.domain), hi = cyl ? 1.0 : theta_hi(grid.domain);
+    const double sd = std::sqrt(2.0 * s_tt);
+    return 0.5 * (std::erf((hi - mu_t) / sd) - std::erf((lo - mu_t) / sd));
+  }
+  mix::Gaussian c;
+  c.weight = 1;
+  c.mu_t = mu_t;
+  c.mu_p = g.mean[2 * std::size_t(j) + 1];
+  c.s_tt = s_tt;
+  c.s_tp = g.cov[3 * std::size_t(j) + 1];
+  c.s_pp = g.cov[3 * std::size_t(j) + 2];
+  c.prepare();
+  // Polar quadrature over the disk: 64 rings (midpoints in r) x 256 angles.
+  const int nr = 64, na = 256;
+  const double rmax = std::sqrt(2.0), dr = rmax / nr, da = 2 * kPi / na;
+  double mass = 0;
+  for (int a = 0; a < nr; ++a) {
+    const double r = (a + 0.5) * dr;
+    for (int b = 0; b < na; ++b) mass += c.density(r * std::cos(b * da), r * std::sin(b * da)) * r * dr * da;
+  }
+  return std::min(mass, 1.0);
+}
+
 std::vector<AmplitudeSums> amplitude_sums_reference(const ChannelSet& set, const std::vector<AmplitudeQuery>& queries) {
   check_set(set);
   const SliceGrid& grid = set.grid;
@@ -65,18 +92,20 @@ std::vector<AmplitudeSums> amplitude_sums_reference(const ChannelSet& set, const
     }
     const std::vector<double>& w = set.values[q.slice];
     for (std::size_t i = 0; i < n; ++i) {
-      const double t = grid.theta[i / np], p = grid.phi[i % np];
+      const double t = grid.theta[i / np], p = grid.phi[i % np], jac = cell_jacobian(grid, i);
       for (int j = 0; j < K; ++j) {
         double v = 0;
         for (int sa = -sub[j]; sa <= sub[j]; ++sa)
           for (int sb = -sub[j]; sb <= sub[j]; ++sb) {
-            const double dt = t + sa * dth / 3 - g.mean[2 * j], d0 = wrap_phi(p + sb * dph / 3 - g.mean[2 * j + 1]);
+            double x = t + sa * dth / 3, y = p + sb * dph / 3;  // the point in the grid's plane
+            if (grid.map != Map::ThetaPhi) mix::to_map(grid.map, x, y, x, y);
+            const double dt = x - g.mean[2 * j], d0 = wrap_phi(y - g.mean[2 * j + 1]);
             for (int img = -images[j]; img <= images[j]; ++img) {
               const double dp = d0 + 2 * kPi * img;
               v += std::exp(-0.5 * (it[j] * dt * dt + 2 * itp[j] * dt * dp + ip[j] * dp * dp));
             }
           }
-        phi[j] = norm[j] * v / (sub[j] ? 9.0 : 1.0);
+        phi[j] = jac * norm[j] * v / (sub[j] ? 9.0 : 1.0);
       }
       for (int c = 0; c < C; ++c) {
         const double wc = w[std::size_t(c) * n + i];
@@ -221,7 +250,7 @@ std::vector<AmplitudeFit> fit_amplitudes(const AmplitudeEvaluator& evaluate, con
     if (pr.slice >= set.values.size()) throw ConfigError("amplitude problem: slice out of range");
     State& s = st[p];
     s.K = pr.gmm.k();
-    for (int j = 0; j < s.K; ++j) s.z.push_back(in_domain_mass(set.grid.domain, pr.gmm.mean[2 * j], pr.gmm.cov[3 * j]));
+    for (int j = 0; j < s.K; ++j) s.z.push_back(in_domain_mass(set.grid, pr.gmm, j));
     const std::vector<double>& w = set.values[pr.slice];
     for (int c = 0; c < C; ++c) {
       double sum = 0, abs_sum = 0, negative = 0;

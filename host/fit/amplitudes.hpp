@@ -88,8 +88,13 @@ std::vector<AmplitudeFit> fit_amplitudes(const AmplitudeEvaluator& evaluate, con
 constexpr double kNoiseShare = 0.005;
 bool is_noise(double negative, double abs_sum);
 
-// The mass of a component inside the domain: theta within the domain's range, phi over one
-// period (all of it): 1/2 (erf((hi - mu) / (sqrt 2 sigma)) - erf((lo - mu) / (sqrt 2 sigma))).
+// The mass of component j of g inside the domain of grid's plane: on ThetaPhi and the
+// cylinder the first axis within its range ([lo, hi]: the domain's theta range, or
+// [-1, 1]) and the second over one period (all of it),
+// 1/2 (erf((hi - mu) / (sqrt 2 sigma)) - erf((lo - mu) / (sqrt 2 sigma))); on the disk the
+// mass within radius sqrt(2), by the grid's cells.
+double in_domain_mass(const SliceGrid& grid, const Gmm& g, int j);
+// The same on ThetaPhi: theta within the domain's range.
 double in_domain_mass(Domain d, double mu_t, double s_tt);
 
 // argmin over a >= 0 of 1/2 a^T G a - b^T a for a symmetric positive (semi)definite K x K

@@ -250,8 +250,8 @@ Gmm initialize(const SliceGrid& grid, const std::vector<double>& w, std::size_t 
   // Cell coordinates, and the nearest-image phi difference of two wrapped angles.
   std::vector<double> xt(n), xp(n);
   for (std::size_t i = 0; i < n; ++i) {
-    xt[i] = grid.theta[i / np];
-    xp[i] = wrap_phi(grid.phi[i % np]);
+    cell_point(grid, i, xt[i], xp[i]);
+    xp[i] = wrap_phi(xp[i]);
   }
   auto wrap_diff = [](double d) { return d > kPi ? d - 2 * kPi : (d < -kPi ? d + 2 * kPi : d); };
   auto add_center = [&](int j, std::size_t cell) {
@@ -337,10 +337,13 @@ Gmm task_start(const SliceGrid& grid, const std::vector<double>& w, const EmTask
 }
 
 double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm) {
-  const std::size_t np = grid.phi.size();
   double l = 0;
-  for (std::size_t i = 0; i < w.size(); ++i)
-    if (w[i] > 0) l += w[i] * gmm_log_density(gmm, grid.theta[i / np], grid.phi[i % np]);
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    if (!(w[i] > 0)) continue;
+    double x, y;
+    cell_point(grid, i, x, y);
+    l += w[i] * gmm_log_density(gmm, x, y);
+  }
   return l;
 }
 

@@ -31,7 +31,8 @@ ChunkLayout::ChunkLayout(const SliceGrid& grid)
       stride(chunks * kChunkCells),
       n_phi(grid.phi.size()),
       dtheta(grid.theta.size() > 1 ? axis_step(grid.theta) : 0.0),
-      dphi(axis_step(grid.phi)) {}
+      dphi(axis_step(grid.phi)),
+      map(grid.map) {}
 
 void set_grid_args(Routine& routine, const ChunkLayout& layout, const SliceGrid& grid) {
   routine.set("slice_stride", static_cast<cl_uint>(layout.stride))
@@ -43,10 +44,10 @@ void set_grid_args(Routine& routine, const ChunkLayout& layout, const SliceGrid&
       .set("dphi", static_cast<float>(layout.dphi));
 }
 
-std::string em_program_options(int k_max, const KernelShape& shape, bool fp64) {
+std::string em_program_options(int k_max, const KernelShape& shape, bool fp64, Map map) {
   return "-DK_MAX=" + std::to_string(k_max) + " -DVEC=" + std::to_string(shape.vec) + " -DWG=" +
          std::to_string(shape.wg) + " -DCPW=" + std::to_string(shape.cpw) + " -DEM_FP64=" + (fp64 ? "1" : "0") +
-         " -cl-denorms-are-zero";
+         " -DMAP=" + std::to_string(static_cast<int>(map)) + " -cl-denorms-are-zero";
 }
 
 std::vector<unsigned char> pack(const std::vector<double>& v, bool fp64) {
@@ -306,7 +307,7 @@ bool run_em(const FitCall& f, const BatchWork& w, const EmInputs& in, const EmSe
   const cl::CommandQueue& queue = *w.run.queue;
   auto t0 = std::chrono::steady_clock::now();
   try {
-    EmRoutines r(build_program(w.device, "em", em_program_options(w.bucket(), w.shape, w.fp64)), f, w, in, o, s);
+    EmRoutines r(build_program(w.device, "em", em_program_options(w.bucket(), w.shape, w.fp64, f.layout.map)), f, w, in, o, s);
     const cl::NDRange e_global(f.layout.chunks * static_cast<std::size_t>(w.shape.wg), P);
     const cl::NDRange e_local(static_cast<std::size_t>(w.shape.wg), 1);
     r.constants.run(queue, cl::NDRange(P));

@@ -72,13 +72,14 @@ void component_constants(const Gmm& gmm, int j, int K, double log2_weight, float
 
 // The build options of the fitting programs (kernels/em.cl, l1.cl, amplitudes.cl) for a
 // K_MAX bucket, a kernel shape and a precision.
-std::string em_program_options(int k_max, const KernelShape& shape, bool fp64);
+std::string em_program_options(int k_max, const KernelShape& shape, bool fp64, Map map);
 
 // The cells of a slice grid in chunks of kChunkCells, as the kernels walk them: a slice
 // takes `stride` floats (its cells, then zero padding to whole chunks).
 struct ChunkLayout {
   std::size_t cells = 0, chunks = 0, stride = 0, n_phi = 0;
   double dtheta = 0, dphi = 0;  // dtheta 0 for a single theta row
+  Map map = Map::ThetaPhi;      // the grid's plane: the programs' MAP
   explicit ChunkLayout(const SliceGrid& grid);
 };
 

@@ -64,13 +64,14 @@ void set_constants(const Gmm& g, std::vector<Comp>& comp) {
 // log-likelihood. `e`: scratch, one value per component.
 double e_step(const SliceGrid& grid, const std::vector<double>& w, const std::vector<Comp>& comp,
               std::vector<double>& e, std::vector<double>& stats) {
-  const std::size_t np = grid.phi.size(), n = w.size();
+  const std::size_t n = w.size();
   const int k = static_cast<int>(comp.size());
   std::fill(stats.begin(), stats.end(), 0.0);
   double L = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (w[i] <= 0) continue;
-    const double t = grid.theta[i / np], ph = grid.phi[i % np];
+    double t, ph;
+    cell_point(grid, i, t, ph);
     double m = -std::numeric_limits<double>::infinity();
     for (int j = 0; j < k; ++j) {
       const Eigen::Vector2d d(t - comp[j].mt, wrap_diff(ph - comp[j].mp));

@@ -128,7 +128,7 @@ std::vector<L1Value> EmEngine::l1_values(const L1Slices& slices, const std::vect
     const Device& dev = w.device;
     const bool won = run_on_device(w.run, dev, "L1 evaluation", [&] {
       cl::Program program =
-          build_program(dev, "l1", em_program_options(K, w.shape, w.fp64) + (in.colour ? " -DL1_CH=3" : ""));
+          build_program(dev, "l1", em_program_options(K, w.shape, w.fp64, layout.map) + (in.colour ? " -DL1_CH=3" : ""));
       Routine kern(program, "em_l1");
       set_grid_args(kern, layout, grid);
       cl::Buffer b_partials = device_buffer(dev, "partials", partials.size(), CL_MEM_WRITE_ONLY);

@@ -257,7 +257,7 @@ std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<
                                          const L1Objective& objective) {
   const double eps = objective.eps;
   const SliceGrid& grid = set.grid;
-  const std::size_t np = grid.phi.size(), n = grid.cells();
+  const std::size_t n = grid.cells();
   const double area = cell_area(grid);
   std::vector<L1Value> out(queries.size());
   for (std::size_t qi = 0; qi < queries.size(); ++qi) {
@@ -290,7 +290,9 @@ std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<
     };
     std::vector<double> all(k);
     for (std::size_t i = 0; i < n; ++i) {
-      const double t = grid.theta[i / np], p = grid.phi[i % np];
+      double t, p;
+      cell_point(grid, i, t, p);
+      const double jac = cell_jacobian(grid, i);  // the cell's area over `area`
       double m = 0, mc[3] = {0, 0, 0};
       for (int j = 0; j < k; ++j) {
         const double dt = t - g.mean[2 * j], d0 = wrap_phi(p - g.mean[2 * j + 1]);
@@ -300,15 +302,17 @@ std::vector<L1Value> l1_values_reference(const SliceSet& set, const std::vector<
         if (colour)
           for (int c = 0; c < 3; ++c) mc[c] += amp[c * k + j] / g.weight[j] * all[j];
       }
+      m *= jac;
+      for (double& c : mc) c *= jac;
       const double am = std::max(area * m, 1e-30), d = w.w[i] - area * m, rho = std::sqrt(d * d + eps * eps);
-      const double s = d / rho + kl * w.w[i] / am;
+      const double s = jac * (d / rho + kl * w.w[i] / am);
       v.objective += rho + (w.w[i] > 0 ? kl * w.w[i] * (std::log(std::max(w.w[i], 1e-30)) - std::log(am)) : 0.0);
       double sc[3] = {0, 0, 0};
       if (colour)
         for (int c = 0; c < 3; ++c) {
           const double e = (ch.empty() ? 0.0 : ch[c * n + i]) - area * mc[c], r = std::sqrt(e * e + eps * eps);
           v.objective += lam * r;
-          sc[c] = lam * e / r;
+          sc[c] = jac * lam * e / r;
         }
       for (int j = 0; j < k; ++j) {
         const double dt = t - g.mean[2 * j], d0 = wrap_phi(p - g.mean[2 * j + 1]);

@@ -9,30 +9,29 @@
 namespace bsdfmix {
 
 Gmm moment_gaussian(const SliceGrid& grid, const std::vector<double>& w) {
-  const std::vector<double>& theta = grid.theta;
-  const std::vector<double>& phi = grid.phi;
-  const std::size_t np = phi.size();
+  const std::size_t n = grid.cells();
+  const bool periodic = grid.map != Map::Disk;  // y is an angle, averaged on the circle
+  std::vector<double> xs(n), ys(n);
   double W = 0, mt = 0, cx = 0, cy = 0;
-  for (std::size_t t = 0; t < theta.size(); ++t)
-    for (std::size_t p = 0; p < np; ++p) {
-      const double x = w[t * np + p];
-      W += x;
-      mt += x * theta[t];
-      cx += x * std::cos(phi[p]);
-      cy += x * std::sin(phi[p]);
-    }
-  const double mp = W > 0 ? std::atan2(cy, cx) : 0.0;
-  mt = W > 0 ? mt / W : 0.5 * (theta.front() + theta.back());
+  for (std::size_t i = 0; i < n; ++i) {
+    cell_point(grid, i, xs[i], ys[i]);
+    const double x = w[i];
+    W += x;
+    mt += x * xs[i];
+    cx += x * (periodic ? std::cos(ys[i]) : ys[i]);
+    cy += x * (periodic ? std::sin(ys[i]) : 0.0);
+  }
+  const double mp = W > 0 ? (periodic ? std::atan2(cy, cx) : cx / W) : 0.0;
+  mt = W > 0 ? mt / W : (grid.map == Map::Disk ? 0.0 : 0.5 * (xs.front() + xs.back()));
   double stt = 0, stp = 0, spp = 0;
-  for (std::size_t t = 0; t < theta.size(); ++t)
-    for (std::size_t p = 0; p < np; ++p) {
-      const double x = w[t * np + p];
-      const double dt = theta[t] - mt, dp = wrap_phi(phi[p] - mp);
-      stt += x * dt * dt;
-      stp += x * dt * dp;
-      spp += x * dp * dp;
-    }
-  const double floor = std::pow(0.25 * std::min(axis_step(theta), axis_step(phi)), 2);  // EM's default floor
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = w[i];
+    const double dt = xs[i] - mt, dp = periodic ? wrap_phi(ys[i] - mp) : ys[i] - mp;
+    stt += x * dt * dt;
+    stp += x * dt * dp;
+    spp += x * dp * dp;
+  }
+  const double floor = std::pow(0.25 * plane_step(grid), 2);  // EM's default floor
   if (W > 0) {
     stt /= W;
     stp /= W;

@@ -1,6 +1,7 @@
 // Slice grids and their validation.
 #include "fit/slices.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -15,6 +16,8 @@ SliceGrid make_slice_grid(Domain domain, std::size_t n_theta, std::size_t n_phi)
   g.phi = uniform_centers(-kPi, kPi, n_phi);
   return g;
 }
+
+double plane_step(const SliceGrid& g) { return std::min(axis_step(g.theta), axis_step(g.phi)); }
 
 namespace {
 void check_uniform(const std::vector<double>& axis, const char* name) {

@@ -28,7 +28,6 @@ struct LogDensities {
   std::vector<double> logn, logs, zmax, lw;
   LogDensities(const SliceGrid& grid, std::size_t n, const Gmm& gmm) {
     const int k = gmm.k();
-    const std::size_t np = grid.phi.size();
     // Per component: inverse covariance, log normalization.
     std::vector<double> ia(k), ib(k), ic(k), lnorm(k);
     lw.resize(k);
@@ -45,7 +44,8 @@ struct LogDensities {
     logs.resize(n);
     zmax.assign(k, -std::numeric_limits<double>::infinity());
     for (std::size_t i = 0; i < n; ++i) {
-      const double t = grid.theta[i / np], ph = grid.phi[i % np];
+      double t, ph;
+      cell_point(grid, i, t, ph);
       double m = -std::numeric_limits<double>::infinity();
       for (int j = 0; j < k; ++j) {
         const double dt = t - gmm.mean[2 * j], dp = wrap_diff(ph - gmm.mean[2 * j + 1]);
@@ -85,7 +85,7 @@ std::vector<std::pair<int, int>> merge_pairs(const std::vector<double>& self, co
 ComponentScores score_components(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm,
                                  std::size_t max_pairs) {
   const int k = gmm.k();
-  const std::size_t np = grid.phi.size(), n = w.size();
+  const std::size_t n = w.size();
   // Pass 1: log N_k(x_i) (nearest image), responsibilities, per-component sums.
   const LogDensities dens(grid, n, gmm);
   const std::vector<double>& logn = dens.logn;
@@ -126,7 +126,9 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
       const double logp = logn[i * k + j] - zmax[j] - std::log(zsum[j]);
       kl[j] += std::exp(logf) * (logf - logp);
       self[j] += w[i] * r * r;
-      const double dt = grid.theta[i / np] - gmm.mean[2 * j], dp = wrap_diff(grid.phi[i % np] - gmm.mean[2 * j + 1]);
+      double x, y;
+      cell_point(grid, i, x, y);
+      const double dt = x - gmm.mean[2 * j], dp = wrap_diff(y - gmm.mean[2 * j + 1]);
       for (int q = 0; q < 2; ++q) {
         const double u = ax[2 * j + q] * dt + ay[2 * j + q] * dp, u2 = u * u;
         m2[2 * j + q] += w[i] * r * u2;
@@ -307,8 +309,11 @@ Gmm seed_at_residual(const SliceGrid& grid, const std::vector<double>& w, const 
   for (double x : w) total += std::max(x, 0.0);
   if (!(total > 0)) return gmm;
   std::vector<double> r(w.size());
-  for (std::size_t i = 0; i < w.size(); ++i)
-    r[i] = w[i] - total * gmm_density(gmm, grid.theta[i / np], grid.phi[i % np]) * dt * dp;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    double x, y;
+    cell_point(grid, i, x, y);
+    r[i] = w[i] - total * gmm_density(gmm, x, y) * dt * dp * cell_jacobian(grid, i);
+  }
   Gmm out = gmm;
   constexpr int kHalf = 2;  // the 5 x 5 window
   while (out.k() < k_new) {
@@ -317,12 +322,17 @@ Gmm seed_at_residual(const SliceGrid& grid, const std::vector<double>& w, const 
     const long ti = long(at / np), pj = long(at % np);
     double m0 = 0, mt = 0, mp = 0, stt = 0, stp = 0, spp = 0;
     std::vector<std::size_t> window;
+    double x0, y0;  // the peak cell in the grid's plane
+    cell_point(grid, at, x0, y0);
     for (long a = std::max(0L, ti - kHalf); a <= std::min(long(nt) - 1, ti + kHalf); ++a)
       for (long b = -kHalf; b <= kHalf; ++b) {
         const std::size_t j = std::size_t((pj + b + long(np)) % long(np)), i = std::size_t(a) * np + j;
         window.push_back(i);
         if (!(r[i] > 0)) continue;
-        const double x = grid.theta[std::size_t(a)] - grid.theta[std::size_t(ti)], y = double(b) * dp;
+        double x, y;
+        cell_point(grid, i, x, y);
+        x -= x0;
+        y = grid.map == Map::Disk ? y - y0 : double(b) * dp;
         m0 += r[i];
         mt += r[i] * x;
         mp += r[i] * y;
@@ -337,8 +347,8 @@ Gmm seed_at_residual(const SliceGrid& grid, const std::vector<double>& w, const 
     const double share = std::min(0.5, m0 / total);
     for (double& x : out.weight) x *= 1 - share;
     out.weight.push_back(share);
-    out.mean.push_back(grid.theta[std::size_t(ti)] + mt);
-    out.mean.push_back(wrap_phi(grid.phi[std::size_t(pj)] + mp));
+    out.mean.push_back(x0 + mt);
+    out.mean.push_back(wrap_phi(y0 + mp));
     for (double x : {a, b, c}) out.cov.push_back(x);
     for (std::size_t i : window) r[i] = 0;
   }

@@ -6,9 +6,12 @@
 namespace bsdfmix {
 
 std::vector<double> mixture_weights(const SliceGrid& grid, const Gmm& gmm) {
-  const std::size_t np = grid.phi.size();
   std::vector<double> w(grid.cells());
-  for (std::size_t i = 0; i < w.size(); ++i) w[i] = gmm_density(gmm, grid.theta[i / np], grid.phi[i % np]);
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    double x, y;
+    cell_point(grid, i, x, y);
+    w[i] = gmm_density(gmm, x, y) * cell_jacobian(grid, i);
+  }
   return w;
 }
 

@@ -103,6 +103,7 @@ MixtureFile MixtureFile::header_only() const {
   MixtureFile h;
   h.storage = storage;
   h.domain = domain;
+  h.map = map;
   h.azimuthal = azimuthal;
   h.table_source = table_source;
   h.fit_settings = fit_settings;
@@ -209,6 +210,8 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
   h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
   h5::write_string_attr(id, "domain", domain_name(m.domain), path);
+  h5::write_string_attr(id, "map", map_name(m.map), path);
+  h5::write_string_attr(id, "format_version", std::to_string(kMixtureFormatVersion), path);
   h5::write_string_attr(id, "symmetry", m.azimuthal ? "azimuthal" : "none", path);
   h5::write_string_attr(id, "table_source", m.table_source, path);
   h5::write_string_attr(id, "fit_settings", m.fit_settings, path);
@@ -327,6 +330,18 @@ void read_copies(hid_t id, const std::string& where, MixtureFile& m) {
                 m.rgb_copies.begin() + long(s * K * kCopyValues));
 }
 
+// The domain, the format version and the map (a file without `map` is in (theta, phi)).
+void read_plane(hid_t id, const std::string& where, MixtureFile& m) {
+  m.domain = parse_domain(h5::read_string_attr(id, "domain", where), where + " attribute 'domain'");
+  if (h5::has_attr(id, "format_version")) {
+    const std::string v = h5::read_string_attr(id, "format_version", where);
+    if (v != "1" && v != std::to_string(kMixtureFormatVersion))
+      throw InputError(where + " attribute 'format_version': '" + v + "' is newer than this bsdfmix reads (at most " +
+                       std::to_string(kMixtureFormatVersion) + "); update bsdfmix");
+  }
+  if (h5::has_attr(id, "map")) m.map = parse_map(h5::read_string_attr(id, "map", where), m.domain, where + " attribute 'map'");
+}
+
 }  // namespace
 
 MixtureFile read_mixture_file(const std::string& path) {
@@ -335,7 +350,7 @@ MixtureFile read_mixture_file(const std::string& path) {
   const std::string where = path + ": /mixture";
   const hid_t id = g.get();
   MixtureFile m;
-  m.domain = parse_domain(h5::read_string_attr(id, "domain", where), where + " attribute 'domain'");
+  read_plane(id, where, m);
   const std::string sym = h5::read_string_attr(id, "symmetry", where);
   if (sym != "azimuthal" && sym != "none") throw InputError(where + ": unknown symmetry '" + sym + "'");
   m.azimuthal = sym == "azimuthal";
@@ -447,6 +462,7 @@ mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
 
 mix::SliceMixture slice_mixture(const MixtureFile& m, std::size_t s) {
   mix::SliceMixture sm = stored_slice(m, s);
+  sm.map = m.map;
   sm.prepare();
   return sm;
 }
@@ -454,6 +470,7 @@ mix::SliceMixture slice_mixture(const MixtureFile& m, std::size_t s) {
 mix::MixtureSet to_mixture_set(const MixtureFile& m) {
   mix::MixtureSet set;
   set.domain = m.domain;
+  set.map = m.map;
   set.azimuthal = m.azimuthal;
   set.grid_theta_o = m.table_theta_o;
   set.grid_phi_o = m.table_phi_o;

@@ -29,12 +29,19 @@ struct MixtureStorage {
 std::string storage_name(const MixtureStorage& s);
 MixtureStorage parse_storage(const std::string& name, const std::string& where);
 
+// The mixture file's format version (attribute `format_version`): 2 adds `map`; a file
+// without the attribute is version 1, in (theta, phi).
+constexpr int kMixtureFormatVersion = 2;
+
 // Values per component of rgb_copies: kCopies copies x R, G, B.
 constexpr std::size_t kCopyValues = std::size_t(mix::kCopies) * 3;
 
 struct MixtureFile {
   MixtureStorage storage;            // as written; read_mixture_file sets what it found
   Domain domain = Domain::Fiber;
+  // The plane of the components (docs/formats.md, "Maps"): attribute `map`; a file without
+  // it (format_version 1) is in (theta, phi).
+  Map map = Map::ThetaPhi;
   bool azimuthal = true;
   std::string table_source = "{}";   // the table's `source` attribute
   std::string fit_settings = "{}";   // JSON: the fit settings that made the file

@@ -48,6 +48,7 @@ GuideSetup guide_setup(const RenderSettings& s, const FitSettings& fit, const st
   f.final_iterations = 100;
   f.refine = "none";
   f.error_target.reset();
+  f.map = "theta_phi";  // the leaves' Gaussians are read as (theta, phi) on the fiber sphere
   g.field.compact_sigma = kBroadSigma;
   const bool guided = std::any_of(s.estimators.begin(), s.estimators.end(), is_guided);
   if (guided) g.devices = select_devices(device_selector);

@@ -25,7 +25,9 @@ std::vector<mix::Gaussian> world_lighting(const RenderSettings& s, const FitSett
   world.domain = Domain::Fiber;
   set_frame(world, {0, 0, 1}, {1, 0, 0}, s.file + ": render.scene");
   const std::string cache = (std::filesystem::path(s.output) / "light_mixtures").string();
-  const LightMixture m = lighting_mixture(world, world_lighting_grid(), fit, cache, device_selector, engine);
+  FitSettings world_fit = fit;
+  world_fit.map = "theta_phi";  // carried between frames as (theta, phi) lobes (light_carry)
+  const LightMixture m = lighting_mixture(world, world_lighting_grid(), world_fit, cache, device_selector, engine);
   std::vector<mix::Gaussian> compact = compact_components(m.mixture);
   log_line("render: the lighting '" + s.lighting.name + "' over world directions: K " + std::to_string(m.k) + " (" +
            std::to_string(compact.size()) + " compact), L1 " + format_number(100 * m.l1_rel, "%.2f") + "%" +

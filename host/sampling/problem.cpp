@@ -32,6 +32,7 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
     return make_query(set.serving(theta_o, phi_o), theta_o, phi_o, f_unit);
   QueryMixture qm;
   qm.domain = set.domain;
+  qm.map = set.map;
   qm.blend = set.blend(theta_o, phi_o);
   const auto& b = qm.blend;
   qm.q.assign(QueryMixture::kQuery, 0.f);
@@ -104,6 +105,7 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
 QueryMixture make_query(const mix::SliceMixture& mixture, Domain domain) {
   mix::MixtureSet one;
   one.domain = domain;
+  one.map = mixture.map;
   one.azimuthal = true;
   one.grid_theta_o = {0.0};
   one.grid_phi_o = {0.0};

@@ -14,9 +14,9 @@ namespace bsdfmix {
 
 namespace {
 
-std::string domain_define(Domain d) {
-  return std::string(" -DHEMISPHERE=") + (d == Domain::Hemisphere ? "1" : "0") +
-         " -DPDF_LANES=" + std::to_string(QueryMixture::kLanes);
+std::string domain_define(Domain d, mix::Map map) {
+  return std::string(" -DHEMISPHERE=") + (d == Domain::Hemisphere ? "1" : "0") + " -DMAP=" +
+         std::to_string(static_cast<int>(map)) + " -DPDF_LANES=" + std::to_string(QueryMixture::kLanes);
 }
 
 // device/routine.hpp's upload, an empty vector as 16 zeros (a kernel's absent input).
@@ -39,7 +39,7 @@ std::vector<mix::Sample> sample_device(const Device& device, const mix::MixtureS
   std::vector<mix::Sample> out;
   out.reserve(n);
   if (n == 0) return out;
-  cl::Program program = build_program(device, "sample", domain_define(qm.domain));
+  cl::Program program = build_program(device, "sample", domain_define(qm.domain, qm.map));
   cl::CommandQueue queue = device.make_queue();
   cl::Buffer q = upload(device, qm.q), comps = upload(device, qm.comps), pdf = upload(device, qm.pdf);
   const std::size_t batch = std::min<std::size_t>(n, std::size_t(1) << 22);
@@ -70,7 +70,7 @@ std::vector<std::pair<double, double>> eval_device(const Device& device, const m
   const QueryMixture qm = make_query(set, theta_o, phi_o);
   std::vector<std::pair<double, double>> out;
   if (dirs.empty()) return out;
-  cl::Program program = build_program(device, "sample", domain_define(qm.domain));
+  cl::Program program = build_program(device, "sample", domain_define(qm.domain, qm.map));
   cl::CommandQueue queue = device.make_queue();
   std::vector<float> d(dirs.size() * 2);
   for (std::size_t i = 0; i < dirs.size(); ++i) {
@@ -123,7 +123,7 @@ class IntegrateLaunch {
         unit_ == 1.0 || p.set == nullptr ? QueryMixture{} : make_query(*p.set, p.theta_o, p.phi_o, unit_);
     const QueryMixture& qm = unit_ == 1.0 || p.set == nullptr ? p.query : scaled;
 
-    const std::string options = domain_define(p.table.domain) + " -DESTIMATOR=" + std::to_string(int(e));
+    const std::string options = domain_define(p.table.domain, qm.map) + " -DESTIMATOR=" + std::to_string(int(e));
     cl::Program program = build_program(device, "sample", options);
     queue_ = device.make_queue();
     const cl::Context& ctx = device.context();

@@ -34,6 +34,7 @@ struct QueryMixture {
   static constexpr std::size_t kLanes = 8;   // components per pdf block (kernels/sample.cl PDF_LANES)
   static constexpr std::size_t kRows = 8;    // float8 rows per pdf block
   Domain domain = Domain::Fiber;
+  mix::Map map = mix::Map::ThetaPhi;  // the plane of the components (kernels/sample.cl MAP)
   mix::MixtureSet::Blend blend;
   // count, rotate, weights, first, counts, total, pdf blocks, broad blocks, extra
   // images, search step, cumulative weights (kernels/sample.cl, Q_*)

@@ -25,6 +25,7 @@ SliceSet make_set(Domain domain, const std::vector<SliceWork>& work, bool pooled
   SliceSet set;
   const WeightedSlice& first = pooled ? work.front().pooled : work.front().full;
   set.grid.domain = domain;
+  set.grid.map = first.map;
   set.grid.theta = first.theta;
   set.grid.phi = first.phi;
   for (const auto& w : work) set.weights.push_back(pooled ? w.pooled.w : w.full.w);
@@ -190,6 +191,10 @@ void Batch::reduce_k() {
 BatchFitter::BatchFitter(const SliceSource& source, const FitSettings& fit, EmEngine& engine, std::string device_names)
     : source_(source), fit_(fit), engine_(engine), devices_(std::move(device_names)) {}
 
+Map fit_map(const FitSettings& fit, Domain d) {
+  return fit.map == "theta_phi" ? Map::ThetaPhi : mix::equal_area_map(d);
+}
+
 BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {
   const auto start = std::chrono::steady_clock::now();
   BatchPart part;
@@ -220,6 +225,7 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
     w.ref = ref;
     w.full.theta = meta.theta_i;
     w.full.phi = meta.phi_i;
+    w.full.map = fit_map(fit_, meta.domain);
     w.full.w = source_.weights(ref);
     hash_weights(content, w.full.w);
     if (meta.rgb) {
@@ -249,6 +255,7 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
 void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
   const TableMeta& meta = source_.meta();
   part.mixture.domain = meta.domain;
+  part.mixture.map = b.full_set.grid.map;
   part.mixture.azimuthal = meta.azimuthal;
   std::vector<Fitted> kept(b.size());
   std::vector<StandInSlice> stand;
@@ -330,6 +337,7 @@ std::string slices_hash(const SliceSource& source, const std::vector<const Slice
 SweepResult empty_result(const TableMeta& meta, const FitSettings& fit) {
   SweepResult r;
   r.mixture.domain = meta.domain;
+  r.mixture.map = fit_map(fit, meta.domain);
   r.mixture.azimuthal = meta.azimuthal;
   r.mixture.table_source = meta.source;
   r.mixture.fit_settings = fit_settings_json(fit);

@@ -41,6 +41,9 @@ class BatchFitter {
   const std::string devices_;
 };
 
+// The map a fit of a `d` table with these settings works and writes in (fit.map).
+Map fit_map(const FitSettings& fit, Domain d);
+
 // Slices per batch of a sweep of `planned` slices: fit.batch, or by default 1/32 of
 // the plan within [4, 64].
 std::size_t batch_size(std::size_t planned, const FitSettings& fit);

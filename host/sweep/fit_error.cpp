@@ -20,6 +20,7 @@ WeightedSlice pool_slice(const WeightedSlice& s, std::size_t f) {
   const std::size_t nt = s.theta.size(), np = s.phi.size();
   if (f <= 1 || nt % f != 0 || np % f != 0) return s;
   WeightedSlice out;
+  out.map = s.map;
   for (std::size_t t = 0; t < nt; t += f) {
     double c = 0;
     for (std::size_t k = 0; k < f; ++k) c += s.theta[t + k];
@@ -42,11 +43,15 @@ namespace {
 // A Gaussian's mean density over a dtheta x dphi cell centered at (theta, phi): its density
 // at the center, or, narrower than half a cell (sub_cell: the table cannot resolve it), its
 // mean over 3 x 3 points of the cell (offsets -1/3, 0, 1/3 of a step).
-double cell_density(const mix::Gaussian& g, bool narrow, double theta, double phi, double dt, double dp) {
-  if (!narrow) return g.density(theta, phi);
+double cell_density(const mix::Gaussian& g, bool narrow, Map map, double theta, double phi, double dt, double dp) {
+  auto at = [&](double t, double p) {
+    if (map != Map::ThetaPhi) mix::to_map(map, t, p, t, p);
+    return g.density(t, p);
+  };
+  if (!narrow) return at(theta, phi);
   double sub = 0;
   for (int a = -1; a <= 1; ++a)
-    for (int b = -1; b <= 1; ++b) sub += g.density(theta + a * dt / 3, wrap_phi(phi + b * dp / 3));
+    for (int b = -1; b <= 1; ++b) sub += at(theta + a * dt / 3, wrap_phi(phi + b * dp / 3));
   return sub / 9;
 }
 
@@ -60,16 +65,22 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
   // its covariance floor, a quarter cell) is integrated over each cell (3 x 3 points);
   // a wider one is compared like the table, by its density at the cell centers.
   std::vector<const mix::Gaussian*> broad, narrow;
-  for (const auto& g : m.components) (sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp) ? narrow : broad).push_back(&g);
+  // On an equal-area map every component is compared at the cell centers, as a renderer's
+  // quadrature (and bsdfmix compare) sees it: the cells' sizes in the plane vary.
+  const bool averaged = s.map == Map::ThetaPhi;
+  for (const auto& g : m.components)
+    (averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp) ? narrow : broad).push_back(&g);
   const std::size_t np = s.phi.size();
   double err = 0;
-  for (std::size_t t = 0; t < s.theta.size(); ++t)
+  for (std::size_t t = 0; t < s.theta.size(); ++t) {
+    const double cell = area * mix::map_jacobian(s.map, s.theta[t]);  // in the mixture's plane
     for (std::size_t p = 0; p < np; ++p) {
       double density = 0;
-      for (const auto* g : broad) density += g->weight * g->density(s.theta[t], s.phi[p]);
-      for (const auto* g : narrow) density += g->weight * cell_density(*g, true, s.theta[t], s.phi[p], dt, dp);
-      err += std::abs(s.w[t * np + p] - total * density * area);
+      for (const auto* g : broad) density += g->weight * cell_density(*g, false, s.map, s.theta[t], s.phi[p], dt, dp);
+      for (const auto* g : narrow) density += g->weight * cell_density(*g, true, s.map, s.theta[t], s.phi[p], dt, dp);
+      err += std::abs(s.w[t * np + p] - total * density * cell);
     }
+  }
   return err / total;
 }
 
@@ -80,11 +91,12 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
   const bool colour = !rgb.empty();
   // A Gaussian's mass in a cell: its mean density there, by the header, times the area.
   auto mass = [&](const mix::Gaussian& g, bool narrow, double theta, double phi) {
-    return cell_density(g, narrow, theta, phi, dt, dp) * area;
+    return cell_density(g, narrow, s.map, theta, phi, dt, dp) * area * mix::map_jacobian(s.map, theta);
   };
   std::vector<bool> narrow, narrow_colour;
-  for (const auto& g : m.components) narrow.push_back(sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
-  for (const auto& g : m.colour) narrow_colour.push_back(sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
+  const bool averaged = s.map == Map::ThetaPhi;  // as l1_rel_error
+  for (const auto& g : m.components) narrow.push_back(averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
+  for (const auto& g : m.colour) narrow_colour.push_back(averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
   // Each component's mass in a cell (its density there, by the header, times the area),
   // its luminance amplitude scale * weight and, with colour, its rgb amplitudes.
   double lum = 0, lum_err = 0, abs_rgb = 0, rgb_err = 0, neg_err = 0;

@@ -13,6 +13,7 @@ namespace bsdfmix {
 struct WeightedSlice {
   std::vector<double> theta, phi;  // cell centers; phi a full period
   std::vector<double> w;           // row-major [theta][phi]
+  mix::Map map = mix::Map::ThetaPhi;  // the plane the mixtures compared with live in
   double total() const;
 };
 

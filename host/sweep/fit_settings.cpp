@@ -25,7 +25,7 @@ namespace {
 auto result_fields(const FitSettings& f) {
   return std::tie(f.k_min, f.k_max, f.seed, f.restarts, f.final_restarts, f.iterations, f.final_iterations,
                   f.tolerance, f.k_penalty, f.error_target, f.search_pool, f.search, f.refine,
-                  f.refine_evaluations, f.refine_kl, f.refine_rgb, f.rgb_copies);
+                  f.refine_evaluations, f.refine_kl, f.refine_rgb, f.rgb_copies, f.map);
 }
 
 }  // namespace

@@ -85,6 +85,7 @@ std::optional<RecordedSettings> read_record(const std::string& json) {
     f.refine_rgb = n["refine_rgb"].as<double>();
     f.rgb_copies.reset();
     if (!n["rgb_copies"].IsNull()) f.rgb_copies = n["rgb_copies"].as<double>();
+    f.map = n["map"] ? n["map"].as<std::string>() : "theta_phi";  // records before maps
     r.criterion = n["criterion"].as<std::string>();
     return r;
   } catch (const YAML::Exception&) {

@@ -124,7 +124,7 @@ std::vector<StandIn> fit_stand_ins(EmEngine& engine, const SliceGrid& grid, cons
     } else {  // no solve: the fitted weights, scaled to the table's in-domain integral
       double total = 0, mass = 0;
       for (std::size_t i = 0; i < n; ++i) total += set.values[problems[p].slice][i];
-      for (int j = 0; j < K; ++j) mass += g.weight[std::size_t(j)] * in_domain_mass(grid.domain, g.mean[2 * j], g.cov[3 * j]);
+      for (int j = 0; j < K; ++j) mass += g.weight[std::size_t(j)] * in_domain_mass(grid, g, j);
       si.scale = mass > 0 ? total / mass : total;
     }
     if (colour)

@@ -122,6 +122,7 @@ std::string fit_settings_json(const FitSettings& f) {
     << "\", \"refine\": \"" << f.refine << "\", \"refine_evaluations\": " << f.refine_evaluations
     << ", \"refine_kl\": " << num(f.refine_kl) << ", \"refine_rgb\": " << num(f.refine_rgb)
     << ", \"rgb_copies\": " << (f.rgb_copies ? num(*f.rgb_copies) : std::string("null"))
+    << ", \"map\": \"" << f.map << "\""
     << ", \"criterion\": \"" << kCriterion << "\"}";
   return s.str();
 }

@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace bsdfmix {
@@ -38,6 +39,82 @@ inline double wrap_phi(double phi) {
   if (r < 0) r += 2 * kPi;
   r -= kPi;
   return r >= kPi ? -kPi : r;
+}
+
+// The map a mixture lives in (docs/formats.md, "Maps"): the plane (x, y) of its Gaussians.
+//  - ThetaPhi: (theta, phi) itself; d(omega) = J(theta) dx dy, so the density per steradian
+//    grows like 1 / J at the pole (files written before maps existed);
+//  - Disk (hemisphere): Lambert's azimuthal equal-area map,
+//    (x, y) = 2 sin(theta / 2) (cos phi, sin phi): the pole at the origin, the horizon the
+//    circle of radius sqrt(2);
+//  - Cylinder (fiber sphere): Lambert's cylindrical equal-area map, (x, y) = (sin theta, phi):
+//    the fiber axis the lines x = +-1.
+// Disk and Cylinder are equal-area: d(omega) = dx dy, so a density per unit of (x, y) is a
+// density per steradian, bounded wherever the mixture is. In every map y is periodic with
+// period 2 pi (a component's density sums its y images); the disk spans |y| <= sqrt(2), so
+// there its images only keep sample() and pdf() exact for the rare very broad component.
+enum class Map { ThetaPhi, Disk, Cylinder };
+
+// The map a mixture file's `map` attribute names ("theta_phi", "disk", "cylinder"); a file
+// without the attribute is in ThetaPhi. Throws std::invalid_argument on any other name.
+inline Map map_from_name(const std::string& name) {
+  if (name == "theta_phi") return Map::ThetaPhi;
+  if (name == "disk") return Map::Disk;
+  if (name == "cylinder") return Map::Cylinder;
+  throw std::invalid_argument("bsdfmix::mix::map_from_name: unknown map '" + name + "'");
+}
+
+// The equal-area map of a domain: Disk for the hemisphere, Cylinder for the fiber sphere.
+inline Map equal_area_map(Domain d) { return d == Domain::Hemisphere ? Map::Disk : Map::Cylinder; }
+
+// The point (x, y) of direction (theta, phi) in map m.
+inline void to_map(Map m, double theta, double phi, double& x, double& y) {
+  if (m == Map::Disk) {
+    const double r = 2 * std::sin(0.5 * theta);
+    x = r * std::cos(phi);
+    y = r * std::sin(phi);
+  } else {
+    x = m == Map::Cylinder ? std::sin(theta) : theta;
+    y = phi;
+  }
+}
+
+// The direction of map point (x, y), phi wrapped into [-pi, pi); false when the point
+// lies outside the map's domain (Disk: beyond the horizon; Cylinder: |x| > 1). ThetaPhi
+// returns (x, y) as they are (the caller checks theta's range).
+inline bool from_map(Map m, double x, double y, double& theta, double& phi) {
+  if (m == Map::Disk) {
+    const double r2 = x * x + y * y;
+    if (!(r2 <= 2.0)) return false;
+    theta = 2 * std::asin(std::min(0.5 * std::sqrt(r2), 1.0));
+    phi = r2 > 0 ? wrap_phi(std::atan2(y, x)) : 0.0;
+    return true;
+  }
+  if (m == Map::Cylinder) {
+    if (!(std::abs(x) <= 1.0)) return false;
+    theta = std::asin(x);
+  } else {
+    theta = x;
+  }
+  phi = wrap_phi(y);
+  return true;
+}
+
+// d(x, y) / d(theta, phi) at theta: the factor from a density per unit of (x, y) to one per
+// unit of (theta, phi) (sin theta on the disk, cos theta on the cylinder, 1 for ThetaPhi).
+inline double map_jacobian(Map m, double theta) {
+  return m == Map::Disk ? std::sin(theta) : (m == Map::Cylinder ? std::cos(theta) : 1.0);
+}
+
+// The point (x, y) turned by `angle` about the pole (phi -> phi + angle).
+inline void rotate_point(Map m, double angle, double& x, double& y) {
+  if (m != Map::Disk) {
+    y = wrap_phi(y + angle);
+    return;
+  }
+  const double c = std::cos(angle), s = std::sin(angle), x0 = x;
+  x = c * x0 - s * y;
+  y = s * x0 + c * y;
 }
 
 // The two cells of a uniform axis around x and the weight toward the second, f in [0, 1]:
@@ -153,6 +230,23 @@ inline Gaussian copy_of(const Gaussian& g, int m, const double rgb[3]) {
   return c;
 }
 
+// g turned by `angle` about the pole of map m (mean and covariance; not prepared):
+// a shift of mu_p on ThetaPhi and Cylinder, a rotation of the plane on Disk.
+inline Gaussian rotated(Map m, const Gaussian& g, double angle) {
+  Gaussian r = g;
+  if (m != Map::Disk) {
+    r.mu_p = wrap_phi(g.mu_p + angle);
+    return r;
+  }
+  rotate_point(m, angle, r.mu_t, r.mu_p);
+  const double c = std::cos(angle), s = std::sin(angle);
+  // R S R^T with R = [c -s; s c]
+  r.s_tt = c * c * g.s_tt - 2 * c * s * g.s_tp + s * s * g.s_pp;
+  r.s_tp = c * s * (g.s_tt - g.s_pp) + (c * c - s * s) * g.s_tp;
+  r.s_pp = s * s * g.s_tt + 2 * c * s * g.s_tp + c * c * g.s_pp;
+  return r;
+}
+
 struct Sample {
   double theta = 0, phi = 0;  // radians; phi wrapped into [-pi, pi)
   double pdf_omega = 0;       // density per steradian of what was sampled
@@ -171,6 +265,7 @@ struct SliceMixture {
   double theta_o = 0, phi_o = 0;
   double scale = 0;  // the luminance stand-in's amplitude: scale * pdf_param is the integrand
   bool has_rgb = false;  // the components' rgb amplitudes are set (else the colour is grey: eval_f)
+  Map map = Map::ThetaPhi;  // the plane of the components (MixtureSet::prepare sets the file's)
   std::vector<Gaussian> components;
   // With colour copies: the Gaussians that carry the colour (copy_of each component's
   // kCopies copies, component-major, each with its own rgb); empty: the components' rgb.
@@ -201,10 +296,20 @@ struct SliceMixture {
     for (auto& g : components) g.weight /= acc;
   }
 
-  double pdf_param(double theta, double phi) const {
+  // The density per unit of the map's (x, y) (per steradian on an equal-area map).
+  double pdf_map(double x, double y) const {
     double p = 0;
-    for (const auto& g : components) p += g.weight * g.density(theta, phi);
+    for (const auto& g : components) p += g.weight * g.density(x, y);
     return p;
+  }
+
+  // The density per unit of (theta, phi) at a direction, whatever the map: pdf_map times
+  // map_jacobian (on ThetaPhi, pdf_map itself).
+  double pdf_param(double theta, double phi) const {
+    if (map == Map::ThetaPhi) return pdf_map(theta, phi);
+    double x, y;
+    to_map(map, theta, phi, x, y);
+    return pdf_map(x, y) * map_jacobian(map, theta);
   }
 
   // The stand-in over (theta, phi), i.e. the integrand f [cos(theta)] J: scale * pdf_param.
@@ -212,13 +317,23 @@ struct SliceMixture {
 
   // The same per channel: sum_k rgb[c] N_k with colour, else eval_param in every channel.
   void eval_rgb_param(double theta, double phi, double out[3]) const {
+    if (map == Map::ThetaPhi) return eval_rgb_map(theta, phi, out);
+    double x, y;
+    to_map(map, theta, phi, x, y);
+    eval_rgb_map(x, y, out);
+    const double j = map_jacobian(map, theta);
+    for (int c = 0; c < 3; ++c) out[c] *= j;
+  }
+
+  // eval_rgb_param per unit of the map's (x, y).
+  void eval_rgb_map(double x, double y, double out[3]) const {
     if (!has_rgb) {
-      out[0] = out[1] = out[2] = eval_param(theta, phi);
+      out[0] = out[1] = out[2] = scale * pdf_map(x, y);
       return;
     }
     out[0] = out[1] = out[2] = 0;
     for (const auto& g : colour.empty() ? components : colour) {
-      const double d = g.density(theta, phi);
+      const double d = g.density(x, y);
       for (int c = 0; c < 3; ++c) out[c] += g.rgb[c] * d;
     }
   }
@@ -232,17 +347,29 @@ struct SliceMixture {
   // Density per steradian of what sample() returns, at (theta, phi) of the domain.
   double pdf_omega(Domain d, double theta, double phi) const {
     if (theta < theta_lo(d) || theta > theta_hi(d)) return 0;
+    if (map != Map::ThetaPhi) {
+      double x, y;
+      to_map(map, theta, phi, x, y);
+      return pdf_map(x, y);
+    }
     const double j = jacobian(d, theta);
     return j > 0 ? pdf_param(theta, wrap_phi(phi)) / j : 0.0;
   }
 
   // A sample of this mixture alone: u1 picks the component, (u2, u3) the point. Invalid
-  // when theta leaves the domain.
+  // when it leaves the domain.
   Sample sample(Domain d, double u1, double u2, double u3) const {
     const Gaussian& g = components[pick(u1)];
     double z0, z1;
     normal_pair(u2, u3, z0, z1);
     Sample out;
+    if (map != Map::ThetaPhi) {
+      const double x = g.mu_t + g.l_tt * z0, y = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
+      out.valid = from_map(map, x, y, out.theta, out.phi);
+      out.pdf_omega = out.valid ? pdf_map(x, y) : 0.0;
+      if (!(out.pdf_omega > 0)) out.valid = false;
+      return out;
+    }
     out.theta = g.mu_t + g.l_tt * z0;
     out.phi = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
     out.valid = out.theta >= theta_lo(d) && out.theta <= theta_hi(d);
@@ -305,6 +432,14 @@ struct ProductOptions {
 // it the result keeps. Throws std::invalid_argument when the product is zero.
 inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceMixture& b,
                             const ProductOptions& o = {}, double* mass = nullptr, double* kept = nullptr) {
+  if (a.map != b.map) throw std::invalid_argument("bsdfmix::mix::product: the two mixtures live in different maps");
+  if (a.map == Map::Disk && rotate_a != 0) {  // a turn of the disk is not a shift of y
+    SliceMixture turned = a;
+    for (Gaussian& g : turned.components) g = rotated(a.map, g, rotate_a);
+    turned.colour.clear();
+    turned.prepare();
+    return product(turned, 0.0, b, o, mass, kept);
+  }
   struct Term {
     double w;
     Gaussian g;
@@ -356,6 +491,7 @@ inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceM
     acc += t.w;
   }
   out.scale = total;
+  out.map = a.map;
   if (mass) *mass = total;
   if (kept) *kept = acc / total;
   out.prepare();
@@ -474,6 +610,7 @@ inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, cons
   out.theta_o = (1 - t) * a.theta_o + t * b.theta_o;
   out.phi_o = a.phi_o + t * wrap_phi(b.phi_o - a.phi_o);
   out.scale = (1 - t) * a.scale + t * b.scale;
+  out.map = a.map;
   out.has_rgb = a.has_rgb && b.has_rgb;
   const bool copies = out.has_rgb && (!a.colour.empty() || !b.colour.empty());
   // A component's kCopies colour Gaussians: its copies, or (a slice without copies) copy_of
@@ -560,6 +697,7 @@ inline void uniforms(std::uint64_t seed, std::uint32_t stream, std::uint64_t ind
 class MixtureSet {
  public:
   Domain domain = Domain::Fiber;
+  Map map = Map::ThetaPhi;     // the plane of every slice's components (the file's `map`)
   bool azimuthal = true;       // f depends on phi_i - phi_o only
   std::vector<double> grid_theta_o, grid_phi_o;  // the table's omega_o axes (cell centers)
   std::vector<SliceMixture> slices;              // fitted slices
@@ -569,7 +707,10 @@ class MixtureSet {
   // Prepares components, the grid lookup and (Displace) the transport plans between
   // neighbouring fitted slices. Call once after filling the fields.
   void prepare() {
-    for (auto& s : slices) s.prepare();
+    for (auto& s : slices) {
+      s.map = map;
+      s.prepare();
+    }
     const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
     slice_of.assign(grid_theta_o.size() * np, -1);
     for (std::size_t s = 0; s < slices.size(); ++s) {
@@ -716,6 +857,7 @@ class MixtureSet {
   }
 
   double pdf_omega(double theta_o, double phi_o, double theta, double phi) const {
+    if (map != Map::ThetaPhi) return map_sum(theta_o, phi_o, theta, phi, false);
     const double j = jacobian(domain, theta);
     return j > 0 ? pdf_param(theta_o, phi_o, theta, phi) / j : 0.0;
   }
@@ -724,6 +866,10 @@ class MixtureSet {
   // each slice with its own scale, blended.
   double eval_f(double theta_o, double phi_o, double theta, double phi) const {
     if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
+    if (map != Map::ThetaPhi) {
+      const double f = map_sum(theta_o, phi_o, theta, phi, true);
+      return domain == Domain::Hemisphere ? f / std::cos(theta) : f;
+    }
     const double j = jacobian(domain, theta);
     if (!(j > 0)) return 0;
     double f = 0;
@@ -746,6 +892,7 @@ class MixtureSet {
   void eval_rgb(double theta_o, double phi_o, double theta, double phi, double rgb[3]) const {
     rgb[0] = rgb[1] = rgb[2] = 0;
     if (theta < theta_lo(domain) || theta > theta_hi(domain)) return;
+    if (map != Map::ThetaPhi) return eval_rgb_map(theta_o, phi_o, theta, phi, rgb);
     const double j = jacobian(domain, theta);
     if (!(j > 0)) return;
     if (interpolation == Interpolation::Displace) {
@@ -785,6 +932,14 @@ class MixtureSet {
     double z0, z1;
     normal_pair(u2, u3, z0, z1);
     Sample out;
+    if (map != Map::ThetaPhi) {
+      const double x = g.mu_t + g.l_tt * z0, y = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
+      out.valid = from_map(map, x, y, out.theta, out.phi);
+      if (out.valid) out.phi = wrap_phi(out.phi + b.rotate);
+      out.pdf_omega = out.valid ? pdf_omega(theta_o, phi_o, out.theta, out.phi) : 0.0;
+      if (!(out.pdf_omega > 0)) out.valid = false;
+      return out;
+    }
     out.theta = g.mu_t + g.l_tt * z0;
     out.phi = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1 + b.rotate);
     out.valid = out.theta >= theta_lo(domain) && out.theta <= theta_hi(domain);
@@ -812,6 +967,7 @@ class MixtureSet {
   MixtureSet serving(double theta_o, double phi_o) const {
     MixtureSet one;
     one.domain = domain;
+    one.map = map;
     one.azimuthal = azimuthal;
     one.grid_theta_o = {theta_o};
     one.grid_phi_o = {azimuthal ? 0.0 : phi_o};
@@ -842,6 +998,46 @@ class MixtureSet {
  private:
   std::vector<Transport> plan_up_;  // per slice: the plan to the next fitted slice above
 
+  // On an equal-area map: the density per steradian (stand_in false) or the stand-in's
+  // f [cos] per steradian (true) of the slices serving omega_o at (theta, phi).
+  double map_sum(double theta_o, double phi_o, double theta, double phi, bool stand_in) const {
+    if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
+    double x, y;
+    if (interpolation == Interpolation::Displace) {
+      const SliceMixture s = at(theta_o, phi_o);
+      to_map(map, theta, phi, x, y);
+      return (stand_in ? s.scale : 1.0) * s.pdf_map(x, y);
+    }
+    const Blend b = blend(theta_o, phi_o);
+    to_map(map, theta, wrap_phi(phi - b.rotate), x, y);
+    double p = 0;
+    for (int k = 0; k < b.count; ++k) {
+      const SliceMixture& s = slices[std::size_t(b.slice[k])];
+      p += b.weight[k] * (stand_in ? s.scale : 1.0) * s.pdf_map(x, y);
+    }
+    return p;
+  }
+
+  // eval_rgb on an equal-area map.
+  void eval_rgb_map(double theta_o, double phi_o, double theta, double phi, double rgb[3]) const {
+    const double c = domain == Domain::Hemisphere ? std::cos(theta) : 1.0;
+    double x, y;
+    if (interpolation == Interpolation::Displace) {
+      to_map(map, theta, phi, x, y);
+      at(theta_o, phi_o).eval_rgb_map(x, y, rgb);
+      for (int q = 0; q < 3; ++q) rgb[q] /= c;
+      return;
+    }
+    const Blend b = blend(theta_o, phi_o);
+    to_map(map, theta, wrap_phi(phi - b.rotate), x, y);
+    for (int k = 0; k < b.count; ++k) {
+      double v[3];
+      slices[std::size_t(b.slice[k])].eval_rgb_map(x, y, v);
+      for (int q = 0; q < 3; ++q) rgb[q] += b.weight[k] * v[q];
+    }
+    for (int q = 0; q < 3; ++q) rgb[q] /= c;
+  }
+
   // The mixture of n pieces with weights w, means rotated by `rotate`: every component of
   // every piece, weighted by its piece's weight; scale the weighted scale; with rgb when
   // every piece has it, colour copies when one of them has them (the others' components
@@ -851,6 +1047,7 @@ class MixtureSet {
     SliceMixture out;
     out.theta_o = theta_o;
     out.phi_o = phi_o;
+    out.map = piece[0]->map;
     out.has_rgb = true;
     bool copies = false;
     for (int k = 0; k < n; ++k) copies = copies || !piece[k]->colour.empty();
@@ -861,14 +1058,12 @@ class MixtureSet {
       for (Gaussian g : s.components) {
         g.weight *= w[k];
         for (double& c : g.rgb) c *= w[k];
-        g.mu_p = wrap_phi(g.mu_p + rotate);
-        out.components.push_back(g);
+        out.components.push_back(rotated(out.map, g, rotate));
       }
       if (copies)
         for (Gaussian g : s.colour.empty() ? s.components : s.colour) {
           for (double& c : g.rgb) c *= w[k];
-          g.mu_p = wrap_phi(g.mu_p + rotate);
-          out.colour.push_back(g);
+          out.colour.push_back(rotated(out.map, g, rotate));
         }
     }
     if (!out.has_rgb) out.colour.clear();
