@@ -10,7 +10,10 @@ rows (the most normal, a middle one, the most grazing) and 3 midpoints between g
 
     /usr/bin/python3 bench/renderer_chi2.py --bsdfmix build/bsdfmix --work out/renderer_chi2
         [--materials paper_white,...] [--presets silk,...] [--rgl-grid 45,90,180] [--fiber-grid 90,90,180]
-        [--rows 10] [--k-max 16] [--csv bench/results/renderer_chi2.csv]
+        [--rows 10] [--k-max 16] [--map equal_area] [--csv bench/results/renderer_chi2.csv]
+
+--map is the fits' `fit.map` (docs/fitting.md, "The map"): equal_area (the default here) or theta_phi.
+bench/results/renderer_chi2.csv holds the equal-area fits, renderer_chi2_theta_phi.csv the (theta, phi) ones.
 
 Writes the CSV (table,theta_o_deg,view,p_value,dof,chi2,hist_sum,pdf_sum,passed,worst_row_theta_deg,
 worst_ratio,worst_row,p_value_no_pole_rows,p_value_no_pole_rows_ires16,reason) and prints "N of M views
@@ -63,14 +66,14 @@ def fit_rows(domain, n_theta_o, rows):
 def make_mixtures(a, name, make_table, domain, n_theta_o):
     """(mixture, displaced copy) of one table in --work, made when missing; seconds spent."""
     t0 = time.time()
-    base = os.path.join(a.work, name)
+    base = os.path.join(a.work, name + ("" if a.map == "equal_area" else "_" + a.map))
     table, mixture, displaced = base + "_table.h5", base + "_mixture.h5", base + "_displace.h5"
     if not os.path.exists(table):
         make_table(table)
     if not os.path.exists(mixture):
         with open(base + "_fit.yaml", "w") as f:
             f.write(f"table: {table}\nfit:\n  output: {mixture}\n  report: {base}_fit.csv\n"
-                    f"  search_report: {base}_search.csv\n  k_max: {a.k_max}\n  seed: 1\n"
+                    f"  search_report: {base}_search.csv\n  k_max: {a.k_max}\n  seed: 1\n  map: {a.map}\n"
                     f"  theta_o: {fit_rows(domain, n_theta_o, a.rows)}\n")
         run(a.bsdfmix, "fit", "-q", base + "_fit.yaml")
     if not os.path.exists(displaced):
@@ -93,6 +96,7 @@ def main():
     ap.add_argument("--rows", type=int, default=10)
     ap.add_argument("--k-max", type=int, default=16)
     ap.add_argument("--samples", type=int, default=1_000_000)
+    ap.add_argument("--map", default="equal_area", choices=["equal_area", "theta_phi"])
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "renderer_chi2.csv"))
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)

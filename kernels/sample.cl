@@ -78,6 +78,12 @@
 #define Q_BLOCKS 15
 #define Q_STEP 18
 #define Q_CUM 19
+// The Lambertian base (MAP 1 only): [24..27] each slice's base share (its first cdf value),
+// [28] the base's weight in the pdf (sum of blend weight x base), [29] its stand-in amplitude
+// (sum of blend weight x scale x base, over f_unit).
+#define Q_BASE 24
+#define Q_BASE_PDF 28
+#define Q_BASE_F 29
 
 // ---- random numbers (philox4x32_10: kernels/common.cl) ------------------------------------
 
@@ -169,7 +175,12 @@ float2 mixture_sums(__global const float* q, __global const VF* pd, const float 
     ap += t;
     af = fma(t, r[6], af);
   }
-  return (float2)(CAT(sum_lanes, PDF_LANES)(ap), CAT(sum_lanes, PDF_LANES)(af));
+  float2 out = (float2)(CAT(sum_lanes, PDF_LANES)(ap), CAT(sum_lanes, PDF_LANES)(af));
+#if MAP == 1
+  const float dome = fmax(1.0f - 0.5f * fma(theta, theta, phi * phi), 0.0f) * (1.0f / S_PI);  // cos / pi at (x, y)
+  out += (float2)(q[Q_BASE_PDF], q[Q_BASE_F]) * dome;
+#endif
+  return out;
 }
 
 bool theta_inside(const float theta) { return theta >= THETA_LO && theta <= THETA_HI; }
@@ -227,6 +238,11 @@ float2 mixture_draw(__global const float* q, __global const float16* comps, cons
   const int k = (count > 1 && u.x >= q[Q_CUM]) + (count > 2 && u.x >= q[Q_CUM + 1]) +
                 (count > 3 && u.x >= q[Q_CUM + 2]);
   const int first = (int)q[Q_FIRST + k], n = (int)q[Q_N + k];
+#if MAP == 1
+  if (u.y < q[Q_BASE + k] || n == 0) {  // the Lambertian base: cosine-weighted (Malley)
+    return (float2)(asin(fmin(sqrt(u.z), 1.0f)), wrap_phi(fma(2.0f * S_PI, u.w, -S_PI) + q[Q_ROTATE]));
+  }
+#endif
   // upper_bound of u.y in the slice's cumulative weights, branch-free: lo = how many are <= u.y
   __global const float* cdf = (__global const float*)(comps + first) + COMP_CDF;
   int lo = 0;

@@ -163,6 +163,10 @@ void bind_slice_mixture(py::module_& m) {
            "theta_phi, disk or cylinder (docs/formats.md, \"Maps\")")
       .def_property_readonly("map", [](const mix::SliceMixture& s) { return map_name(s.map); },
                              "the plane of the components: theta_phi, disk or cylinder")
+      .def_readonly("base", &mix::SliceMixture::base,
+                    "the Lambertian base's share of the mixture (disk only; 0: none; docs/formats.md, \"The base\")")
+      .def_property_readonly("base_rgb", [](const mix::SliceMixture& s) { return Array(3, s.base_rgb); },
+                             "the base's R, G, B amplitudes")
       .def("pdf_map", py::vectorize(&mix::SliceMixture::pdf_map), py::arg("x"), py::arg("y"),
            "density per unit of the map's (x, y) (per steradian on disk and cylinder)")
       .def_readonly("theta_o", &mix::SliceMixture::theta_o)

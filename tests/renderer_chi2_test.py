@@ -5,13 +5,16 @@ Run by ctest (renderer_chi2_test) on the fixture examples_data (tests/examples_d
     /usr/bin/python3 -m pytest -q tests/renderer_chi2_test.py
 - the port itself (scripts/mitsuba_chi2.py) on exact analytic samplers: correct ones pass, wrong
   pdfs are rejected (these need no build: add `-k analytic`);
-- every mixture file of the fixture, and a small RGL fit made here with the CLI (import at
-  8 x 30 x 60, 3 theta_o rows, K <= 8): Mitsuba's test at 1,000,000 samples for 3 fitted rows and
-  3 rows between (fewer when the file has fewer), all views under one Sidak correction;
+- files fitted here with `fit.map: equal_area` (docs/fitting.md, "The map"): the silk preset at
+  6 x 32 x 64 (rows 1 and 4, K <= 6), the same packed to interpolate by displacement, and
+  paper_white imported at 8 x 30 x 60 (rows 0, 3, 7, K <= 8): Mitsuba's test at 1,000,000
+  samples for 3 fitted rows and 3 rows between (fewer when the file has fewer), all views under
+  one Sidak correction;
 - the pole density: pdf_omega at 1e-1 .. 1e-6 rad from each pole (hemisphere: the normal and the
   horizon; fiber: both ends of the axis), at 5 phi. The values at 1e-5 and 1e-6 rad must be finite
   and differ by under 1e-3 of the larger of the value and the view's peak (its largest sampled pdf),
-  so that a finite limit passes, zero included (a cosine at the horizon), and 1/theta fails.
+  so that a finite limit passes, zero included (a cosine at the horizon), and 1/theta fails. The
+  fixture's (theta, phi) file fails it: that is what the map is for.
 """
 import math
 import os
@@ -29,9 +32,7 @@ import mixture_views  # noqa: E402
 
 DATA = pathlib.Path(os.environ.get("BSDFMIX_EXAMPLES_DATA", ROOT / "build" / "tests" / "examples"))
 CLI = os.environ.get("BSDFMIX_CLI", str(ROOT / "build" / "bsdfmix"))
-FIXTURE_FILES = ["mixture.h5", "mixture_ragged.h5", "mixture_displace.h5"]
-RGL_FILE = "rgl_paper_small.h5"
-FILES = FIXTURE_FILES + [RGL_FILE]
+FILES = ["silk_equal_area.h5", "silk_equal_area_displace.h5", "paper_equal_area.h5"]
 SAMPLES = 1_000_000
 
 
@@ -78,30 +79,60 @@ def cli(*args):
 
 
 def fit_rgl(work):
-    """A small fit of data/rgl/paper_white_rgb.bsdf: 8 theta_o x 30 theta_i x 60 phi_i, rows 0, 3, 7, K <= 8."""
-    table, out = work / "rgl_paper_table.h5", work / RGL_FILE
+    """paper_white_rgb.bsdf: 8 theta_o x 30 theta_i x 60 phi_i, rows 0, 3, 7, K <= 8, on the disk."""
+    table, out = work / "rgl_paper_table.h5", work / "paper_equal_area.h5"
     cli("import", "rgl", "-q", ROOT / "data" / "rgl" / "paper_white_rgb.bsdf", "--theta-o", 8, "--theta-i", 30,
         "--phi-i", 60, "-o", table)
     rows = [(i + 0.5) * math.pi / 16 for i in (0, 3, 7)]
     (work / "rgl_fit.yaml").write_text(
         f"table: {table}\nfit:\n  output: {out}\n  report: {work / 'rgl_fit.csv'}\n"
-        f"  search_report: {work / 'rgl_search.csv'}\n  k_max: 8\n  seed: 1\n  theta_o: {rows}\n")
+        f"  search_report: {work / 'rgl_search.csv'}\n  k_max: 8\n  seed: 1\n  map: equal_area\n  theta_o: {rows}\n")
     cli("fit", "-q", work / "rgl_fit.yaml")
     return out
 
 
+def fit_silk(work):
+    """The silk preset at 6 x 32 x 64, rows 1 and 4, K <= 6, on the cylinder; and packed to displace."""
+    out, moved = work / "silk_equal_area.h5", work / "silk_equal_area_displace.h5"
+    (work / "silk_fit.yaml").write_text(
+        f"table: {work / 'silk_table.h5'}\ngenerate:\n  preset: silk\n  theta_o: 6\n  theta_i: 32\n  phi_i: 64\n"
+        f"fit:\n  output: {out}\n  report: {work / 'silk_fit.csv'}\n  search_report: {work / 'silk_search.csv'}\n"
+        f"  k_max: 6\n  restarts: 1\n  final_restarts: 2\n  map: equal_area\n"
+        f"  theta_o: [-0.7853981633974483, 0.7853981633974483]\n")
+    cli("fit", "-q", work / "silk_fit.yaml")
+    cli("pack", "-q", out, "--interpolation", "displace", "-o", moved)
+    return out, moved
+
+
 @pytest.fixture(scope="module")
-def suite(tmp_path_factory):
-    """{file: (MixtureSet, views)} and the number of views tested together."""
+def bsdfmix():
     import bsdfmix_import
-    bsdfmix = bsdfmix_import.load()
-    paths = {f: DATA / f for f in FIXTURE_FILES}
-    paths[RGL_FILE] = fit_rgl(tmp_path_factory.mktemp("rgl"))
+    return bsdfmix_import.load()
+
+
+@pytest.fixture(scope="module")
+def suite(tmp_path_factory, bsdfmix):
+    """{file: (MixtureSet, views)} and the number of views tested together."""
+    work = tmp_path_factory.mktemp("maps")
+    silk, moved = fit_silk(work)
+    paths = {"silk_equal_area.h5": silk, "silk_equal_area_displace.h5": moved, "paper_equal_area.h5": fit_rgl(work)}
     out = {}
     for f, path in paths.items():
         m = bsdfmix.load_mixture(str(path))
+        assert m.map in ("disk", "cylinder"), f"{f}: map {m.map}"
         out[f] = (m, mixture_views.views(m))
     return out, sum(len(v) for _, v in out.values())
+
+
+def test_theta_phi_file_diverges_at_the_pole(bsdfmix):
+    """The fixture's file in (theta, phi): its pdf_omega grows like 1/theta at the fiber axis."""
+    m = bsdfmix.load_mixture(str(DATA / "mixture.h5"))
+    assert m.map == "theta_phi"
+    theta_o, phi_o, _ = mixture_views.views(m)[0]
+    _, _, pdf, valid = m.sample_counter(theta_o, phi_o, 100_000, seed=2)
+    peak = float(np.max(np.where(valid, pdf, 0.0)))
+    probe = mixture_views.pole_probe(m, theta_o, phi_o)
+    assert not all(mixture_views.converged(v, scale=peak).all() for v in probe.values())
 
 
 def view_line(f, theta_o, kind, r):

@@ -51,6 +51,8 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
   loglik.push_back(loglik_);
   l1_rel.push_back(l1_rel_);
   k.push_back(kk);
+  base.push_back(0.0);
+  base_rgb.insert(base_rgb.end(), 3, 0.0);
   for (int j = 0; j < kmax; ++j) {
     const bool used = j < kk;
     weights.push_back(used ? float(w[j]) : 0.f);
@@ -61,6 +63,16 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
     if (copies || has_copies())  // (the first slice with copies starts the array)
       for (std::size_t d = 0; d < kCopyValues; ++d) rgb_copies.push_back(used && copies ? (*copies)[kCopyValues * j + d] : 0.0);
   }
+}
+
+void MixtureFile::set_base(double share, const double* rgb) {
+  if (base.empty()) throw Error("MixtureFile::set_base: no slice yet");
+  base.back() = share;
+  for (int c = 0; c < 3; ++c) base_rgb[base_rgb.size() - 3 + std::size_t(c)] = rgb ? rgb[c] : 0.0;
+}
+
+bool MixtureFile::has_base() const {
+  return std::any_of(base.begin(), base.end(), [](double b) { return b > 0; });
 }
 
 void MixtureFile::slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean,
@@ -97,6 +109,7 @@ void MixtureFile::add_slice_from(const MixtureFile& from, std::size_t s) {
   const std::vector<double> rgb = from.slice_rgb(s), copies = from.slice_copies(s);
   add_slice(from.theta_o[s], from.phi_o[s], from.scale[s], from.loglik[s], from.l1_rel[s], w, mean, cov,
             from.has_rgb() ? &rgb : nullptr, &copies);
+  set_base(from.base[s], &from.base_rgb[3 * s]);
 }
 
 MixtureFile MixtureFile::header_only() const {
@@ -207,6 +220,10 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
   h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
   h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
+  if (m.has_base()) {
+    h5::write_doubles(id, "base", {S}, m.base.data(), path);
+    if (m.has_rgb()) h5::write_doubles(id, "base_rgb", {S, 3}, m.base_rgb.data(), path);
+  }
   h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
   h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
   h5::write_string_attr(id, "domain", domain_name(m.domain), path);
@@ -330,6 +347,27 @@ void read_copies(hid_t id, const std::string& where, MixtureFile& m) {
                 m.rgb_copies.begin() + long(s * K * kCopyValues));
 }
 
+// The optional base (docs/formats.md, "The base"): zeros when absent.
+void read_base(hid_t id, const std::string& where, MixtureFile& m) {
+  const std::size_t S = m.theta_o.size();
+  m.base.assign(S, 0.0);
+  m.base_rgb.assign(3 * S, 0.0);
+  if (!h5::exists(id, "base")) return;
+  if (m.map != Map::Disk) throw InputError(where + "/base: a base needs map 'disk', the file's is " + map_name(m.map));
+  m.base = h5::read_doubles(id, "base", where);
+  if (m.base.size() != S)
+    throw InputError(where + "/base: length " + std::to_string(m.base.size()) + ", expected " + std::to_string(S));
+  for (std::size_t s = 0; s < S; ++s)
+    if (!(m.base[s] >= 0 && m.base[s] <= 1))
+      throw InputError(where + "/base: slice " + std::to_string(s) + " holds " + std::to_string(m.base[s]) +
+                       ", expected a share in [0, 1]");
+  if (!h5::exists(id, "base_rgb")) return;
+  m.base_rgb = h5::read_doubles(id, "base_rgb", where);
+  if (m.base_rgb.size() != 3 * S)
+    throw InputError(where + "/base_rgb: " + std::to_string(m.base_rgb.size()) + " values, expected " +
+                     std::to_string(3 * S) + " ([S, 3])");
+}
+
 // The domain, the format version and the map (a file without `map` is in (theta, phi)).
 void read_plane(hid_t id, const std::string& where, MixtureFile& m) {
   m.domain = parse_domain(h5::read_string_attr(id, "domain", where), where + " attribute 'domain'");
@@ -371,6 +409,7 @@ MixtureFile read_mixture_file(const std::string& path) {
       throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
                        std::to_string(S) + " (the length of theta_o)");
   if (m.k.size() != S) throw InputError(where + "/k: length " + std::to_string(m.k.size()) + ", expected " + std::to_string(S));
+  read_base(id, where, m);
   if (h5::exists(id, "offset")) {
     read_ragged(id, where, m);
   } else {
@@ -437,7 +476,8 @@ MixtureFile read_mixture_file(const std::string& path) {
             throw InputError(at + " component " + std::to_string(j) + ": rgb_copies is not a finite non-negative number");
         }
     }
-    if (std::abs(wsum - 1.0) > 1e-3) throw InputError(at + ": weights sum to " + std::to_string(wsum) + ", expected 1");
+    if (std::abs(wsum + m.base[s] - 1.0) > 1e-3)
+      throw InputError(at + ": weights sum to " + std::to_string(wsum) + (m.base[s] > 0 ? " beside a base of " + std::to_string(m.base[s]) : std::string()) + ", expected 1");
   }
   return m;
 }
@@ -453,6 +493,9 @@ mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
   sm.theta_o = m.theta_o[s];
   sm.phi_o = m.phi_o[s];
   sm.scale = m.scale[s];
+  sm.map = m.map;
+  sm.base = m.base.empty() ? 0.0 : m.base[s];
+  for (int c = 0; sm.base > 0 && c < 3; ++c) sm.base_rgb[c] = m.base_rgb[3 * s + std::size_t(c)];
   const std::vector<double> copies = m.slice_copies(s);
   if (!copies.empty()) sm.set_copies(copies);
   return sm;

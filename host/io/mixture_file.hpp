@@ -62,6 +62,9 @@ struct MixtureFile {
   // [S, kmax, 4, 3]: the colour copies' amplitudes (the header's copy_of; docs/formats.md,
   // "Colour copies"), all zero on a slice without them; empty: no slice has them.
   std::vector<double> rgb_copies;
+  // [S] and [S, 3]: the Lambertian base's share of each slice's mixture and its colour
+  // amplitudes (docs/formats.md, "The base"; disk files only); zeros: no base.
+  std::vector<double> base, base_rgb;
 
   std::size_t slices() const { return theta_o.size(); }
   bool has_rgb() const { return !rgb_scale.empty(); }
@@ -72,6 +75,10 @@ struct MixtureFile {
   void add_slice(double theta_o_, double phi_o_, double scale_, double loglik_, double l1_rel_,
                  const std::vector<double>& w, const std::vector<double>& mean, const std::vector<double>& cov,
                  const std::vector<double>* rgb = nullptr, const std::vector<double>* copies = nullptr);
+  // Gives the last slice added its base: its share of the mixture (weights and share sum
+  // to 1) and its colour amplitudes (rgb may be null).
+  void set_base(double share, const double* rgb);
+  bool has_base() const;
   // The k used components of slice s as parameter arrays (K, 2K, 3K).
   void slice_params(std::size_t s, std::vector<double>& w, std::vector<double>& mean, std::vector<double>& cov) const;
   // The k used components' rgb_scale of slice s (3K, [component][channel]); empty without colour.

@@ -61,6 +61,9 @@ QueryMixture make_query(const mix::MixtureSet& set, double theta_o, double phi_o
     qm.q[std::size_t(10 + k)] = float(s.components.size());
     cum += b.weight[k];
     qm.q[std::size_t(19 + k)] = float(cum);
+    qm.q[std::size_t(24 + k)] = float(s.base);  // kernels/sample.cl Q_BASE
+    qm.q[28] += float(b.weight[k] * s.base);
+    qm.q[29] += float(b.weight[k] * s.scale * s.base / f_unit);
     max_n = std::max(max_n, s.components.size());
     for (std::size_t j = 0; j < s.components.size(); ++j) {
       const mix::Gaussian& g = s.components[j];

@@ -17,8 +17,8 @@ namespace {
 
 constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
 // 2: the report and search rows as fields, not CSV text; 3: rgb_scale and the rows' RGB errors;
-// 4: rgb_copies
-constexpr std::uint32_t kVersion = 4;
+// 4: rgb_copies; 5: the map, the base and its colour
+constexpr std::uint32_t kVersion = 5;
 
 // Calls visit(field) for every field of a row, as row_fields.hpp lists them.
 struct ReportFields {
@@ -156,6 +156,7 @@ void part_fields(Part& p, Io& io) {
   auto& m = p.mixture;
   io.field(p.slice_index);
   io.field(m.domain);
+  io.field(m.map);
   io.field(m.azimuthal);
   io.field(m.table_source);
   io.field(m.fit_settings);
@@ -165,6 +166,8 @@ void part_fields(Part& p, Io& io) {
   for (auto* v : {&m.weights, &m.means, &m.covariances}) io.field(*v);
   io.field(m.rgb_scale);
   io.field(m.rgb_copies);
+  io.field(m.base);
+  io.field(m.base_rgb);
   io.rows(p.report, ReportFields{});
   io.rows(p.search, SearchFields{});
   io.field(p.slices_hash);

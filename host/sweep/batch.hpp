@@ -12,6 +12,7 @@
 
 #include "sweep/fit_settings.hpp"
 #include "fit/em.hpp"
+#include "sweep/base_lobe.hpp"
 #include "sweep/fit_error.hpp"
 #include "sweep/fit_slices.hpp"
 #include "sweep/slice_plan.hpp"
@@ -41,6 +42,11 @@ struct SliceWork {
   WeightedSlice full, pooled;  // pooled: the search's coarser slice (search_pool)
   std::vector<double> rgb;     // with colour: the R, G, B integrand weights (SliceSource::rgb_weights)
   double total = 0;
+  // On the disk: the Lambertian base taken off `full` and `rgb` (sweep/base_lobe.hpp), and
+  // the slice as the table has it (`table`, `table_rgb`), which the stand-in is judged on.
+  SliceBase base;
+  WeightedSlice table;
+  std::vector<double> table_rgb;
 };
 
 struct Batch {

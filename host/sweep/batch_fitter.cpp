@@ -217,6 +217,21 @@ BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {
   return part;
 }
 
+namespace {
+
+// The Lambertian base off the slice's weights: the Gaussians are fitted to the rest, judged
+// against the whole slice (WeightedSlice::reference_total, extra_error).
+void take_base_off(SliceWork& w, const TableMeta& meta) {
+  w.table = w.full;
+  w.table_rgb = w.rgb;
+  w.base = take_base(meta.theta_i, meta.phi_i.size(), axis_step(meta.theta_i), axis_step(meta.phi_i), w.full.w,
+                     meta.rgb ? &w.rgb : nullptr);
+  w.full.reference_total = w.table.total();
+  w.full.extra_error = w.base.excess;
+}
+
+}  // namespace
+
 void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& part) const {
   const TableMeta& meta = source_.meta();
   Hash64 content;
@@ -232,6 +247,7 @@ void BatchFitter::load(Batch& b, const std::vector<SliceRef>& refs, BatchPart& p
       w.rgb = source_.rgb_weights(ref);
       hash_weights(content, w.rgb);
     }
+    if (w.full.map == Map::Disk) take_base_off(w, meta);
     w.total = w.full.total();
     w.pooled = pool_slice(w.full, std::size_t(fit_.search_pool));
     b.work.push_back(std::move(w));
@@ -273,12 +289,17 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
   const std::vector<StandIn> stand_ins = fit_stand_ins(b.engine, b.full_set.grid, stand, fit_.rgb_copies ? *fit_.rgb_copies : -1.0);
   for (std::size_t s = 0; s < b.size(); ++s) {
     Fitted& f = kept[s];
-    f.gmm.weight = stand_ins[s].weight;
     const SliceWork& w = b.work[s];
+    // With a base: its amplitude beside the Gaussians', the weights shared out over both.
+    const double scale = stand_ins[s].scale + w.base.lum;
+    f.gmm.weight = stand_ins[s].weight;
+    std::vector<double> weights = f.gmm.weight;
+    for (double& x : weights) x *= scale > 0 ? stand_ins[s].scale / scale : 0.0;
     const double theta_o = meta.theta_o[w.ref.t_o], phi_o = meta.phi_o[w.ref.p_o];
     part.slice_index.push_back(w.ref.index);
-    part.mixture.add_slice(theta_o, phi_o, stand_ins[s].scale, f.loglik, 0.0, f.gmm.weight, f.gmm.mean, f.gmm.cov,
+    part.mixture.add_slice(theta_o, phi_o, scale, f.loglik, 0.0, weights, f.gmm.mean, f.gmm.cov,
                            meta.rgb ? &stand_ins[s].rgb : nullptr, &stand_ins[s].copies);
+    if (w.base.lum > 0) part.mixture.set_base(w.base.lum / scale, w.base.rgb);
   }
   // Their errors as the header evaluates the slices stored (float32 parameters), and the
   // log-likelihood of the weights stored.
@@ -286,7 +307,9 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
   const std::size_t first = part.mixture.slices() - b.size();
   const std::size_t threads = std::min<std::size_t>(b.size(), std::max(1u, std::thread::hardware_concurrency()));
   run_on_workers(b.size(), threads, [&](std::size_t, std::size_t s) {
-    errors[s] = stand_in_error(b.work[s].full, b.work[s].rgb, slice_mixture(part.mixture, first + s));
+    const SliceWork& w = b.work[s];
+    const bool based = !w.table.w.empty();
+    errors[s] = stand_in_error(based ? w.table : w.full, based ? w.table_rgb : w.rgb, slice_mixture(part.mixture, first + s));
     if (kept[s].ok)
       kept[s].loglik = em_detail::weighted_loglik(b.full_set.grid, em_detail::prepare_slice(b.full_set, s).w, kept[s].gmm);
   });

@@ -21,6 +21,8 @@ WeightedSlice pool_slice(const WeightedSlice& s, std::size_t f) {
   if (f <= 1 || nt % f != 0 || np % f != 0) return s;
   WeightedSlice out;
   out.map = s.map;
+  out.reference_total = s.reference_total;
+  out.extra_error = s.extra_error;
   for (std::size_t t = 0; t < nt; t += f) {
     double c = 0;
     for (std::size_t k = 0; k < f; ++k) c += s.theta[t + k];
@@ -81,7 +83,7 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
       err += std::abs(s.w[t * np + p] - total * density * cell);
     }
   }
-  return err / total;
+  return (err + s.extra_error) / (s.reference_total > 0 ? s.reference_total : total);
 }
 
 StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& rgb, const mix::SliceMixture& m) {
@@ -104,6 +106,13 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
     for (std::size_t p = 0; p < np; ++p) {
       const std::size_t i = t * np + p;
       double y = 0, c[3] = {0, 0, 0};
+      if (m.base > 0) {  // the Lambertian base's mass in the cell (disk: at the cell's point)
+        double x, yy;
+        mix::to_map(m.map, s.theta[t], s.phi[p], x, yy);
+        const double d = mix::lambert_base(x, yy) * area * mix::map_jacobian(s.map, s.theta[t]);
+        y += m.scale * m.base * d;
+        for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? m.base_rgb[q] : m.scale * m.base) * d;
+      }
       for (std::size_t k = 0; k < m.components.size(); ++k) {
         const mix::Gaussian& g = m.components[k];
         const double d = mass(g, narrow[k], s.theta[t], s.phi[p]);

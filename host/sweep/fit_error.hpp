@@ -14,6 +14,9 @@ struct WeightedSlice {
   std::vector<double> theta, phi;  // cell centers; phi a full period
   std::vector<double> w;           // row-major [theta][phi]
   mix::Map map = mix::Map::ThetaPhi;  // the plane the mixtures compared with live in
+  // With a base taken off (sweep/base_lobe.hpp): the whole slice's total, which l1_rel_error
+  // divides by, and the base's excess over the cells, which it adds; 0: none.
+  double reference_total = 0, extra_error = 0;
   double total() const;
 };
 

@@ -43,7 +43,7 @@ struct FitSettings {
   std::optional<double> rgb_copies = 1.2;
   // The plane the Gaussians live in (docs/fitting.md, "The map"): equal_area (the disk on
   // the hemisphere, the cylinder on the fiber sphere) or theta_phi (files before maps).
-  std::string map = "equal_area";
+  std::string map = "theta_phi";
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
 };
 

@@ -253,6 +253,20 @@ struct Sample {
   bool valid = false;         // false when theta left the domain: zero contribution
 };
 
+// The Lambertian base on the disk: the cosine-weighted density cos(theta) / pi per
+// steradian, at map point (x, y): (1 - (x^2 + y^2) / 2) / pi inside the disk, 0 outside.
+inline double lambert_base(double x, double y) {
+  const double c = 1.0 - 0.5 * (x * x + y * y);
+  return c > 0 ? c / kPi : 0.0;
+}
+
+// A draw of the Lambertian base from two uniforms (Malley: uniform on the unit disk, lifted),
+// as a disk point (x, y).
+inline void lambert_draw(double u2, double u3, double& x, double& y) {
+  const double sin_t = std::sqrt(u2), theta = std::asin(std::min(sin_t, 1.0)), phi = 2 * kPi * u3 - kPi;
+  to_map(Map::Disk, theta, phi, x, y);
+}
+
 // Unit normal pair from two uniforms (Box-Muller), u1 in [0, 1).
 inline void normal_pair(double u1, double u2, double& z0, double& z1) {
   const double r = std::sqrt(-2.0 * std::log(1.0 - u1));
@@ -266,6 +280,10 @@ struct SliceMixture {
   double scale = 0;  // the luminance stand-in's amplitude: scale * pdf_param is the integrand
   bool has_rgb = false;  // the components' rgb amplitudes are set (else the colour is grey: eval_f)
   Map map = Map::ThetaPhi;  // the plane of the components (MixtureSet::prepare sets the file's)
+  // The Lambertian base (Disk only, docs/formats.md "The base"): its weight beside the
+  // components' (normalized with them by prepare) and its colour amplitudes (with has_rgb).
+  double base = 0;
+  double base_rgb[3] = {0, 0, 0};
   std::vector<Gaussian> components;
   // With colour copies: the Gaussians that carry the colour (copy_of each component's
   // kCopies copies, component-major, each with its own rgb); empty: the components' rgb.
@@ -283,9 +301,11 @@ struct SliceMixture {
   }
 
   void prepare() {
+    if (base < 0 || (base > 0 && map != Map::Disk))
+      throw std::invalid_argument("bsdfmix::mix::SliceMixture: a base needs the disk map and a weight >= 0");
     for (auto& g : colour) g.prepare();
     cdf.clear();
-    double acc = 0;
+    double acc = base;
     for (auto& g : components) {
       g.prepare();
       acc += g.weight;
@@ -294,11 +314,12 @@ struct SliceMixture {
     if (!(acc > 0)) throw std::invalid_argument("bsdfmix::mix::SliceMixture: weights sum to zero");
     for (auto& c : cdf) c /= acc;
     for (auto& g : components) g.weight /= acc;
+    base /= acc;
   }
 
   // The density per unit of the map's (x, y) (per steradian on an equal-area map).
   double pdf_map(double x, double y) const {
-    double p = 0;
+    double p = base > 0 ? base * lambert_base(x, y) : 0.0;
     for (const auto& g : components) p += g.weight * g.density(x, y);
     return p;
   }
@@ -331,11 +352,23 @@ struct SliceMixture {
       out[0] = out[1] = out[2] = scale * pdf_map(x, y);
       return;
     }
-    out[0] = out[1] = out[2] = 0;
+    const double b = base > 0 ? lambert_base(x, y) : 0.0;
+    for (int c = 0; c < 3; ++c) out[c] = base_rgb[c] * b;
     for (const auto& g : colour.empty() ? components : colour) {
       const double d = g.density(x, y);
       for (int c = 0; c < 3; ++c) out[c] += g.rgb[c] * d;
     }
+  }
+
+  // A point of the map's plane from three uniforms: u1 picks the base (u1 < base) or a
+  // component, (u2, u3) the point (y wrapped).
+  void draw_map(double u1, double u2, double u3, double& x, double& y) const {
+    if (u1 < base || components.empty()) return lambert_draw(u2, u3, x, y);
+    const Gaussian& g = components[pick(u1)];
+    double z0, z1;
+    normal_pair(u2, u3, z0, z1);
+    x = g.mu_t + g.l_tt * z0;
+    y = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
   }
 
   // Component index for u in [0, 1): binary search of the CDF.
@@ -359,17 +392,18 @@ struct SliceMixture {
   // A sample of this mixture alone: u1 picks the component, (u2, u3) the point. Invalid
   // when it leaves the domain.
   Sample sample(Domain d, double u1, double u2, double u3) const {
-    const Gaussian& g = components[pick(u1)];
-    double z0, z1;
-    normal_pair(u2, u3, z0, z1);
     Sample out;
     if (map != Map::ThetaPhi) {
-      const double x = g.mu_t + g.l_tt * z0, y = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
+      double x, y;
+      draw_map(u1, u2, u3, x, y);
       out.valid = from_map(map, x, y, out.theta, out.phi);
       out.pdf_omega = out.valid ? pdf_map(x, y) : 0.0;
       if (!(out.pdf_omega > 0)) out.valid = false;
       return out;
     }
+    const Gaussian& g = components[pick(u1)];
+    double z0, z1;
+    normal_pair(u2, u3, z0, z1);
     out.theta = g.mu_t + g.l_tt * z0;
     out.phi = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
     out.valid = out.theta >= theta_lo(d) && out.theta <= theta_hi(d);
@@ -412,6 +446,10 @@ inline SliceMixture make_slice_mixture(const std::vector<double>& weight, const 
   return m;
 }
 
+// The standard deviation of the one isotropic Gaussian at the pole that product() puts in
+// a Lambertian base's place (the least-squares fit of the cosine dome on the disk).
+constexpr double kBaseSigma = 0.75;
+
 // How product() prunes: the heaviest component pairs are kept until they hold `keep` of
 // the product's mass, and at most `max_components` of them.
 struct ProductOptions {
@@ -446,8 +484,21 @@ inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceM
   };
   std::vector<Term> terms;
   double total = 0;
-  for (const Gaussian& x : a.components)
-    for (const Gaussian& y : b.components) {
+  // A Lambertian base takes part as the one Gaussian nearest it, N(0, kBaseSigma^2 I)
+  // (11% L1 from the cosine dome): the product stays a mixture of Gaussians, and its pdf
+  // is exactly what its sample() draws.
+  std::vector<Gaussian> parts[2] = {a.components, b.components};
+  for (int i = 0; i < 2; ++i) {
+    const SliceMixture& m = i == 0 ? a : b;
+    if (!(m.base > 0)) continue;
+    Gaussian g;
+    g.weight = m.base;
+    g.s_tt = g.s_pp = kBaseSigma * kBaseSigma;
+    g.prepare();
+    parts[i].push_back(g);
+  }
+  for (const Gaussian& x : parts[0])
+    for (const Gaussian& y : parts[1]) {
       const double st = x.s_tt + y.s_tt, sp = x.s_pp + y.s_pp, sx = x.s_tp + y.s_tp;
       const double det = st * sp - sx * sx;
       if (!(det > 0)) continue;
@@ -611,6 +662,8 @@ inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, cons
   out.phi_o = a.phi_o + t * wrap_phi(b.phi_o - a.phi_o);
   out.scale = (1 - t) * a.scale + t * b.scale;
   out.map = a.map;
+  out.base = (1 - t) * a.base + t * b.base;
+  for (int c = 0; c < 3; ++c) out.base_rgb[c] = (1 - t) * a.base_rgb[c] + t * b.base_rgb[c];
   out.has_rgb = a.has_rgb && b.has_rgb;
   const bool copies = out.has_rgb && (!a.colour.empty() || !b.colour.empty());
   // A component's kCopies colour Gaussians: its copies, or (a slice without copies) copy_of
@@ -928,18 +981,19 @@ class MixtureSet {
     double acc = b.weight[0];
     while (k + 1 < b.count && u0 >= acc) acc += b.weight[++k];
     const SliceMixture& s = slices[b.slice[k]];
-    const Gaussian& g = s.components[s.pick(u1)];
-    double z0, z1;
-    normal_pair(u2, u3, z0, z1);
     Sample out;
     if (map != Map::ThetaPhi) {
-      const double x = g.mu_t + g.l_tt * z0, y = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1);
+      double x, y;
+      s.draw_map(u1, u2, u3, x, y);
       out.valid = from_map(map, x, y, out.theta, out.phi);
       if (out.valid) out.phi = wrap_phi(out.phi + b.rotate);
       out.pdf_omega = out.valid ? pdf_omega(theta_o, phi_o, out.theta, out.phi) : 0.0;
       if (!(out.pdf_omega > 0)) out.valid = false;
       return out;
     }
+    const Gaussian& g = s.components[s.pick(u1)];
+    double z0, z1;
+    normal_pair(u2, u3, z0, z1);
     out.theta = g.mu_t + g.l_tt * z0;
     out.phi = wrap_phi(g.mu_p + g.l_pt * z0 + g.l_pp * z1 + b.rotate);
     out.valid = out.theta >= theta_lo(domain) && out.theta <= theta_hi(domain);
@@ -1054,6 +1108,8 @@ class MixtureSet {
     for (int k = 0; k < n; ++k) {
       const SliceMixture& s = *piece[k];
       out.scale += w[k] * s.scale;
+      out.base += w[k] * s.base;
+      for (int c = 0; c < 3; ++c) out.base_rgb[c] += w[k] * s.base_rgb[c];
       out.has_rgb = out.has_rgb && s.has_rgb;
       for (Gaussian g : s.components) {
         g.weight *= w[k];
