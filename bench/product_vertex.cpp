@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
       comps_header = 0;
       for (const Vertex& v : vs) {
         try {
-          const mix::SliceMixture m = mix::product(set.slices[v.slice], 0.0, carry_lighting(compact, v.axes), o);
+          const mix::SliceMixture m = mix::product(set.slices[v.slice], 0.0, carry_lighting(compact, v.axes, kWorldAxes, set.map), o);
           comps_header += m.components.size();
           const mix::Sample s = m.sample(Domain::Hemisphere, v.u[0], v.u[1], v.u[2]);
           sink += s.pdf_omega + m.pdf_omega(Domain::Hemisphere, v.theta, v.phi);

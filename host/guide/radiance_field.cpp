@@ -180,7 +180,12 @@ void RadianceField::fit_leaves(const std::vector<Sample>& samples, const std::ve
   const LeafSlices source(std::move(grids), s.grid_theta, s.grid_phi);
   std::vector<SliceRef> refs;
   for (std::size_t i = 0; i < n; ++i) refs.push_back({i, i, 0});
-  const SweepResult fitted = fit_slices(source, refs, s.fit, devices, what, engine);
+  // The leaves are fitted over (theta, phi) whatever the settings' map: the cell floor of
+  // leaf_mixture is in radians, and the compact components are carried as (theta, phi)
+  // lobes (render/light_carry.hpp).
+  FitSettings fit = s.fit;
+  fit.map = "theta_phi";
+  const SweepResult fitted = fit_slices(source, refs, fit, devices, what, engine);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t slice = std::size_t(std::find(fitted.slice_index.begin(), fitted.slice_index.end(), i) -
                                           fitted.slice_index.begin());

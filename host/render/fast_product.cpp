@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "render/light_carry.hpp"
+
 namespace bsdfmix {
 namespace render {
 
@@ -79,6 +81,7 @@ void pair_weights(const ProductFactor& a, std::size_t nb, float lt, float lp, fl
 
 void ProductFactor::assign(const mix::SliceMixture& s) {
   for (auto* v : {&w, &mt, &mp, &stt, &stp, &spp, &itt, &itp, &ipp}) v->clear();
+  map = s.map;
   for (const mix::Gaussian& g : s.components) {
     w.push_back(float(g.weight));
     mt.push_back(float(g.mu_t));
@@ -115,6 +118,7 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
   for (auto* v : {&lw_, &lmt_, &lmp_, &ltt_, &ltp_, &lpp_, &litt_, &litp_, &lipp_, &w_, &wn_, &mt_, &mp_, &itt_, &ipp_, &ctt_, &cpt_, &cpp_, &cdf_, &wide_cut_})
     v->clear();
   wide_.clear();
+  map_ = a.map;
   carry_lighting(src, f);
   const std::size_t nb = a.size(), nl = lw_.size(), nc = 3 * nb * nl;
   if (nb == 0 || nl == 0) return false;
@@ -137,7 +141,14 @@ bool FastProduct::build(const ProductFactor& a, const CarrySource& src, const Lo
   return true;
 }
 
-// 1. The lighting in the frame: carry_lighting's map, from the precomputed directions.
+// 1. The lighting in the frame: carry_lighting's map, from the precomputed directions,
+// then on into the plane of map_ (compose_map_jacobian) as carry_lighting does.
+// The lighting is a function L over the plane, not a density: a lobe keeps its value at
+// each direction when its weight is multiplied by |det| of the Jacobian from its plane to
+// the new one (its 1 / (2 pi sqrt(det S)) shrinks by that factor). The frame change gives
+// cos(theta_w) / rho; the map multiplies it by |det M| = map_jacobian (cos theta on the
+// cylinder, sin theta on the disk). Times the BSDF factor (per unit of the plane) it is the
+// integrand f cos L per unit of the plane, as on (theta, phi).
 void FastProduct::carry_lighting(const CarrySource& src, const LocalAxes& f) {
   const bool fiber = f.domain == Domain::Fiber;
   const double sgn = fiber ? 1.0 : -1.0, cap = 4 * kPi * kPi;
@@ -148,14 +159,23 @@ void FastProduct::carry_lighting(const CarrySource& src, const LocalAxes& f) {
     const double mu_t = fiber ? std::asin(z) : std::acos(z);
     if (!fiber && mu_t > kPi / 2 + 4 * g.sigma_max) continue;  // below the horizon: lights nothing here
     const double rho = std::sqrt(rho2);
-    const double j11 = sgn * dot(g.dwt, f.axis) / rho, j12 = sgn * dot(g.dwp, f.axis) / rho;
-    const double j21 = (x * dot(g.dwt, f.e2) - y * dot(g.dwt, f.e1)) / rho2;
-    const double j22 = (x * dot(g.dwp, f.e2) - y * dot(g.dwp, f.e1)) / rho2;
-    const double s_tt = j11 * j11 * g.s_tt + 2 * j11 * j12 * g.s_tp + j12 * j12 * g.s_pp;
+    double j11 = sgn * dot(g.dwt, f.axis) / rho, j12 = sgn * dot(g.dwp, f.axis) / rho;
+    double j21 = (x * dot(g.dwt, f.e2) - y * dot(g.dwt, f.e1)) / rho2;
+    double j22 = (x * dot(g.dwp, f.e2) - y * dot(g.dwp, f.e1)) / rho2;
+    double mx = mu_t, my = std::atan2(y, x), s_theta = 0;
+    if (map_ != mix::Map::ThetaPhi) {
+      s_theta = j11 * j11 * g.s_tt + 2 * j11 * j12 * g.s_tp + j12 * j12 * g.s_pp;
+      double j[4] = {j11, j12, j21, j22};
+      compose_map_jacobian(map_, mu_t, x / rho, y / rho, j);
+      j11 = j[0], j12 = j[1], j21 = j[2], j22 = j[3];
+      mix::to_map(map_, mu_t, my, mx, my);
+    }
+    double s_tt = j11 * j11 * g.s_tt + 2 * j11 * j12 * g.s_tp + j12 * j12 * g.s_pp;
+    if (map_ == mix::Map::Cylinder) s_tt += map_curvature_variance(map_, mu_t, s_theta);
     double s_tp = j11 * j21 * g.s_tt + (j11 * j22 + j12 * j21) * g.s_tp + j12 * j22 * g.s_pp;
     double s_pp = j21 * j21 * g.s_tt + 2 * j21 * j22 * g.s_tp + j22 * j22 * g.s_pp;
     const double weight = g.weight * std::abs(j11 * j22 - j12 * j21);
-    if (s_pp > cap) {  // uniform in phi: keep the correlation coefficient
+    if (map_ != mix::Map::Disk && s_pp > cap) {  // uniform in phi: keep the correlation coefficient
       s_tp *= std::sqrt(cap / s_pp);
       s_pp = cap;
     }
@@ -166,8 +186,8 @@ void FastProduct::carry_lighting(const CarrySource& src, const LocalAxes& f) {
     }
     if (!(weight > 0 && std::isfinite(weight) && s_tt > 0 && det > 0)) continue;
     lw_.push_back(float(weight));
-    lmt_.push_back(float(mu_t));
-    lmp_.push_back(float(std::atan2(y, x)));
+    lmt_.push_back(float(mx));
+    lmp_.push_back(float(my));
     ltt_.push_back(float(s_tt));
     ltp_.push_back(float(s_tp));
     lpp_.push_back(float(s_pp));
@@ -231,6 +251,7 @@ double FastProduct::add_pairs(const ProductFactor& a, std::size_t top) {
     const double l_tt = std::sqrt(s_tt), l_pt = s_tp / l_tt, l_pp = std::sqrt(std::max(s_pp - l_pt * l_pt, 0.0));
     const float ftt = float(l_tt), fpt = float(l_pt), fpp = float(l_pp);
     if (!(ftt > 0.f) || !(fpp > 0.f) || !std::isfinite(ftt) || !std::isfinite(fpt) || !std::isfinite(fpp)) continue;
+    if (!std::isfinite(1.f / ftt * (1.f / fpp))) continue;  // a density beyond float's range
     acc += double(order_[r].first);
     w_.push_back(order_[r].first);
     mt_.push_back(float(s_tt * ht + s_tp * hp));
@@ -248,10 +269,13 @@ double FastProduct::add_pairs(const ProductFactor& a, std::size_t top) {
 // components whose phi spread reaches images beyond the nearest three (9 sigma >= 3 pi).
 void FastProduct::normalize(double acc) {
   float run = 0;
-  const float inv = float(1 / acc), inv_2pi = float(1 / (2 * kPi));
+  const double dinv = 1 / acc;
+  const float inv = float(dinv), inv_2pi = float(1 / (2 * kPi));
+  // pairs that barely overlap can sum to less than 1 / FLT_MAX: then the division in double
+  const bool wide_inv = !std::isfinite(inv);
   wn_.resize(w_.size());
   for (std::size_t c = 0; c < w_.size(); ++c) {
-    w_[c] *= inv;
+    w_[c] = wide_inv ? float(double(w_[c]) * dinv) : w_[c] * inv;
     run += w_[c];
     cdf_.push_back(run);
     wn_[c] = w_[c] * inv_2pi * itt_[c] * ipp_[c];
@@ -271,6 +295,14 @@ mix::Sample FastProduct::sample(Domain d, double u1, double u2, double u3) const
   c = std::min(c, w_.size() - 1);
   double z0, z1;
   mix::normal_pair(u2, u3, z0, z1);
+  if (map_ != mix::Map::ThetaPhi) {  // a point of the plane, taken to its direction
+    const double x = double(mt_[c]) + double(ctt_[c]) * z0;
+    const double y = wrap(double(mp_[c]) + double(cpt_[c]) * z0 + double(cpp_[c]) * z1);
+    out.valid = mix::from_map(map_, x, y, out.theta, out.phi);
+    out.pdf_omega = out.valid ? pdf_plane(float(x), float(y)) : 0.0;
+    if (!(out.pdf_omega > 0)) out.valid = false;
+    return out;
+  }
   out.theta = double(mt_[c]) + double(ctt_[c]) * z0;
   out.phi = wrap(double(mp_[c]) + double(cpt_[c]) * z0 + double(cpp_[c]) * z1);
   out.valid = out.theta >= mix::theta_lo(d) && out.theta <= mix::theta_hi(d);
@@ -281,9 +313,17 @@ mix::Sample FastProduct::sample(Domain d, double u1, double u2, double u3) const
 
 double FastProduct::pdf_omega(Domain d, double theta, double phi) const {
   if (theta < mix::theta_lo(d) || theta > mix::theta_hi(d)) return 0;
+  if (map_ != mix::Map::ThetaPhi) {  // equal-area: per unit of the plane is per steradian
+    double x, y;
+    mix::to_map(map_, theta, phi, x, y);
+    return pdf_plane(float(x), float(wrap(y)));
+  }
   const double jac = mix::jacobian(d, theta);
   if (!(jac > 0)) return 0;
-  const float th = float(theta), ph = float(wrap(phi));
+  return pdf_plane(float(theta), float(wrap(phi))) / jac;
+}
+
+double FastProduct::pdf_plane(float th, float ph) const {
   const std::size_t n = w_.size();
   const float *wn = wn_.data(), *mt = mt_.data(), *mp = mp_.data(), *it = itt_.data(), *ip = ipp_.data(),
               *cpt = cpt_.data();
@@ -315,12 +355,13 @@ double FastProduct::pdf_omega(Domain d, double theta, double phi) const {
       if (!any) break;
     }
   }
-  return (double(sum) + extra) / jac;
+  return double(sum) + extra;
 }
 
 mix::SliceMixture FastProduct::mixture() const {
   mix::SliceMixture m;
   m.scale = 1;
+  m.map = map_;
   for (std::size_t c = 0; c < w_.size(); ++c) {
     mix::Gaussian g;
     g.weight = w_[c];

@@ -31,9 +31,10 @@ namespace bsdfmix {
 namespace render {
 
 // A prepared slice mixture as the pairs read it: weights, means (phi wrapped into
-// [-pi, pi)), covariances and precisions, one float array each.
+// [-pi, pi)), covariances and precisions, one float array each, and the map of its plane.
 struct ProductFactor {
   std::vector<float> w, mt, mp, stt, stp, spp, itt, itp, ipp;
+  mix::Map map = mix::Map::ThetaPhi;
   void assign(const mix::SliceMixture& s);
   std::size_t size() const { return w.size(); }
 };
@@ -54,11 +55,13 @@ struct CarrySource {
 
 class FastProduct {
  public:
-  // The product of the lighting `src` carried into the frame `f` with `bsdf`; false (and
-  // empty) when they do not overlap.
+  // The product of the lighting `src` carried into the frame `f` with `bsdf`, in the plane
+  // of bsdf's map (its (x, y) as (theta, phi) below); false (and empty) when they do not
+  // overlap.
   bool build(const ProductFactor& bsdf, const CarrySource& src, const LocalAxes& f, const mix::ProductOptions& o);
   std::size_t size() const { return w_.size(); }
-  // As SliceMixture::sample and pdf_omega: invalid when theta leaves the domain.
+  // As SliceMixture::sample and pdf_omega: invalid when theta leaves the domain (on a
+  // map's plane: when the point leaves the map, mix::from_map).
   mix::Sample sample(Domain d, double u1, double u2, double u3) const;
   double pdf_omega(Domain d, double theta, double phi) const;
   // The components as header Gaussians, prepared (for tests).
@@ -72,6 +75,8 @@ class FastProduct {
   std::size_t keep_heaviest(double total, const mix::ProductOptions& o);
   double add_pairs(const ProductFactor& a, std::size_t top);
   void normalize(double acc);
+  // The density per unit of the plane at (t, p), p in [-pi, pi).
+  double pdf_plane(float t, float p) const;
 
   // the carried lighting: weight, mean, covariance, precision
   std::vector<float> lw_, lmt_, lmp_, ltt_, ltp_, lpp_, litt_, litp_, lipp_;
@@ -83,6 +88,7 @@ class FastProduct {
   std::vector<float> w_, wn_, mt_, mp_, itt_, ipp_, ctt_, cpt_, cpp_, cdf_;
   std::vector<int> wide_;
   std::vector<float> wide_cut_;
+  mix::Map map_ = mix::Map::ThetaPhi;  // the plane of the product: the bsdf factor's
   mutable std::vector<float> term_;  // pdf_omega's per-component terms (one thread uses a product)
 };
 

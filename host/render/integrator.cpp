@@ -149,7 +149,8 @@ Guiding guiding_at(const SceneView& v, const PathStrategy& st, int depth, const 
   if (st.guided_product && b.tabulated() && !g.leaf->compact.empty() && g.a_guide > 0) {
     g.axes = b.axes();
     try {
-      g.gprod = v.bsdf->product(b.theta_o(), carry_lighting(g.leaf->compact, g.axes, kGuideAxes), v.product);
+      const mix::SliceMixture lobes = carry_lighting(g.leaf->compact, g.axes, kGuideAxes, v.bsdf->map());
+      g.gprod = v.bsdf->product(b.theta_o(), lobes, v.product);
       g.a_prod = g.a_guide * g.leaf->compact_share;
       g.a_guide -= g.a_prod;
     } catch (const std::invalid_argument&) {

@@ -13,6 +13,7 @@
 
 #include <bsdfmix/mixture.hpp>
 
+#include <cmath>
 #include <vector>
 
 #include "render/local_axes.hpp"
@@ -35,8 +36,27 @@ std::vector<mix::Gaussian> compact_components(const mix::SliceMixture& world);
 // 2 pi (wider is uniform in phi to 1e-8), the correlation coefficient kept.
 // The components are over `from`'s (theta, phi) in the fiber domain's map: the world's
 // latitude-longitude (the lighting), or the guide's map (a guide leaf's radiance).
+// `to` is the plane of the result: the frame's (theta, phi), or a map's plane (the plane of
+// the BSDF mixture the lighting multiplies; mixture.hpp, "Maps").
 mix::SliceMixture carry_lighting(const std::vector<mix::Gaussian>& compact, const LocalAxes& f,
-                                 const LocalAxes& from = kWorldAxes);
+                                 const LocalAxes& from = kWorldAxes, mix::Map to = mix::Map::ThetaPhi);
+
+// A carried lobe's Jacobian j = d(theta, phi) / d(source theta, phi) (row-major) taken on
+// into map m's plane at the frame's (theta, cos phi, sin phi): j := M j, M = d(x, y) /
+// d(theta, phi). ThetaPhi: unchanged. Cylinder: M = [[cos theta, 0], [0, 1]]. Disk, r =
+// 2 sin(theta / 2): M = [[cos(theta / 2) cos phi, -r sin phi], [cos(theta / 2) sin phi, r cos phi]].
+// |det M| is map_jacobian (cos theta, sin theta).
+void compose_map_jacobian(mix::Map m, double theta, double cos_phi, double sin_phi, double j[4]);
+
+// The cylinder's x = sin theta is flat at the fiber's axis, where a linearized lobe would
+// have no width in x (and its density no bound): its x variance there gains the delta
+// method's second-order term, sin^2 theta s_theta^2 / 2 (s_theta: theta's variance in the
+// frame). 0 on the other maps.
+inline double map_curvature_variance(mix::Map m, double theta, double s_theta) {
+  if (m != mix::Map::Cylinder) return 0;
+  const double s = std::sin(theta);
+  return 0.5 * s * s * s_theta * s_theta;
+}
 
 }  // namespace render
 }  // namespace bsdfmix

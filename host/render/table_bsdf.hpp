@@ -69,8 +69,10 @@ class TableBsdf {
   mix::Sample mixture_sample(double theta_o, const double u[4]) const;
   double mixture_pdf(double theta_o, double theta, double phi) const;
 
+  // The plane of the mixtures' components (mixture.hpp, "Maps").
+  mix::Map map() const { return set_.map; }
   // The mixture of the fitted slice nearest theta_o times `lighting`, a mixture over the
-  // same (theta, phi) of the hit's frame: the header's product, pruned by `o`.
+  // same plane (map()) of the hit's frame: the header's product, pruned by `o`.
   // Throws std::invalid_argument when the two do not overlap.
   mix::SliceMixture product(double theta_o, const mix::SliceMixture& lighting, const mix::ProductOptions& o) const;
   // The same slice's mixture as the renderer's per-vertex product reads it
