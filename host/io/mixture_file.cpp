@@ -8,6 +8,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "io/h5.hpp"
+#include "io/mixture_parts.hpp"
 
 namespace bsdfmix {
 
@@ -347,39 +348,6 @@ void read_copies(hid_t id, const std::string& where, MixtureFile& m) {
                 m.rgb_copies.begin() + long(s * K * kCopyValues));
 }
 
-// The optional base (docs/formats.md, "The base"): zeros when absent.
-void read_base(hid_t id, const std::string& where, MixtureFile& m) {
-  const std::size_t S = m.theta_o.size();
-  m.base.assign(S, 0.0);
-  m.base_rgb.assign(3 * S, 0.0);
-  if (!h5::exists(id, "base")) return;
-  if (m.map != Map::Disk) throw InputError(where + "/base: a base needs map 'disk', the file's is " + map_name(m.map));
-  m.base = h5::read_doubles(id, "base", where);
-  if (m.base.size() != S)
-    throw InputError(where + "/base: length " + std::to_string(m.base.size()) + ", expected " + std::to_string(S));
-  for (std::size_t s = 0; s < S; ++s)
-    if (!(m.base[s] >= 0 && m.base[s] <= 1))
-      throw InputError(where + "/base: slice " + std::to_string(s) + " holds " + std::to_string(m.base[s]) +
-                       ", expected a share in [0, 1]");
-  if (!h5::exists(id, "base_rgb")) return;
-  m.base_rgb = h5::read_doubles(id, "base_rgb", where);
-  if (m.base_rgb.size() != 3 * S)
-    throw InputError(where + "/base_rgb: " + std::to_string(m.base_rgb.size()) + " values, expected " +
-                     std::to_string(3 * S) + " ([S, 3])");
-}
-
-// The domain, the format version and the map (a file without `map` is in (theta, phi)).
-void read_plane(hid_t id, const std::string& where, MixtureFile& m) {
-  m.domain = parse_domain(h5::read_string_attr(id, "domain", where), where + " attribute 'domain'");
-  if (h5::has_attr(id, "format_version")) {
-    const std::string v = h5::read_string_attr(id, "format_version", where);
-    if (v != "1" && v != std::to_string(kMixtureFormatVersion))
-      throw InputError(where + " attribute 'format_version': '" + v + "' is newer than this bsdfmix reads (at most " +
-                       std::to_string(kMixtureFormatVersion) + "); update bsdfmix");
-  }
-  if (h5::has_attr(id, "map")) m.map = parse_map(h5::read_string_attr(id, "map", where), m.domain, where + " attribute 'map'");
-}
-
 }  // namespace
 
 MixtureFile read_mixture_file(const std::string& path) {
@@ -388,7 +356,7 @@ MixtureFile read_mixture_file(const std::string& path) {
   const std::string where = path + ": /mixture";
   const hid_t id = g.get();
   MixtureFile m;
-  read_plane(id, where, m);
+  read_mixture_plane(id, where, m);
   const std::string sym = h5::read_string_attr(id, "symmetry", where);
   if (sym != "azimuthal" && sym != "none") throw InputError(where + ": unknown symmetry '" + sym + "'");
   m.azimuthal = sym == "azimuthal";
@@ -409,7 +377,7 @@ MixtureFile read_mixture_file(const std::string& path) {
       throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
                        std::to_string(S) + " (the length of theta_o)");
   if (m.k.size() != S) throw InputError(where + "/k: length " + std::to_string(m.k.size()) + ", expected " + std::to_string(S));
-  read_base(id, where, m);
+  read_mixture_base(id, where, m);
   if (h5::exists(id, "offset")) {
     read_ragged(id, where, m);
   } else {

@@ -294,7 +294,8 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
     const double scale = stand_ins[s].scale + w.base.lum;
     f.gmm.weight = stand_ins[s].weight;
     std::vector<double> weights = f.gmm.weight;
-    for (double& x : weights) x *= scale > 0 ? stand_ins[s].scale / scale : 0.0;
+    if (w.base.lum > 0)
+      for (double& x : weights) x *= stand_ins[s].scale / scale;
     const double theta_o = meta.theta_o[w.ref.t_o], phi_o = meta.phi_o[w.ref.p_o];
     part.slice_index.push_back(w.ref.index);
     part.mixture.add_slice(theta_o, phi_o, scale, f.loglik, 0.0, weights, f.gmm.mean, f.gmm.cov,
