@@ -50,6 +50,7 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
   scale.push_back(scale_);
   loglik.push_back(loglik_);
   l1_rel.push_back(l1_rel_);
+  defensive.push_back(kDefaultDefensive);
   k.push_back(kk);
   for (int j = 0; j < kmax; ++j) {
     const bool used = j < kk;
@@ -97,6 +98,7 @@ void MixtureFile::add_slice_from(const MixtureFile& from, std::size_t s) {
   const std::vector<double> rgb = from.slice_rgb(s), copies = from.slice_copies(s);
   add_slice(from.theta_o[s], from.phi_o[s], from.scale[s], from.loglik[s], from.l1_rel[s], w, mean, cov,
             from.has_rgb() ? &rgb : nullptr, &copies);
+  defensive.back() = from.defensive[s];
 }
 
 MixtureFile MixtureFile::header_only() const {
@@ -141,7 +143,7 @@ std::uint64_t MixtureFile::payload_bytes() const {
   for (std::size_t i = 0; has_copies() && i < S; ++i)
     if (!slice_copies(i).empty()) copied += std::uint64_t(k[i]);
   return N * 6 * sizeof(float) + (has_rgb() ? N * 3 * rgb_bytes : 0) +
-         (has_copies() ? copied * kCopyValues * rgb_bytes + S * sizeof(std::int32_t) : 0) + S * 5 * sizeof(double) +
+         (has_copies() ? copied * kCopyValues * rgb_bytes + S * sizeof(std::int32_t) : 0) + S * 6 * sizeof(double) +
          S * sizeof(std::int32_t) * (storage.ragged ? 2 : 1) +
          (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
 }
@@ -207,6 +209,7 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
   h5::write_doubles(id, "scale", {S}, m.scale.data(), path);
   h5::write_doubles(id, "loglik", {S}, m.loglik.data(), path);
   h5::write_doubles(id, "l1_rel", {S}, m.l1_rel.data(), path);
+  h5::write_doubles(id, "defensive", {S}, m.defensive.data(), path);
   h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
   h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
   h5::write_string_attr(id, "domain", domain_name(m.domain), path);
@@ -342,6 +345,16 @@ void read_plane(hid_t id, const std::string& where, MixtureFile& m) {
   if (h5::has_attr(id, "map")) m.map = parse_map(h5::read_string_attr(id, "map", where), m.domain, where + " attribute 'map'");
 }
 
+// Each slice's uniform share, in [0, 1); files written before it: 0.1 for every slice.
+std::vector<double> read_defensive(hid_t id, const std::string& where, std::size_t S) {
+  if (!h5::exists(id, "defensive")) return std::vector<double>(S, kDefaultDefensive);
+  std::vector<double> a = h5::read_doubles(id, "defensive", where);
+  for (std::size_t s = 0; s < a.size(); ++s)
+    if (!(a[s] >= 0 && a[s] < 1))
+      throw InputError(where + " slice " + std::to_string(s) + ": defensive is not a share in [0, 1)");
+  return a;
+}
+
 }  // namespace
 
 MixtureFile read_mixture_file(const std::string& path) {
@@ -365,8 +378,10 @@ MixtureFile read_mixture_file(const std::string& path) {
   m.loglik = h5::read_doubles(id, "loglik", where);
   m.l1_rel = h5::read_doubles(id, "l1_rel", where);
   const std::size_t S = m.theta_o.size();
+  m.defensive = read_defensive(id, where, S);
   for (const auto& [name, v] : {std::pair{"phi_o", &m.phi_o}, std::pair{"scale", &m.scale},
-                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel}})
+                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel},
+                                 std::pair{"defensive", &m.defensive}})
     if (v->size() != S)
       throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
                        std::to_string(S) + " (the length of theta_o)");
@@ -453,6 +468,7 @@ mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
   sm.theta_o = m.theta_o[s];
   sm.phi_o = m.phi_o[s];
   sm.scale = m.scale[s];
+  sm.defensive = m.defensive[s];
   const std::vector<double> copies = m.slice_copies(s);
   if (!copies.empty()) sm.set_copies(copies);
   return sm;
