@@ -226,9 +226,10 @@ std::vector<double> study_directions(int count, double theta_max, std::uint64_t 
 
 void bench_sampling(const SamplingPeersOptions& o, const std::string& device, bool quiet) {
   if (o.directions < 1 || o.samples < 2 || o.quadrature < 8 || !(o.theta_max_deg > 0 && o.theta_max_deg < 90) ||
-      !(o.light_fraction > 0 && o.light_fraction < 1) || !(o.uniform_fraction > 0 && o.uniform_fraction < 1))
+      !(o.light_fraction > 0 && o.light_fraction < 1) ||
+      !(o.earned || (o.uniform_fraction > 0 && o.uniform_fraction < 1)))
     throw ConfigError("bench sampling: --directions >= 1, --samples >= 2, --quadrature >= 8, 0 < --theta-max < 90, "
-                      "0 < --light-fraction < 1, 0 < --uniform-fraction < 1");
+                      "0 < --light-fraction < 1, 0 < --uniform-fraction < 1 or earned");
   if (o.mixture.empty() || o.table.empty() || o.csv.empty())
     throw ConfigError("bench sampling: --mixture, --table and --csv are required");
   prepare_output(o.csv);
@@ -289,6 +290,7 @@ void bench_sampling(const SamplingPeersOptions& o, const std::string& device, bo
   const std::vector<double> views = study_directions(o.directions, o.theta_max_deg * mix::kPi / 180, o.seed);
   MisOptions mis;
   mis.uniform_fraction = o.uniform_fraction;
+  mis.earned = o.earned;
   mis.light_fraction = o.light_fraction;
 
   struct Cell {  // one view under one lighting

@@ -36,7 +36,8 @@ struct SamplingPeersOptions {
   std::uint64_t seed = 1;
   double theta_max_deg = 85;      // view elevations drawn uniformly in [0, this]
   int quadrature = 2048;          // the RGL integral: cells in sin^2(theta) (twice as many in phi)
-  double uniform_fraction = 0.1;  // the defensive mixture's uniform share (mis_tab's)
+  double uniform_fraction = 0.1;  // the defensive mixture's uniform share (mis_tab's) ...
+  bool earned = true;             // ... unless each view takes the mixture's earned share (MixtureSet::defensive)
   double light_fraction = 0.5;    // light sampling's share in mis_light_rgl, mis_light_cdf, mis_light_gmm
 };
 

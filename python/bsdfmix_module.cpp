@@ -172,6 +172,8 @@ void bind_slice_mixture(py::module_& m) {
       .def_readonly("theta_o", &mix::SliceMixture::theta_o)
       .def_readonly("phi_o", &mix::SliceMixture::phi_o)
       .def_readonly("scale", &mix::SliceMixture::scale)
+      .def_readonly("defensive", &mix::SliceMixture::defensive,
+                    "the uniform share a sampler mixes in (the file's `defensive`; 0.1 in files without it)")
       .def_readonly("has_rgb", &mix::SliceMixture::has_rgb)
       .def_property_readonly("has_copies", [](const mix::SliceMixture& s) { return !s.colour.empty(); })
       .def("__len__", [](const mix::SliceMixture& s) { return s.components.size(); })
@@ -277,6 +279,8 @@ py::class_<mix::MixtureSet> bind_mixture_set(py::module_& m) {
             return py::make_tuple(std::vector<int>(b.slice, b.slice + b.count), std::vector<double>(b.weight, b.weight + b.count), b.rotate);
           },
           py::arg("theta_o"), py::arg("phi_o"), "the slices serving omega_o: (slice indices, weights, rotate)")
+      .def("defensive", py::vectorize(&mix::MixtureSet::defensive), py::arg("theta_o"), py::arg("phi_o"),
+           "the uniform share for omega_o: the slices' `defensive` with their blend weights")
       .def("pdf_param", py::vectorize(&mix::MixtureSet::pdf_param), py::arg("theta_o"), py::arg("phi_o"),
            py::arg("theta"), py::arg("phi"), "density over (theta, phi) of what sample() returns for omega_o")
       .def("pdf_omega", py::vectorize(&mix::MixtureSet::pdf_omega), py::arg("theta_o"), py::arg("phi_o"),
@@ -377,13 +381,14 @@ void bind_files(py::module_& m) {
         d["scale"] = Array(py::ssize_t(f.slices()), f.scale.data());
         d["loglik"] = Array(py::ssize_t(f.slices()), f.loglik.data());
         d["l1_rel"] = Array(py::ssize_t(f.slices()), f.l1_rel.data());
+        d["defensive"] = Array(py::ssize_t(f.slices()), f.defensive.data());
         d["k"] = py::array_t<std::int32_t>(py::ssize_t(f.slices()), f.k.data());
         d["payload_bytes"] = f.payload_bytes();
         return d;
       },
       py::arg("path"),
       "a mixture file's per-slice values and attributes (dict: domain, azimuthal, storage, table_source, "
-      "fit_settings, theta_o, phi_o, scale, loglik, l1_rel, k, payload_bytes)");
+      "fit_settings, theta_o, phi_o, scale, loglik, l1_rel, defensive, k, payload_bytes)");
 
   py::class_<TableReader>(m, "Table", "A table file (docs/formats.md, \"Table file\"), read one slice at a time.")
       .def(py::init<const std::string&>(), py::arg("path"))

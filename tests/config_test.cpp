@@ -86,6 +86,11 @@ TEST_CASE("a bare section takes every default", "[config]") {
   CHECK(c.converge->samples_max == 65536);
   CHECK(c.converge->runs == 64);
   CHECK(c.converge->product_auto);
+  CHECK(c.converge->earned_share);  // uniform_fraction: earned
+  CHECK_FALSE(parse_config("table: " + existing_table() + "\nconverge:\n  uniform_fraction: 0.05\n", "cfg.yaml")
+                  .converge->earned_share);  // a number pins it
+  CHECK(parse_config("table: " + existing_table() + "\nconverge:\n  uniform_fraction: 0.05\n", "cfg.yaml")
+            .converge->uniform_fraction == 0.05);
   CHECK(c.converge->product_light == 0.1);
   CHECK(c.converge->light_fraction == 0.5);
   CHECK_FALSE(c.converge->power_heuristic);
@@ -158,6 +163,8 @@ TEST_CASE("wrong types and impossible values are named", "[config]") {
   CHECK_THAT(config_error(t + "converge:\n  product_fraction: 0.8\n  product_light: 0.3\n"),
              Catch::Contains("converge.product_light (line 4): product_fraction + product_light must be at most 1"));
   CHECK_THAT(config_error(t + "converge:\n  light_fraction: 1\n"), Catch::Contains("converge.light_fraction (line 3): must be below 1"));
+  CHECK_THAT(config_error(t + "converge:\n  uniform_fraction: earnt\n"), Catch::Contains("converge.uniform_fraction (line 3)"));
+  CHECK_THAT(config_error(t + "converge:\n  uniform_fraction: 1\n"), Catch::Contains("must be below 1 (1 is pure uniform sampling: us_tab), or earned"));
   CHECK_THAT(config_error(t + "converge:\n  product_components: 0\n"), Catch::Contains("converge.product_components (line 3): 0 is out of range"));
 }
 

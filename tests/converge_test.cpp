@@ -27,6 +27,7 @@
 #include "io/pfm.hpp"
 #include "io/table.hpp"
 #include "sampling/sampling.hpp"
+#include "sweep/earned_share.hpp"
 #include "tables/rgl_brdf.hpp"
 #include "tables/rgl_import.hpp"
 
@@ -54,7 +55,8 @@ double lobe(double dt, double dp, double st, double sp) {
 
 // A small table (3 theta_o slices, 24 x 48 cells) whose f is a lobe that moves with
 // theta_o plus a floor, and a mixture file for it: the lobe's Gaussian and a broad
-// Gaussian (which keeps the mixture positive wherever f is), scale = the integral.
+// Gaussian (which keeps the mixture positive wherever f is), scale = the integral, and
+// the uniform share each slice earns (sweep/earned_share.hpp).
 struct Fixture {
   std::string table, mixture;
   Domain domain;
@@ -90,6 +92,9 @@ Fixture make_fixture(Domain domain) {
       }
     m.add_slice(to, 0.0, integral, 0.0, 0.05, {0.85, 0.15}, {mt, mp, 0.1, 0.0},
                 {0.2 * 0.2, 0.0, 0.35 * 0.35, 0.7 * 0.7, 0.0, 2.0 * 2.0});
+    WeightedSlice ws{meta.theta_i, meta.phi_i, w, mix::Map::ThetaPhi};
+    for (std::size_t c = 0; c < ws.w.size(); ++c) ws.w[c] *= f[c];
+    m.defensive.back() = earned_share(ws, slice_mixture(m, s), domain).share;
   }
   write_table(fx.table, meta, values);
   write_mixture_file(fx.mixture, m);
@@ -181,7 +186,10 @@ void check_unbiased(const Fixture& fx, const Lighting& light, double to, double 
   const mix::SliceMixture lm = light_mixture(fx, light);
   MisOptions mis;
   mis.power = power;
+  mis.earned = true;  // mis_tab and mis_light_gmm with each slice's earned share
   const Problem p = make_problem(table, set, to, po, light, mis, &lm);
+  CHECK(p.mis.uniform_fraction == set.defensive(to, po));
+  std::printf("converge_test: earned uniform share at theta_o %.3f: %.4g\n", to, p.mis.uniform_fraction);
   const double ref = table_integral(p), stand_in = stand_in_integral(p);
   const int runs = 64;
   const std::uint64_t n = 1024;
@@ -335,11 +343,16 @@ TEST_CASE("bsdfmix converge writes the convergence CSV with the exact columns", 
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);
-  CHECK(line == "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample");
+  CHECK(line == "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample,"
+                "uniform_fraction");
   int rows = 0;
+  const mix::MixtureSet set = to_mixture_set(read_mixture_file(fiber().mixture));
   while (std::getline(in, line)) {
     ++rows;
-    CHECK(std::count(line.begin(), line.end(), ',') == 11);
+    CHECK(std::count(line.begin(), line.end(), ',') == 12);
+    // the share used: the earned one (the default) at the row's direction
+    const double theta_o = std::stod(line.substr(line.find(',') + 1));
+    CHECK(std::stod(line.substr(line.rfind(',') + 1)) == Approx(set.defensive(theta_o, 0.0)).margin(1e-9));
   }
   CHECK(rows == 2 * 2 * 11 * 7);  // directions x scenes x estimators (the default under a scene) x N in 1..64
   std::ifstream tail((dir / "conv_tail.csv").string());
@@ -549,7 +562,7 @@ TEST_CASE("bsdfmix converge writes the rows of is_rgl and mis_light_rgl", "[conv
     std::vector<std::string> cells;
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-    REQUIRE(cells.size() == 12);
+    REQUIRE(cells.size() == 13);
     ++rows[cells[4]];
     CHECK(std::isfinite(std::stod(cells[7])));  // mean
     CHECK(std::stod(cells[8]) > 0);             // reference

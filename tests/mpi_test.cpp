@@ -192,6 +192,9 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   for (std::size_t s = 0; s < 5; ++s) {
     p.report[s].rgb_l1_rel = std::abs(u(rng));
     p.report[s].rgb_negative = 0.1 * std::abs(u(rng));
+    p.report[s].defensive = 0.01 * double(s);
+    p.report[s].max_weight = std::abs(u(rng));
+    p.mixture.defensive[s] = 0.02 * double(s);
   }
   p.report[3].rgb_l1_rel = p.report[3].rgb_negative = std::numeric_limits<double>::quiet_NaN();  // a row without colour
   p.search.push_back({103, 2, 0, -1, 0.2, 0.208, true});
@@ -208,7 +211,7 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   CHECK(same_bits(q.mixture.table_theta_o, p.mixture.table_theta_o));
   CHECK(same_bits(q.mixture.table_phi_o, p.mixture.table_phi_o));
   for (auto f : {&MixtureFile::theta_o, &MixtureFile::phi_o, &MixtureFile::scale, &MixtureFile::loglik,
-                 &MixtureFile::l1_rel})
+                 &MixtureFile::l1_rel, &MixtureFile::defensive})
     CHECK(same_bits(q.mixture.*f, p.mixture.*f));
   CHECK(same_bits(q.mixture.k, p.mixture.k));
   CHECK(q.mixture.kmax == p.mixture.kmax);
@@ -225,8 +228,10 @@ TEST_CASE("a batch part survives its trip through bytes bit for bit", "[scale]")
   for (std::size_t i = 0; i < p.report.size(); ++i) {
     const ReportRow &a = q.report[i], &b = p.report[i];
     CHECK(a.slice == b.slice);
-    CHECK(same_bits(std::vector<double>{a.theta_o, a.phi_o, a.loglik, a.l1_rel, a.seconds, a.rgb_l1_rel, a.rgb_negative},
-                    std::vector<double>{b.theta_o, b.phi_o, b.loglik, b.l1_rel, b.seconds, b.rgb_l1_rel, b.rgb_negative}));
+    CHECK(same_bits(std::vector<double>{a.theta_o, a.phi_o, a.loglik, a.l1_rel, a.seconds, a.rgb_l1_rel, a.rgb_negative,
+                                        a.defensive, a.max_weight},
+                    std::vector<double>{b.theta_o, b.phi_o, b.loglik, b.l1_rel, b.seconds, b.rgb_l1_rel, b.rgb_negative,
+                                        b.defensive, b.max_weight}));
     CHECK(a.k == b.k);
     CHECK(a.iterations == b.iterations);
     CHECK(a.device == b.device);

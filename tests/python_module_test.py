@@ -5,7 +5,7 @@ Run by ctest (python_module_test) on the fixture examples_data (tests/examples_d
 - the samples of `bsdfmix sample --cpu` (same seed and stream) and their pdf;
 - every figure of `bsdfmix compare` (l1_rel, energy, per channel) from the module's eval_f,
   eval_rgb, Table and integrand_weights, on the padded and the ragged float32 file;
-- the blend, the blended mixture and the product against the set's own pdf;
+- the blend, the blended mixture and the product against the set's own pdf; the earned share;
 - a file interpolated by displacement: its samples and figures as above, and at() as its pdf;
 - tables read as h5py reads them; errors raised as Python exceptions.
 """
@@ -131,6 +131,13 @@ def test_slices_and_blend():
                                rtol=1e-12, atol=1e-300)
     # its luminance stand-in has one scale, the blended one: eval_f's to the slices' difference
     np.testing.assert_allclose(b.eval_param(th, ph) / jac, m.eval_f(0.1, 0.2, th, ph), rtol=2e-3)
+    # the earned uniform share: the file's per slice, blended with the blend weights
+    info = bsdfmix.mixture_info(str(DATA / "mixture.h5"))
+    assert [s.defensive for s in m.slices] == list(info["defensive"])
+    assert all(0 <= s.defensive <= 0.1 for s in m.slices)
+    assert m.defensive(grid[2], 0.7) == pytest.approx(sum(w * m.slices[i].defensive for i, w in zip(slices, weights)))
+    old = bsdfmix.load_mixture(str(ROOT / "tests" / "data" / "mixture_before_rgb.h5"))  # written before the share
+    assert all(s.defensive == 0.1 for s in old.slices) and old.defensive(old.grid_theta_o[0], 0.0) == pytest.approx(0.1)
 
 
 def test_displacement():

@@ -191,7 +191,7 @@ TEST_CASE("a grey table gives rgb_scale = scale * weight in every channel", "[st
   REQUIRE(rows.size() == m.slices() + 1);
   for (std::size_t r = 1; r < rows.size(); ++r) {
     const std::vector<std::string>& row = rows[r];
-    REQUIRE(row.size() == 12);
+    REQUIRE(row.size() == 14);
     CHECK(std::stod(row[10]) == Approx(std::stod(row[6])).epsilon(1e-6));
     CHECK(std::stod(row[11]) == 0.0);
   }
@@ -211,7 +211,7 @@ TEST_CASE("the report's errors are the stand-in's through the header, recomputed
   const auto rows = csv_rows(f.report);
   REQUIRE(rows.size() == m.slices() + 1);
   CHECK(rows[0] == std::vector<std::string>{"slice", "theta_o", "phi_o", "k", "iterations", "loglik", "l1_rel", "seconds",
-                                            "device", "status", "rgb_l1_rel", "rgb_negative"});
+                                            "device", "status", "rgb_l1_rel", "rgb_negative", "defensive", "max_weight"});
   const TableReader reader(table);
   const TableMeta& meta = reader.meta();
   const std::size_t np = meta.phi_i.size();

@@ -257,11 +257,12 @@ TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
     }
     // The CSVs follow their contracts.
     const std::string report = slurp(f.report), search = slurp(f.search_report);
-    CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status,rgb_l1_rel,rgb_negative\n",
+    CHECK(report.rfind("slice,theta_o,phi_o,k,iterations,loglik,l1_rel,seconds,device,status,rgb_l1_rel,rgb_negative,"
+                       "defensive,max_weight\n",
                        0) == 0);
-    CHECK(std::count(report.begin(), report.end(), ',') == 5 * 11);  // 12 fields a row, no comma inside one
-    CHECK(std::count(report.begin(), report.end(), '\n') == std::count(report.begin(), report.end(), ',') / 11);
-    CHECK_THAT(report, Catch::Contains(",ok,,\n"));  // no rgb: the colour columns are empty
+    CHECK(std::count(report.begin(), report.end(), ',') == 5 * 13);  // 14 fields a row, no comma inside one
+    CHECK(std::count(report.begin(), report.end(), '\n') == std::count(report.begin(), report.end(), ',') / 13);
+    CHECK_THAT(report, Catch::Contains(",ok,,,"));  // no rgb: the colour columns are empty
     CHECK(search.rfind("slice,k,restart,loglik,l1_rel,score,chosen\n", 0) == 0);
     CHECK(std::count(report.begin(), report.end(), '\n') == 5);
     std::size_t rows = 0;
@@ -320,8 +321,8 @@ TEST_CASE("zero slices are stored with scale 0 and never NaN", "[fit]") {
   CHECK(std::isfinite(m.loglik[0]));
   CHECK(m.scale[1] > 0);
   const std::string report = slurp(f.report);
-  CHECK_THAT(report, Catch::Contains(",zero: every cell is zero; stored with scale 0,,\n"));
-  CHECK_THAT(report, Catch::Contains(",ok,,\n"));
+  CHECK_THAT(report, Catch::Contains(",zero: every cell is zero; stored with scale 0,,,"));
+  CHECK_THAT(report, Catch::Contains(",ok,,,"));  // the empty colour columns, then defensive
 }
 
 TEST_CASE("a slice with fewer non-zero cells than K gets one component per cell", "[fit]") {
@@ -343,7 +344,7 @@ TEST_CASE("a slice with fewer non-zero cells than K gets one component per cell"
   // Three components at the covariance floor, one on each cell: each holds most of its
   // mass in its cell (its center density times the cell area would overstate it 2.5x).
   CHECK(m.l1_rel[0] < 0.4);
-  CHECK_THAT(slurp(f.report), Catch::Contains(",reduced: K lowered from 8 to 3; the number of non-zero cells,,\n"));
+  CHECK_THAT(slurp(f.report), Catch::Contains(",reduced: K lowered from 8 to 3; the number of non-zero cells,,,"));
 }
 
 TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
@@ -457,12 +458,13 @@ TEST_CASE("fit_slices fits in memory what the file sweep fits", "[fit][sweep]") 
     CHECK_FALSE(r.report[4].failed());
 
     // Its rows are the file sweep's CSV rows.
-    std::string report = "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,device,status,rgb_l1_rel,rgb_negative\n";
+    std::string report =
+        "slice,theta_o,phi_o,k,iterations,loglik,l1_rel,device,status,rgb_l1_rel,rgb_negative,defensive,max_weight\n";
     for (const ReportRow& row : r.report)
       report += std::to_string(row.slice) + "," + g9(row.theta_o) + "," + g9(row.phi_o) + "," +
                 std::to_string(row.k) + "," + std::to_string(row.iterations) + "," + g9(row.loglik) + "," +
                 g9(row.l1_rel) + "," + row.device + "," + row.status + "," + g9(row.rgb_l1_rel) + "," +
-                g9(row.rgb_negative) + "\n";
+                g9(row.rgb_negative) + "," + g9(row.defensive) + "," + g9(row.max_weight) + "\n";
     CHECK(without_column(report, 99) == without_column(slurp(f.report), 7));
     std::string search_csv = "slice,k,restart,loglik,l1_rel,score,chosen\n";
     for (const SearchRow& row : r.search)

@@ -2,15 +2,34 @@
 // `bsdfmix bench sampling`: a material's samplers against each other (bench/sampling_peers.*).
 #include <cstdio>
 #include <memory>
+#include <string>
 
 #include "bench/em_bench.hpp"
 #include "bench/sampling_peers.hpp"
 #include "cli/commands.hpp"
 #include "cli/environment.hpp"
+#include "core/error.hpp"
 #include "core/progress.hpp"
 #include "fit/em.hpp"
 
 namespace bsdfmix::cli {
+
+namespace {
+
+// --uniform-fraction as a number (earned is handled before).
+double parse_share(const std::string& text) {
+  std::size_t used = 0;
+  double v = -1;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size()) throw ConfigError("bench sampling: --uniform-fraction '" + text + "' is not a number or earned");
+  return v;
+}
+
+}  // namespace
 
 void add_bench(CLI::App& app, Common& common) {
   auto* sub = app.add_subcommand("bench", "benchmarks");
@@ -19,6 +38,7 @@ void add_bench(CLI::App& app, Common& common) {
     bench::EmBenchOptions o;
     bench::SamplingPeersOptions s;
     bool list_views = false;
+    std::string share = "earned";  // --uniform-fraction: a number or earned
   };
   const auto args = std::make_shared<Args>();
   em->add_option("--k", args->o.k, "Gaussian components")->capture_default_str();
@@ -52,7 +72,8 @@ void add_bench(CLI::App& app, Common& common) {
   sp->add_option("--seed", args->s.seed, "seed of the views and the samples")->capture_default_str();
   sp->add_option("--quadrature", args->s.quadrature, "the RGL integral's cells in sin^2 theta (x 2 in phi)")
       ->capture_default_str();
-  sp->add_option("--uniform-fraction", args->s.uniform_fraction, "the defensive mixture's uniform share")
+  sp->add_option("--uniform-fraction", args->share,
+                 "the defensive mixture's uniform share: a number, or earned (each view's share from the mixture file)")
       ->capture_default_str();
   sp->add_option("--light-fraction", args->s.light_fraction, "light sampling's share in the mis_light_* samplers")
       ->capture_default_str();
@@ -67,6 +88,8 @@ void add_bench(CLI::App& app, Common& common) {
     }
     if (common.quiet) Progress::set_enabled(false);
     bench::SamplingPeersOptions s = args->s;
+    s.earned = args->share == "earned";
+    if (!s.earned) s.uniform_fraction = parse_share(args->share);
     s.light_engine = run_environment().engine;
     bench::bench_sampling(s, common.device, common.quiet);
   });

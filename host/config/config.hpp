@@ -47,6 +47,7 @@ struct ConvergeSection {
   std::string mixture;                   // "" = fit.output
   std::vector<std::string> estimators;
   double uniform_fraction = 0.1;
+  bool earned_share = true;  // uniform_fraction: earned (each slice's share from the mixture file)
   std::string tail_csv;  // "" = beside csv: <csv stem>_tail.csv
   bool cpu = false;      // the CPU reference instead of the device kernels
   // Sampling with the lighting (docs/sampling.md): MIS fractions and heuristic, the

@@ -75,8 +75,12 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   for (const auto& e : c.estimators) {
     if (!known_estimator(e)) n.fail("estimators", "unknown estimator '" + e + "' (expected " + estimator_list() + ")");
   }
-  c.uniform_fraction = n.number("uniform_fraction", 0.0, 1.0);
-  if (c.uniform_fraction >= 1.0) n.fail("uniform_fraction", "must be below 1 (1 is pure uniform sampling: us_tab)");
+  c.earned_share = n.has("uniform_fraction") && n.raw("uniform_fraction").IsScalar() &&
+                   n.raw("uniform_fraction").Scalar() == "earned";
+  if (!c.earned_share) {
+    c.uniform_fraction = n.number("uniform_fraction", 0.0, 1.0);
+    if (c.uniform_fraction >= 1.0) n.fail("uniform_fraction", "must be below 1 (1 is pure uniform sampling: us_tab), or earned");
+  }
   if (n.has("tail_csv")) c.tail_csv = n.str("tail_csv");
   c.light_fraction = n.number("light_fraction", 0.0, 1.0);
   if (c.light_fraction >= 1.0) n.fail("light_fraction", "must be below 1 (1 is light sampling alone: the `light` estimator)");

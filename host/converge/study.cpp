@@ -91,7 +91,7 @@ std::vector<ConvergenceRow> convergence_rows(const RunSums& sums, double referen
 std::string format_row(const ConvergenceRow& r) {
   return r.table + "," + num(r.theta_o) + "," + num(r.phi_o) + "," + r.scene + "," + r.estimator + "," +
          std::to_string(r.samples) + "," + std::to_string(r.runs) + "," + num(r.mean) + "," + num(r.reference) + "," +
-         num(r.rmse) + "," + num(r.rel_rmse) + "," + num(r.ns_per_sample);
+         num(r.rmse) + "," + num(r.rel_rmse) + "," + num(r.ns_per_sample) + "," + num(r.uniform_fraction);
 }
 
 namespace {
@@ -157,8 +157,10 @@ void read_inputs(const StudySpec& spec, StudyInputs& in) {
 std::string direction_tail(const StudySpec& spec, const StudyInputs& in, double theta_o, double phi_o) {
   const TableReader& table = in.table;
   const MixtureFile& mf = in.mf;
-  Problem p0 = make_problem(table, in.set, theta_o, phi_o, default_lighting(table.meta().domain, 1.0),
-                            spec.mis.uniform_fraction);
+  MisOptions mis;  // mis_tab's share alone matters here
+  mis.uniform_fraction = spec.mis.uniform_fraction;
+  mis.earned = spec.mis.earned;
+  Problem p0 = make_problem(table, in.set, theta_o, phi_o, default_lighting(table.meta().domain, 1.0), mis, nullptr);
   const TailDiagnostic td = tail_diagnostic(p0);
   const auto b = in.set.blend(theta_o, phi_o);
   int main = 0;  // the slice with the largest blend weight
@@ -179,7 +181,8 @@ std::string direction_tail(const StudySpec& spec, const StudyInputs& in, double 
                           std::to_string(table_bytes) + "," + std::to_string(mix_bytes) + "," + num(td.missed_is) +
                           "\n";
   std::string msg = "converge: theta_o " + fixed(theta_o, 4) + " phi_o " + fixed(phi_o, 4) + ": K " +
-                    std::to_string(k_used) + ", predicted variance per sample (L=1) " +
+                    std::to_string(k_used) + ", mis_tab uniform share " + short_num(p0.mis.uniform_fraction) +
+                    (spec.mis.earned ? " (earned)" : "") + ", predicted variance per sample (L=1) " +
                     (td.relvar_us > 1e-9 ? "relative to uniform: is_tab " + num(td.relvar_is / td.relvar_us) +
                                                ", mis_tab " + num(td.relvar_mis / td.relvar_us)
                                          : "(uniform sampling is exact here): is_tab " + num(td.relvar_is) +
@@ -296,6 +299,7 @@ void scene_rows(const StudySpec& spec, const Lighting& light, const Problem& p, 
       r.estimator = estimator_name(e);
       r.theta_o = p.theta_o;
       r.phi_o = p.phi_o;
+      r.uniform_fraction = p.mis.uniform_fraction;
     }
     const ConvergenceRow& last = rs.back();
     line += std::string(i ? ";" : "") + " " + estimator_name(e) + " " + short_num(last.rel_rmse);

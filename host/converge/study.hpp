@@ -48,10 +48,11 @@ struct ConvergenceRow {
   std::uint64_t samples = 0;
   int runs = 0;
   double mean = 0, reference = 0, rmse = 0, rel_rmse = 0, ns_per_sample = 0;
+  double uniform_fraction = 0;  // mis_tab's uniform share at this direction (every row of it)
 };
 
 constexpr const char* kConvergenceHeader =
-    "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample";
+    "table,theta_o,phi_o,scene,estimator,samples,runs,mean,reference,rmse,rel_rmse,ns_per_sample,uniform_fraction";
 constexpr const char* kTailHeader =
     "table,theta_o,phi_o,k,l1_rel,reference,stand_in,stand_in_error,relvar_us,relvar_is,relvar_mis,"
     "max_weight_is,max_weight_mis,table_bytes,mixture_bytes,missed_is";

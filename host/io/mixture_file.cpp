@@ -51,6 +51,7 @@ void MixtureFile::add_slice(double theta_o_, double phi_o_, double scale_, doubl
   scale.push_back(scale_);
   loglik.push_back(loglik_);
   l1_rel.push_back(l1_rel_);
+  defensive.push_back(kDefaultDefensive);
   k.push_back(kk);
   base.push_back(0.0);
   base_rgb.insert(base_rgb.end(), 3, 0.0);
@@ -111,6 +112,7 @@ void MixtureFile::add_slice_from(const MixtureFile& from, std::size_t s) {
   add_slice(from.theta_o[s], from.phi_o[s], from.scale[s], from.loglik[s], from.l1_rel[s], w, mean, cov,
             from.has_rgb() ? &rgb : nullptr, &copies);
   set_base(from.base[s], &from.base_rgb[3 * s]);
+  defensive.back() = from.defensive[s];
 }
 
 MixtureFile MixtureFile::header_only() const {
@@ -155,7 +157,7 @@ std::uint64_t MixtureFile::payload_bytes() const {
   for (std::size_t i = 0; has_copies() && i < S; ++i)
     if (!slice_copies(i).empty()) copied += std::uint64_t(k[i]);
   return N * 6 * sizeof(float) + (has_rgb() ? N * 3 * rgb_bytes : 0) +
-         (has_copies() ? copied * kCopyValues * rgb_bytes + S * sizeof(std::int32_t) : 0) + S * 5 * sizeof(double) +
+         (has_copies() ? copied * kCopyValues * rgb_bytes + S * sizeof(std::int32_t) : 0) + S * 6 * sizeof(double) +
          S * sizeof(std::int32_t) * (storage.ragged ? 2 : 1) +
          (table_theta_o.size() + table_phi_o.size()) * sizeof(double);
 }
@@ -225,6 +227,7 @@ void write_mixture_group(hid_t file, const MixtureFile& m, const std::string& pa
     h5::write_doubles(id, "base", {S}, m.base.data(), path);
     if (m.has_rgb()) h5::write_doubles(id, "base_rgb", {S, 3}, m.base_rgb.data(), path);
   }
+  h5::write_doubles(id, "defensive", {S}, m.defensive.data(), path);
   h5::write_doubles(id, "table_theta_o", {m.table_theta_o.size()}, m.table_theta_o.data(), path);
   h5::write_doubles(id, "table_phi_o", {m.table_phi_o.size()}, m.table_phi_o.data(), path);
   h5::write_string_attr(id, "domain", domain_name(m.domain), path);
@@ -371,8 +374,10 @@ MixtureFile read_mixture_file(const std::string& path) {
   m.loglik = h5::read_doubles(id, "loglik", where);
   m.l1_rel = h5::read_doubles(id, "l1_rel", where);
   const std::size_t S = m.theta_o.size();
+  m.defensive = read_mixture_defensive(id, where, S);
   for (const auto& [name, v] : {std::pair{"phi_o", &m.phi_o}, std::pair{"scale", &m.scale},
-                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel}})
+                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel},
+                                 std::pair{"defensive", &m.defensive}})
     if (v->size() != S)
       throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
                        std::to_string(S) + " (the length of theta_o)");
@@ -464,6 +469,7 @@ mix::SliceMixture stored_slice(const MixtureFile& m, std::size_t s) {
   sm.map = m.map;
   sm.base = m.base.empty() ? 0.0 : m.base[s];
   for (int c = 0; sm.base > 0 && c < 3; ++c) sm.base_rgb[c] = m.base_rgb[3 * s + std::size_t(c)];
+  sm.defensive = m.defensive[s];
   const std::vector<double> copies = m.slice_copies(s);
   if (!copies.empty()) sm.set_copies(copies);
   return sm;

@@ -33,6 +33,9 @@ MixtureStorage parse_storage(const std::string& name, const std::string& where);
 // without the attribute is version 1, in (theta, phi).
 constexpr int kMixtureFormatVersion = 2;
 
+// A slice's uniform share where its file has no `defensive` dataset (files before it).
+constexpr double kDefaultDefensive = 0.1;
+
 // Values per component of rgb_copies: kCopies copies x R, G, B.
 constexpr std::size_t kCopyValues = std::size_t(mix::kCopies) * 3;
 
@@ -51,6 +54,9 @@ struct MixtureFile {
   mix::Interpolation interpolation = mix::Interpolation::Blend;
 
   std::vector<double> theta_o, phi_o, scale, loglik, l1_rel;  // [S]
+  // [S]: each slice's earned uniform share (sweep/earned_share.hpp); add_slice appends 0.1,
+  // as a file without the dataset reads.
+  std::vector<double> defensive;
   std::vector<std::int32_t> k;                                // [S]
   int kmax = 0;
   std::vector<float> weights;      // [S, kmax]

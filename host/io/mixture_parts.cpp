@@ -3,6 +3,7 @@
 #include "io/mixture_parts.hpp"
 
 #include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "io/h5.hpp"
@@ -40,6 +41,16 @@ void read_mixture_plane(hid_t id, const std::string& where, MixtureFile& m) {
                        std::to_string(kMixtureFormatVersion) + "); update bsdfmix");
   }
   if (h5::has_attr(id, "map")) m.map = parse_map(h5::read_string_attr(id, "map", where), m.domain, where + " attribute 'map'");
+}
+
+// Each slice's uniform share, in [0, 1); files written before it: 0.1 for every slice.
+std::vector<double> read_mixture_defensive(hid_t id, const std::string& where, std::size_t S) {
+  if (!h5::exists(id, "defensive")) return std::vector<double>(S, kDefaultDefensive);
+  std::vector<double> a = h5::read_doubles(id, "defensive", where);
+  for (std::size_t s = 0; s < a.size(); ++s)
+    if (!(a[s] >= 0 && a[s] < 1))
+      throw InputError(where + " slice " + std::to_string(s) + ": defensive is not a share in [0, 1)");
+  return a;
 }
 
 }  // namespace bsdfmix

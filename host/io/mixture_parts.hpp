@@ -4,6 +4,7 @@
 #include <hdf5.h>
 
 #include <string>
+#include <vector>
 
 #include "io/mixture_file.hpp"
 
@@ -15,5 +16,9 @@ void read_mixture_plane(hid_t id, const std::string& where, MixtureFile& m);
 // The optional base (docs/formats.md, "The base"): zeros when absent. After theta_o and
 // the map are read.
 void read_mixture_base(hid_t id, const std::string& where, MixtureFile& m);
+
+// Each slice's uniform share, in [0, 1) (docs/formats.md, `defensive`); files written
+// before it: 0.1 for every slice.
+std::vector<double> read_mixture_defensive(hid_t id, const std::string& where, std::size_t S);
 
 }  // namespace bsdfmix

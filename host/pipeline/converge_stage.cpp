@@ -45,6 +45,7 @@ void stage_converge(const Config& config, const std::string& device_selector, co
              std::to_string(spec.samples_max) + " (N doubles)");
   spec.seed = c.seed;
   spec.mis.uniform_fraction = c.uniform_fraction;
+  spec.mis.earned = c.earned_share;
   spec.mis.light_fraction = c.light_fraction;
   spec.mis.product_fraction = c.product_fraction;
   spec.mis.product_light = c.product_light;

@@ -198,6 +198,12 @@ Rgb TableBsdf::f_rgb(FSource which, double theta_o, double theta, double phi) co
   return Rgb(c[0] / j, c[1] / j, c[2] / j);
 }
 
+double TableBsdf::share(double theta_o) const {
+  if (uniform_fraction >= 0 || !has_set_) return uniform_fraction >= 0 ? uniform_fraction : 0.1;
+  if (bracketed(theta_o)) return set_.defensive(theta_o, 0.0);
+  return set_.slices[std::size_t(nearest_fitted(theta_o))].defensive;
+}
+
 mix::Sample TableBsdf::mixture_sample(double theta_o, const double u[4]) const {
   if (bracketed(theta_o)) return set_.sample(theta_o, 0.0, u[0], u[1], u[2], u[3]);
   return set_.slices[std::size_t(nearest_fitted(theta_o))].sample(meta_.domain, u[1], u[2], u[3]);
@@ -242,21 +248,22 @@ void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double&
     pdf_out = r.pdf;  // the warps' density there: what pdf() gives
     return;
   }
-  if (s == BsdfSampler::Uniform || (s == BsdfSampler::Mixture && u[0] < uniform_fraction)) {
+  const double a = s == BsdfSampler::Mixture ? share(theta_o) : 0.0;
+  if (s == BsdfSampler::Uniform || (s == BsdfSampler::Mixture && u[0] < a)) {
     // uniform over the domain's sphere or hemisphere of directions
     theta = meta_.domain == Domain::Fiber ? std::asin(std::clamp(2 * u[2] - 1, -1.0, 1.0))
                                           : std::acos(std::clamp(u[2], 0.0, 1.0));
     phi = 2 * kPi * u[3] - kPi;
   } else if (s == BsdfSampler::Mixture) {
     if (!has_set_) throw InputError("render: mixture sampling needs the mixtures");
-    const double v[4] = {(u[0] - uniform_fraction) / (1 - uniform_fraction), u[1], u[2], u[3]};
+    const double v[4] = {(u[0] - a) / (1 - a), u[1], u[2], u[3]};
     const mix::Sample m = mixture_sample(theta_o, v);
     if (!m.valid) return;
     theta = m.theta;
     phi = m.phi;
     // the sampler already evaluated the mixture's density there: the same number pdf()
     // would compute again (MixtureSet::sample calls pdf_omega at the sample)
-    pdf_out = uniform_fraction * uniform_pdf_ + (1 - uniform_fraction) * m.pdf_omega;
+    pdf_out = a * uniform_pdf_ + (1 - a) * m.pdf_omega;
     return;
   } else {
     // the table CDF of one of the two slices around theta_o, picked by its weight
@@ -291,8 +298,10 @@ double TableBsdf::pdf(BsdfSampler s, double theta_o, double theta, double phi) c
     const double st = std::sin(theta);
     return rgl_->pdf({std::sin(theta_o), 0.0, std::cos(theta_o)}, {st * std::cos(phi), st * std::sin(phi), std::cos(theta)});
   }
-  if (s == BsdfSampler::Mixture)
-    return uniform_fraction * uniform_pdf_ + (1 - uniform_fraction) * mixture_pdf(theta_o, theta, phi);
+  if (s == BsdfSampler::Mixture) {
+    const double a = share(theta_o);
+    return a * uniform_pdf_ + (1 - a) * mixture_pdf(theta_o, theta, phi);
+  }
   std::size_t i0, i1;
   double w;
   bracket(theta_o, i0, i1, w);

@@ -57,11 +57,16 @@ class TableBsdf {
   bool has_rgb() const { return !rgb_.empty(); }
 
   // A direction (theta, phi) from uniforms u[0..3] and its density per steradian;
-  // pdf 0: no sample. The mixture sampler is the mixture with `uniform_fraction` of
+  // pdf 0: no sample. The mixture sampler is the mixture with share(theta_o) of
   // uniform samples (balance heuristic), as mis_tab.
   void sample(BsdfSampler s, double theta_o, const double u[4], double& theta, double& phi, double& pdf) const;
   double pdf(BsdfSampler s, double theta_o, double theta, double phi) const;
-  double uniform_fraction = 0.1;
+  // The mixture sampler's uniform share: this number, or below 0 the mixture file's earned
+  // share at theta_o (share()).
+  double uniform_fraction = -1;
+  // The uniform share at theta_o: uniform_fraction, or the earned one (MixtureSet::defensive
+  // when a fitted slice brackets theta_o, else the nearest fitted slice's).
+  double share(double theta_o) const;
 
   // The mixture's own sampler and density at theta_o: the header's MixtureSet::sample
   // and pdf_omega at (theta_o, 0) when a fitted slice brackets theta_o, else the nearest

@@ -237,6 +237,7 @@ Problem make_problem(const TableReader& table, const mix::MixtureSet& set, doubl
   p.light.domain = p.table.domain;
   p.light_sampler = make_light_sampler(p.light);
   p.mis = mis;
+  if (mis.earned) p.mis.uniform_fraction = set.defensive(theta_o, phi_o);
   if (light_mixture) {
     p.product = p.set->product_with(theta_o, phi_o, *light_mixture, mis.product, nullptr, &p.product_kept);
     p.product_query = make_query(p.product, p.table.domain);

@@ -102,6 +102,9 @@ std::size_t cdf_find(const float* cdf, std::size_t n, double u);
 // lighting"): one-sample MIS, each technique picked with its fraction.
 struct MisOptions {
   double uniform_fraction = 0.1;  // mis_tab, and the BSDF side of mis_light_gmm: uniform's share
+  // make_problem sets uniform_fraction to the mixture's earned share at omega_o
+  // (MixtureSet::defensive; docs/sampling.md, "The earned share")
+  bool earned = false;
   double light_fraction = 0.5;    // mis_light_cdf, mis_light_gmm: light sampling's share
   double product_fraction = 0.8;  // mis_product: the product's share ...
   double product_light = 0.1;     // ... light sampling's; uniform takes the rest

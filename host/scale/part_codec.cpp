@@ -17,7 +17,7 @@ namespace {
 
 constexpr std::uint32_t kMagic = 0x42504D58;  // "XMPB"
 // 2: the report and search rows as fields, not CSV text; 3: rgb_scale and the rows' RGB errors;
-// 4: rgb_copies; 5: the map, the base and its colour
+// 4: rgb_copies; 5: the map, the base and its colour, the earned share
 constexpr std::uint32_t kVersion = 5;
 
 // Calls visit(field) for every field of a row, as row_fields.hpp lists them.
@@ -160,7 +160,7 @@ void part_fields(Part& p, Io& io) {
   io.field(m.azimuthal);
   io.field(m.table_source);
   io.field(m.fit_settings);
-  for (auto* v : {&m.table_theta_o, &m.table_phi_o, &m.theta_o, &m.phi_o, &m.scale, &m.loglik, &m.l1_rel}) io.field(*v);
+  for (auto* v : {&m.table_theta_o, &m.table_phi_o, &m.theta_o, &m.phi_o, &m.scale, &m.loglik, &m.l1_rel, &m.defensive}) io.field(*v);
   io.field(m.k);
   io.field(m.kmax);
   for (auto* v : {&m.weights, &m.means, &m.covariances}) io.field(*v);
@@ -191,7 +191,7 @@ BatchPart decode_part(const std::uint8_t* data, std::size_t size) {
   const MixtureFile& m = p.mixture;
   const std::size_t S = m.slices(), K = std::size_t(std::max(m.kmax, 0));
   if (!r.done() || p.slice_index.size() != S || m.phi_o.size() != S || m.scale.size() != S ||
-      m.loglik.size() != S || m.l1_rel.size() != S || m.k.size() != S || m.weights.size() != S * K ||
+      m.loglik.size() != S || m.l1_rel.size() != S || m.defensive.size() != S || m.k.size() != S || m.weights.size() != S * K ||
       m.means.size() != 2 * S * K || m.covariances.size() != 3 * S * K ||
       (!m.rgb_scale.empty() && m.rgb_scale.size() != 3 * S * K) ||
       (!m.rgb_copies.empty() && (m.rgb_scale.empty() || m.rgb_copies.size() != kCopyValues * S * K)) || p.report.size() != S)

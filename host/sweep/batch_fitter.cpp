@@ -14,6 +14,7 @@
 #include "fit/scheduler.hpp"
 #include "sweep/batch.hpp"
 #include "sweep/criterion.hpp"
+#include "sweep/earned_share.hpp"
 #include "sweep/stand_in.hpp"
 #include "sweep/sweep.hpp"
 
@@ -302,15 +303,18 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
                            meta.rgb ? &stand_ins[s].rgb : nullptr, &stand_ins[s].copies);
     if (w.base.lum > 0) part.mixture.set_base(w.base.lum / scale, w.base.rgb);
   }
-  // Their errors as the header evaluates the slices stored (float32 parameters), and the
-  // log-likelihood of the weights stored.
+  // Their errors as the header evaluates the slices stored (float32 parameters), the
+  // uniform share each earns (sweep/earned_share.hpp) and the log-likelihood of the weights stored.
   std::vector<StandInError> errors(b.size());
+  std::vector<EarnedShare> shares(b.size());
   const std::size_t first = part.mixture.slices() - b.size();
   const std::size_t threads = std::min<std::size_t>(b.size(), std::max(1u, std::thread::hardware_concurrency()));
   run_on_workers(b.size(), threads, [&](std::size_t, std::size_t s) {
     const SliceWork& w = b.work[s];
-    const bool based = !w.table.w.empty();
-    errors[s] = stand_in_error(based ? w.table : w.full, based ? w.table_rgb : w.rgb, slice_mixture(part.mixture, first + s));
+    const bool based = !w.table.w.empty();  // judged on the whole slice, the base included
+    const mix::SliceMixture stored = slice_mixture(part.mixture, first + s);
+    errors[s] = stand_in_error(based ? w.table : w.full, based ? w.table_rgb : w.rgb, stored);
+    shares[s] = earned_share(based ? w.table : w.full, stored, meta.domain);
     if (kept[s].ok)
       kept[s].loglik = em_detail::weighted_loglik(b.full_set.grid, em_detail::prepare_slice(b.full_set, s).w, kept[s].gmm);
   });
@@ -319,11 +323,14 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
     const Fitted& f = kept[s];
     const std::string st = status(b, s);
     part.mixture.l1_rel[first + s] = errors[s].l1_rel;
+    part.mixture.defensive[first + s] = shares[s].share;
     part.mixture.loglik[first + s] = f.loglik;
     ReportRow row{w.ref.index, part.mixture.theta_o[first + s], part.mixture.phi_o[first + s], f.gmm.k(), f.iterations,
                   f.loglik, errors[s].l1_rel, seconds / double(b.size()), devices_, st};
     row.rgb_l1_rel = errors[s].rgb_l1_rel;
     row.rgb_negative = errors[s].rgb_negative;
+    row.defensive = shares[s].share;
+    row.max_weight = shares[s].max_weight;
     part.report.push_back(row);
     part.search.insert(part.search.end(), b.search_rows[s].begin(), b.search_rows[s].end());
     if (st != "ok") log_line("slice " + std::to_string(w.ref.index) + ": " + st);

@@ -86,6 +86,29 @@ double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
   return (err + s.extra_error) / (s.reference_total > 0 ? s.reference_total : total);
 }
 
+std::vector<double> cell_masses(const WeightedSlice& s, const mix::SliceMixture& m) {
+  const std::size_t nt = s.theta.size(), np = s.phi.size();
+  const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
+  const bool averaged = s.map == Map::ThetaPhi;  // as l1_rel_error
+  std::vector<bool> narrow;
+  for (const auto& g : m.components) narrow.push_back(averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
+  std::vector<double> out(nt * np, 0.0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const double cell = area * mix::map_jacobian(s.map, s.theta[t]);
+    for (std::size_t p = 0; p < np && m.base > 0; ++p) {  // the Lambertian base at the cell's point
+      double x, y;
+      mix::to_map(m.map, s.theta[t], s.phi[p], x, y);
+      out[t * np + p] += m.base * mix::lambert_base(x, y) * cell;
+    }
+    for (std::size_t p = 0; p < np; ++p)
+      for (std::size_t k = 0; k < m.components.size(); ++k) {
+        const mix::Gaussian& g = m.components[k];
+        out[t * np + p] += g.weight * cell_density(g, narrow[k], s.map, s.theta[t], s.phi[p], dt, dp) * cell;
+      }
+  }
+  return out;
+}
+
 StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& rgb, const mix::SliceMixture& m) {
   StandInError e;
   const std::size_t nt = s.theta.size(), np = s.phi.size(), n = nt * np;

@@ -35,6 +35,12 @@ using mix::make_slice_mixture;
 // most of its mass in one cell; its center density overstates that 2.5x).
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m);
 
+// The probability mass of a prepared mixture (weights summing to 1) in each cell of the
+// slice, row-major like s.w: per component as l1_rel_error measures it (density at the
+// cell center, or over 3 x 3 points for a component narrower than half a cell), times the
+// cell's area; mass past the theta border is lost.
+std::vector<double> cell_masses(const WeightedSlice& s, const mix::SliceMixture& m);
+
 // The errors of a slice's stand-in exactly as a renderer evaluates it through the header:
 // each component's mass in each cell by the header's density (as l1_rel_error: at the cell
 // center, or over 3 x 3 points for a component narrower than half a cell; fit/gmm.hpp

@@ -28,6 +28,9 @@ struct ReportRow {  // one row of the fit report (docs/formats.md, "Fit report")
   // The stand-in's RGB error and the part of it in cells whose measured channel is
   // negative (sweep/fit_error.hpp StandInError); NaN for a table without rgb.
   double rgb_l1_rel = std::numeric_limits<double>::quiet_NaN(), rgb_negative = std::numeric_limits<double>::quiet_NaN();
+  // The uniform share the slice earns and the largest importance weight with it, over the
+  // integral (sweep/earned_share.hpp).
+  double defensive = 0.1, max_weight = 0;
   bool failed() const;
 };
 

@@ -32,6 +32,8 @@ void report_fields(Row& r, Visit&& visit) {
   visit("status", r.status, number);
   visit("rgb_l1_rel", r.rgb_l1_rel, colour);
   visit("rgb_negative", r.rgb_negative, colour);
+  visit("defensive", r.defensive, number);
+  visit("max_weight", r.max_weight, number);
 }
 
 // The same for a search row; its fields are std::size_t, int, double, bool.

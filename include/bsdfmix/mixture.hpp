@@ -278,6 +278,10 @@ inline void normal_pair(double u1, double u2, double& z0, double& z1) {
 struct SliceMixture {
   double theta_o = 0, phi_o = 0;
   double scale = 0;  // the luminance stand-in's amplitude: scale * pdf_param is the integrand
+  // The uniform share a sampler mixes in with this mixture (the file's `defensive`; 0.1 in
+  // files without it): the smallest share whose largest importance weight on the table is
+  // no larger than with 0.1 (docs/sampling.md, "The earned share").
+  double defensive = 0.1;
   bool has_rgb = false;  // the components' rgb amplitudes are set (else the colour is grey: eval_f)
   Map map = Map::ThetaPhi;  // the plane of the components (MixtureSet::prepare sets the file's)
   // The Lambertian base (Disk only, docs/formats.md "The base"): its weight beside the
@@ -661,6 +665,7 @@ inline SliceMixture displaced(const SliceMixture& a, const SliceMixture& b, cons
   out.theta_o = (1 - t) * a.theta_o + t * b.theta_o;
   out.phi_o = a.phi_o + t * wrap_phi(b.phi_o - a.phi_o);
   out.scale = (1 - t) * a.scale + t * b.scale;
+  out.defensive = (1 - t) * a.defensive + t * b.defensive;
   out.map = a.map;
   out.base = (1 - t) * a.base + t * b.base;
   for (int c = 0; c < 3; ++c) out.base_rgb[c] = (1 - t) * a.base_rgb[c] + t * b.base_rgb[c];
@@ -899,6 +904,15 @@ class MixtureSet {
     return mixed(piece, w, n, rotate, theta_o, phi_o);
   }
 
+  // The uniform share for omega_o: the slices' `defensive` with their blend weights
+  // (blend(); with Displace, the same weights of the two slices).
+  double defensive(double theta_o, double phi_o) const {
+    const Blend b = blend(theta_o, phi_o);
+    double a = 0;
+    for (int k = 0; k < b.count; ++k) a += b.weight[k] * slices[std::size_t(b.slice[k])].defensive;
+    return a;
+  }
+
   // Density over (theta, phi) of what sample() returns for omega_o.
   double pdf_param(double theta_o, double phi_o, double theta, double phi) const {
     if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
@@ -1102,6 +1116,7 @@ class MixtureSet {
     out.theta_o = theta_o;
     out.phi_o = phi_o;
     out.map = piece[0]->map;
+    out.defensive = 0;  // the pieces' shares, weighted below
     out.has_rgb = true;
     bool copies = false;
     for (int k = 0; k < n; ++k) copies = copies || !piece[k]->colour.empty();
@@ -1110,6 +1125,7 @@ class MixtureSet {
       out.scale += w[k] * s.scale;
       out.base += w[k] * s.base;
       for (int c = 0; c < 3; ++c) out.base_rgb[c] += w[k] * s.base_rgb[c];
+      out.defensive += w[k] * s.defensive;
       out.has_rgb = out.has_rgb && s.has_rgb;
       for (Gaussian g : s.components) {
         g.weight *= w[k];
