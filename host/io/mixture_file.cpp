@@ -374,10 +374,8 @@ MixtureFile read_mixture_file(const std::string& path) {
   m.loglik = h5::read_doubles(id, "loglik", where);
   m.l1_rel = h5::read_doubles(id, "l1_rel", where);
   const std::size_t S = m.theta_o.size();
-  m.defensive = read_mixture_defensive(id, where, S);
   for (const auto& [name, v] : {std::pair{"phi_o", &m.phi_o}, std::pair{"scale", &m.scale},
-                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel},
-                                 std::pair{"defensive", &m.defensive}})
+                                 std::pair{"loglik", &m.loglik}, std::pair{"l1_rel", &m.l1_rel}})
     if (v->size() != S)
       throw InputError(where + "/" + name + ": length " + std::to_string(v->size()) + ", expected " +
                        std::to_string(S) + " (the length of theta_o)");

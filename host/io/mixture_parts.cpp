@@ -13,6 +13,7 @@ namespace bsdfmix {
 // The optional base (docs/formats.md, "The base"): zeros when absent.
 void read_mixture_base(hid_t id, const std::string& where, MixtureFile& m) {
   const std::size_t S = m.theta_o.size();
+  m.defensive = read_mixture_defensive(id, where, S);
   m.base.assign(S, 0.0);
   m.base_rgb.assign(3 * S, 0.0);
   if (!h5::exists(id, "base")) return;
@@ -47,6 +48,9 @@ void read_mixture_plane(hid_t id, const std::string& where, MixtureFile& m) {
 std::vector<double> read_mixture_defensive(hid_t id, const std::string& where, std::size_t S) {
   if (!h5::exists(id, "defensive")) return std::vector<double>(S, kDefaultDefensive);
   std::vector<double> a = h5::read_doubles(id, "defensive", where);
+  if (a.size() != S)
+    throw InputError(where + "/defensive: length " + std::to_string(a.size()) + ", expected " + std::to_string(S) +
+                     " (the length of theta_o)");
   for (std::size_t s = 0; s < a.size(); ++s)
     if (!(a[s] >= 0 && a[s] < 1))
       throw InputError(where + " slice " + std::to_string(s) + ": defensive is not a share in [0, 1)");
