@@ -23,6 +23,8 @@ The tables (NAME: CSV):
   pinned_k             bench/results/pinned_k.csv (docs/studies/satin_grazing.md)
   tails                bench/results/tails.csv (docs/studies/satin_grazing.md, "Heavier tails")
   parameterization     bench/results/parameterization.csv (docs/studies/parameterization.md)
+  map_accuracy         bench/results/map_accuracy.csv (docs/fitting.md, "The map and the base")
+  renderer_chi2        bench/results/renderer_chi2{,_theta_phi}.csv (docs/sampling.md, "A renderer's sampling test")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_rgl           bench/results/render/<material>_skymap/render.csv (docs/studies/render_materials.md,
                        "The file's own sampler against the mixtures, in the image"): the RGL file's own
@@ -224,6 +226,36 @@ def parameterization():
             table, math.degrees(float(maps[next(iter(maps))][0]["theta_o"])), k_cells(maps.get("native")),
             k_cells(maps.get("disk")), k_cells(maps.get("half")), k_cells(maps.get("project")),
             "%s (%s)" % (pct(d["l1_rel"], 1), d["k"]) if d else "-"))
+    return out
+
+
+def map_accuracy():
+    """Per table: median L1 (mean K) of the fitted rows in each map, largest energy errors."""
+    out = ["| table | (theta, phi) | equal-area map | largest energy error, (theta, phi) / map |", "|---|---|---|---|"]
+    by = {}
+    for r in rows("map_accuracy.csv"):
+        by.setdefault(r["table"], {}).setdefault(r["map"], []).append(r)
+    for table, maps in by.items():
+        cell = {}
+        for m, rr in maps.items():
+            l1 = sorted(float(r["l1_rel"]) for r in rr)
+            med = (l1[(len(l1) - 1) // 2] + l1[len(l1) // 2]) / 2
+            cell[m] = ("%.2f%% (%.1f)" % (100 * med, sum(float(r["k"]) for r in rr) / len(rr)),
+                       "%.1f%%" % (100 * max(abs(float(r["energy"])) for r in rr)))
+        out.append("| %s | %s | %s | %s / %s |" % (table, cell["theta_phi"][0], cell["equal_area"][0],
+                                                   cell["theta_phi"][1], cell["equal_area"][1]))
+    return out
+
+
+def renderer_chi2():
+    """Views passing Mitsuba 3's chi-square test per map, and with 16 x 16 quadrature nodes."""
+    out = ["| fits | views | pass | pass with 16 x 16 nodes, pole rows out |", "|---|---|---|---|"]
+    for name, label in (("renderer_chi2_theta_phi.csv", "(theta, phi)"), ("renderer_chi2.csv", "equal-area map")):
+        rr = rows(name)
+        alpha = 1 - (1 - 0.01) ** (1 / len(rr))
+        passed = sum(r["passed"] in ("1", "True", "true") for r in rr)
+        fine = sum(float(r["p_value_no_pole_rows_ires16"]) >= alpha for r in rr) if label != "(theta, phi)" else None
+        out.append("| %s | %d | %d | %s |" % (label, len(rr), passed, "-" if fine is None else str(fine)))
     return out
 
 
@@ -634,7 +666,7 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
           "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k, "tails": tails,
-          "parameterization": parameterization,
+          "parameterization": parameterization, "map_accuracy": map_accuracy, "renderer_chi2": renderer_chi2,
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity,

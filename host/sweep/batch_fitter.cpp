@@ -292,11 +292,14 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
     Fitted& f = kept[s];
     const SliceWork& w = b.work[s];
     // With a base: its amplitude beside the Gaussians', the weights shared out over both.
-    const double scale = stand_ins[s].scale + w.base.lum;
+    // The Gaussians carry the rest less what the base's clamp added (SliceBase::excess),
+    // so that the whole keeps the table's integral.
+    const double rest = w.full.total(), keep = rest > 0 ? std::max(rest - w.base.excess, 0.0) / rest : 1.0;
+    const double scale = stand_ins[s].scale * keep + w.base.lum;
     f.gmm.weight = stand_ins[s].weight;
     std::vector<double> weights = f.gmm.weight;
     if (w.base.lum > 0)
-      for (double& x : weights) x *= stand_ins[s].scale / scale;
+      for (double& x : weights) x *= stand_ins[s].scale * keep / scale;
     const double theta_o = meta.theta_o[w.ref.t_o], phi_o = meta.phi_o[w.ref.p_o];
     part.slice_index.push_back(w.ref.index);
     part.mixture.add_slice(theta_o, phi_o, scale, f.loglik, 0.0, weights, f.gmm.mean, f.gmm.cov,
