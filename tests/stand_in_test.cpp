@@ -21,6 +21,7 @@
 #include "fit/gmm.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
+#include "sweep/base_lobe.hpp"
 #include "sweep/fit_error.hpp"
 #include "sweep/fit_slices.hpp"
 #include "sweep/slice_plan.hpp"
@@ -364,4 +365,30 @@ TEST_CASE("the channels move the Gaussians: a lower RGB error on a measured mate
                                                << sums[0][1] << " and " << sums[1][1]);
   CHECK(sums[1][1] < 0.97 * sums[0][1]);
   CHECK(sums[1][0] < 1.03 * sums[0][0]);
+}
+
+TEST_CASE("the Lambertian base: a diffuse floor under a lobe is found and taken off", "[stand_in]") {
+  // f = rho / pi everywhere plus a lobe on 45 x 90 hemisphere cells; then the lobe alone.
+  const std::vector<double> theta = uniform_centers(0.0, kPi / 2, 45), phi = uniform_centers(-kPi, kPi, 90);
+  const double dt = theta[1] - theta[0], dp = phi[1] - phi[0], rho = 0.3;
+  for (const double floor : {rho, 0.0}) {
+    INFO("floor " << floor);
+    std::vector<double> w, lobe;
+    for (double t : theta)
+      for (double p : phi) {
+        const double l = 4.0 * std::exp(-((t - 0.5) * (t - 0.5) + p * p) / (2 * 0.1 * 0.1));
+        const double cell = std::cos(t) * std::sin(t) * dt * dp;
+        w.push_back((floor / kPi + l) * cell);
+        lobe.push_back(l * cell);
+      }
+    std::vector<double> rgb(3 * w.size());
+    for (int c = 0; c < 3; ++c) std::copy(w.begin(), w.end(), rgb.begin() + long(c * w.size()));
+    const SliceBase b = take_base(theta, phi.size(), dt, dp, w, &rgb);
+    CHECK(b.lum == Approx(floor).margin(1e-9));  // the floor, where the lobe is not
+    for (int c = 0; c < 3; ++c) CHECK(b.rgb[c] == Approx(floor).margin(1e-9));
+    CHECK(b.excess < 1e-12);
+    double left = 0, want = 0;
+    for (std::size_t i = 0; i < w.size(); ++i) left += w[i], want += lobe[i];
+    CHECK(left == Approx(want).epsilon(1e-9));  // what is left is the lobe
+  }
 }

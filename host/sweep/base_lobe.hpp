@@ -10,7 +10,7 @@ namespace bsdfmix {
 
 // The share of the cells, weighed by the base's own mass, whose f lies below the floor:
 // the floor is this quantile of pi f over the hemisphere.
-constexpr double kBaseQuantile = 0.1;
+constexpr double kBaseQuantile = 0.02;
 
 struct SliceBase {
   double lum = 0;             // the base's luminance amplitude: its integral, rho_d = pi f_floor
