@@ -336,7 +336,7 @@ TEST_CASE("bsdfmix converge writes the convergence CSV with the exact columns", 
   const fs::path dir = temp_dir();
   const std::string cfg = (dir / "cfg.yaml").string(), csv = (dir / "conv.csv").string();
   std::ofstream(cfg) << "table: " << fiber().table << "\nconverge:\n  mixture: " << fiber().mixture
-                     << "\n  theta_o: [0.0, 0.5]\n  samples_max: 100\n  runs: 4\n  csv: " << csv
+                     << "\n  theta_o: [0.0, 0.5]\n  samples_max: 100\n  runs: 4\n  uniform_fraction: earned\n  csv: " << csv
                      << "\n  scene:\n    - {name: sky, constant: 0.5, gradient: {zenith: 1, horizon: 0.5, ground: 0.1}}\n"
                         "    - {name: flat, constant: 1}\n";
   REQUIRE(std::system((std::string(BSDFMIX_BINARY) + " converge -q " + cfg).c_str()) == 0);
@@ -350,7 +350,7 @@ TEST_CASE("bsdfmix converge writes the convergence CSV with the exact columns", 
   while (std::getline(in, line)) {
     ++rows;
     CHECK(std::count(line.begin(), line.end(), ',') == 12);
-    // the share used: the earned one (the default) at the row's direction
+    // the share used: the earned one at the row's direction
     const double theta_o = std::stod(line.substr(line.find(',') + 1));
     CHECK(std::stod(line.substr(line.rfind(',') + 1)) == Approx(set.defensive(theta_o, 0.0)).margin(1e-9));
   }

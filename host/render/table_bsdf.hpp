@@ -63,7 +63,7 @@ class TableBsdf {
   double pdf(BsdfSampler s, double theta_o, double theta, double phi) const;
   // The mixture sampler's uniform share: this number, or below 0 the mixture file's earned
   // share at theta_o (share()).
-  double uniform_fraction = -1;
+  double uniform_fraction = 0.1;
   // The uniform share at theta_o: uniform_fraction, or the earned one (MixtureSet::defensive
   // when a fitted slice brackets theta_o, else the nearest fitted slice's).
   double share(double theta_o) const;
