@@ -15,31 +15,25 @@ Writes table,map,theta_o_deg,k,l1_rel,energy,fit_seconds (one row per fitted sli
 table's median L1 per map.
 """
 import argparse
-import csv
 import glob
 import math
 import os
 import statistics
-import subprocess
-import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+import study_io
+from study_io import ROOT, rows as csv_rows
+
 RGL_ROWS_DEG = [1, 5, 7, 11, 13, 19, 21, 29, 31, 41, 43, 49, 51, 61, 63, 69, 71, 79, 81]  # hemisphere rows fitted
 FIBER_ROWS_DEG = [-81, -61, -41, -21, -1, 21, 41, 61, 81]
 
 
 def run(*args):
-    r = subprocess.run([str(a) for a in args], capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"map_accuracy: `{' '.join(map(str, args))}` failed: {r.stderr.strip()}")
+    study_io.bsdfmix("map_accuracy", *args)
 
 
 def grid(text):
-    n = [int(x) for x in text.split(",")]
-    if len(n) != 3 or min(n) < 1:
-        sys.exit(f"map_accuracy: a grid is theta_o,theta_i,phi_i (got {text!r})")
-    return n
+    return study_io.grid("map_accuracy", text)
 
 
 def fit_and_compare(a, name, table, rows_deg, fit_map, generate=""):
@@ -54,16 +48,16 @@ def fit_and_compare(a, name, table, rows_deg, fit_map, generate=""):
                     f"  search_report: {base}_search.csv\n  k_max: {a.k_max}\n  seed: 1\n  map: {fit_map}\n"
                     f"  theta_o: {rows}\n")
         t0 = time.time()
-        run(a.bsdfmix, "fit", "-q", base + "_fit.yaml")
+        run("fit", "-q", base + "_fit.yaml")
         seconds = time.time() - t0
         with open(base + "_seconds.txt", "w") as f:
             f.write(f"{seconds:.1f}\n")
     elif os.path.exists(base + "_seconds.txt"):
         seconds = float(open(base + "_seconds.txt").read())
-    run(a.bsdfmix, "compare", "-q", mixture, table, "--csv", cmp_csv)
-    k = {r["slice"]: r["k"] for r in csv.DictReader(open(base + "_fit.csv"))}
+    run("compare", "-q", mixture, table, "--csv", cmp_csv)
+    k = {r["slice"]: r["k"] for r in csv_rows(base + "_fit.csv")}
     out = []
-    for r in csv.DictReader(open(cmp_csv)):
+    for r in csv_rows(cmp_csv):
         if r["fitted"] != "1":
             continue
         out.append({"table": name, "map": fit_map, "theta_o_deg": f"{math.degrees(float(r['theta_o'])):.2f}",
@@ -83,6 +77,7 @@ def main():
     ap.add_argument("--k-max", type=int, default=32)
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "map_accuracy.csv"))
     a = ap.parse_args()
+    study_io.BIN = a.bsdfmix
     os.makedirs(a.work, exist_ok=True)
     materials = [m for m in a.materials.split(",") if m] or sorted(
         os.path.basename(p)[:-len("_rgb.bsdf")] for p in glob.glob(os.path.join(ROOT, "data", "rgl", "*_rgb.bsdf")))
@@ -91,7 +86,7 @@ def main():
         to, ti, pi = grid(a.rgl_grid)
         table = os.path.join(a.work, m + "_table.h5")
         if not os.path.exists(table):
-            run(a.bsdfmix, "import", "rgl", "-q", os.path.join(ROOT, "data", "rgl", m + "_rgb.bsdf"),
+            run("import", "rgl", "-q", os.path.join(ROOT, "data", "rgl", m + "_rgb.bsdf"),
                 "--theta-o", to, "--theta-i", ti, "--phi-i", pi, "-o", table)
         for fit_map in ("theta_phi", "equal_area"):
             rows += fit_and_compare(a, m, table, RGL_ROWS_DEG, fit_map)
@@ -102,11 +97,7 @@ def main():
         for fit_map in ("theta_phi", "equal_area"):
             rows += fit_and_compare(a, p, table, FIBER_ROWS_DEG, fit_map, generate)
     os.makedirs(os.path.dirname(os.path.abspath(a.csv)), exist_ok=True)
-    with open(a.csv + ".tmp", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    os.replace(a.csv + ".tmp", a.csv)
+    study_io.write_rows(a.csv, rows)
     for name in dict.fromkeys(r["table"] for r in rows):
         med = {m: statistics.median(float(r["l1_rel"]) for r in rows if r["table"] == name and r["map"] == m)
                for m in ("theta_phi", "equal_area")}

@@ -26,7 +26,6 @@ import argparse
 import glob
 import math
 import os
-import subprocess
 import sys
 import time
 
@@ -37,6 +36,7 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import bsdfmix_import  # noqa: E402
 import mitsuba_chi2  # noqa: E402
 import mixture_views  # noqa: E402
+import study_io  # noqa: E402
 
 FIELDS = ["table", "theta_o_deg", "view", "p_value", "dof", "chi2", "hist_sum", "pdf_sum", "passed",
           "worst_row_theta_deg", "worst_ratio", "worst_row", "p_value_no_pole_rows", "p_value_no_pole_rows_ires16",
@@ -44,16 +44,12 @@ FIELDS = ["table", "theta_o_deg", "view", "p_value", "dof", "chi2", "hist_sum", 
 
 
 def run(cli, *args):
-    r = subprocess.run([cli, *map(str, args)], capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"renderer_chi2: `bsdfmix {' '.join(map(str, args))}` failed: {r.stderr.strip()}")
+    study_io.BIN = cli
+    study_io.bsdfmix("renderer_chi2", *args)
 
 
 def grid(text):
-    n = [int(x) for x in text.split(",")]
-    if len(n) != 3 or min(n) < 1:
-        sys.exit(f"renderer_chi2: a grid is theta_o,theta_i,phi_i (got {text!r})")
-    return n
+    return study_io.grid("renderer_chi2", text)
 
 
 def fit_rows(domain, n_theta_o, rows):

@@ -11,10 +11,19 @@ BIN = os.environ.get("BSDFMIX_BIN") or os.path.join(ROOT, "build", "bsdfmix")
 
 
 def bsdfmix(study, *args):
-    """Runs `bsdfmix ARGS`; a failure ends the study with one line naming the command."""
+    """Runs `bsdfmix ARGS` (each as text); a failure ends the study with one line naming the command."""
+    args = [str(a) for a in args]
     r = subprocess.run([BIN, *args], capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"{study}: `bsdfmix {' '.join(args)}` failed: {r.stderr.strip()}")
+
+
+def grid(study, text):
+    """A table grid "theta_o,theta_i,phi_i" as three positive counts; else the study ends naming it."""
+    n = [int(x) for x in text.split(",")]
+    if len(n) != 3 or min(n) < 1:
+        sys.exit(f"{study}: a grid is theta_o,theta_i,phi_i (got {text!r})")
+    return n
 
 
 def rows(path):

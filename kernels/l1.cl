@@ -142,7 +142,8 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
     const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
     const floatv wv = VLOADV(0, w + c);
     const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c + LANES < (float)n_cells);
-    const floatv cell = area * plane_jacobian(t, ph);
+    const floatv jac = plane_jacobian(t, ph);  // the cell's area over `area` (1 on (theta, phi))
+    const floatv cell = area * jac;
     const floatv m = l1_densities(cp, images, ca, k, t, ph, a, mc);
     const floatv am = fmax(cell * m, (floatv)1e-30f);
     const floatv d = wv - cell * m;
@@ -150,13 +151,13 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
     const floatv kl_cell =
         select((floatv)0.f, LN2_F * wv * (log2_fast(fmax(wv, (floatv)1e-30f)) - log2_fast(am)), wv > 0.f);
     obj = fma(valid, fma((floatv)kl, kl_cell, rho), obj);
-    const floatv s = valid * plane_jacobian(t, ph) * (d / rho + kl * wv / am);
+    const floatv s = valid * jac * (d / rho + kl * wv / am);
 #if L1_CH
     floatv rc[3];
     for (int ch = 0; ch < 3; ++ch) {
       const floatv dc = VLOADV(0, chw + ch * slice_stride + c) - cell * mc[ch];
       rc[ch] = sqrt(fma(dc, dc, (floatv)eps2));
-      sc[ch] = valid * plane_jacobian(t, ph) * rgb_weight * dc / rc[ch];
+      sc[ch] = valid * jac * rgb_weight * dc / rc[ch];
     }
     obj = fma(valid * rgb_weight, rc[0] + rc[1] + rc[2], obj);
 #endif

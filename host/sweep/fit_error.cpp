@@ -57,6 +57,15 @@ double cell_density(const mix::Gaussian& g, bool narrow, Map map, double theta, 
   return sub / 9;
 }
 
+// The Lambertian base's density at the cell centered at (theta, phi), at the cell's point
+// of the mixture's map (include/bsdfmix/mixture.hpp lambert_base); 0 without a base.
+double base_density(const mix::SliceMixture& m, double theta, double phi) {
+  if (!(m.base > 0)) return 0;
+  double x, y;
+  mix::to_map(m.map, theta, phi, x, y);
+  return mix::lambert_base(x, y);
+}
+
 }  // namespace
 
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
@@ -95,16 +104,13 @@ std::vector<double> cell_masses(const WeightedSlice& s, const mix::SliceMixture&
   std::vector<double> out(nt * np, 0.0);
   for (std::size_t t = 0; t < nt; ++t) {
     const double cell = area * mix::map_jacobian(s.map, s.theta[t]);
-    for (std::size_t p = 0; p < np && m.base > 0; ++p) {  // the Lambertian base at the cell's point
-      double x, y;
-      mix::to_map(m.map, s.theta[t], s.phi[p], x, y);
-      out[t * np + p] += m.base * mix::lambert_base(x, y) * cell;
-    }
-    for (std::size_t p = 0; p < np; ++p)
+    for (std::size_t p = 0; p < np; ++p) {
+      out[t * np + p] += m.base * base_density(m, s.theta[t], s.phi[p]) * cell;
       for (std::size_t k = 0; k < m.components.size(); ++k) {
         const mix::Gaussian& g = m.components[k];
         out[t * np + p] += g.weight * cell_density(g, narrow[k], s.map, s.theta[t], s.phi[p], dt, dp) * cell;
       }
+    }
   }
   return out;
 }
@@ -129,10 +135,8 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
     for (std::size_t p = 0; p < np; ++p) {
       const std::size_t i = t * np + p;
       double y = 0, c[3] = {0, 0, 0};
-      if (m.base > 0) {  // the Lambertian base's mass in the cell (disk: at the cell's point)
-        double x, yy;
-        mix::to_map(m.map, s.theta[t], s.phi[p], x, yy);
-        const double d = mix::lambert_base(x, yy) * area * mix::map_jacobian(s.map, s.theta[t]);
+      if (m.base > 0) {  // the Lambertian base's mass in the cell
+        const double d = base_density(m, s.theta[t], s.phi[p]) * area * mix::map_jacobian(s.map, s.theta[t]);
         y += m.scale * m.base * d;
         for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? m.base_rgb[q] : m.scale * m.base) * d;
       }
