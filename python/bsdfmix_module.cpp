@@ -387,7 +387,7 @@ void bind_files(py::module_& m) {
         return d;
       },
       py::arg("path"),
-      "a mixture file's per-slice values and attributes (dict: domain, azimuthal, storage, table_source, "
+      "a mixture file's per-slice values and attributes (dict: domain, map, azimuthal, storage, table_source, "
       "fit_settings, theta_o, phi_o, scale, loglik, l1_rel, defensive, k, payload_bytes)");
 
   py::class_<TableReader>(m, "Table", "A table file (docs/formats.md, \"Table file\"), read one slice at a time.")

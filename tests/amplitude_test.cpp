@@ -84,8 +84,12 @@ AmplitudeEvaluator on_reference(const ChannelSet& set) {
 }  // namespace
 
 TEST_CASE("the amplitude kernel matches its reference in every K bucket, layout and precision", "[amplitudes]") {
+  const Map map = GENERATE(Map::ThetaPhi, Map::Cylinder, Map::Disk);  // the programs' MAP
+  INFO("map " << map_name(map));
   ChannelSet set;
-  set.grid = make_slice_grid(Domain::Fiber, 90, 180);  // 16200 cells: the last chunk is padding in part
+  // 16200 cells: the last chunk is padding in part
+  set.grid = make_slice_grid(map == Map::Disk ? Domain::Hemisphere : Domain::Fiber, 90, 180);
+  set.grid.map = map;
   set.channels = 4;
   const std::size_t n = set.grid.cells();
   {  // four channels of a mixture, the last one dim and noisy: negative in many cells

@@ -144,6 +144,33 @@ TEST_CASE("kernels match the reference for several K, both precisions", "[em]") 
   }
 }
 
+// The programs of the equal-area maps (-DMAP=1, 2): the cells at their map points, against the
+// reference's cell_point. On the cylinder the three lobes' theta means are x = sin theta
+// (all inside [-1, 1]); on the disk, lobes at the pole, inside and at the rim.
+TEST_CASE("kernels match the reference on the equal-area maps, both precisions", "[em]") {
+  for (const Map map : {Map::Cylinder, Map::Disk}) {
+    SliceSet set;
+    set.grid = make_slice_grid(map == Map::Disk ? Domain::Hemisphere : Domain::Fiber, 45, 90);
+    set.grid.map = map;
+    const Gmm truth = map == Map::Disk ? join({lobe(0.4, 0.02, -0.03, 0.1, 0.12, 0.2), lobe(0.4, 0.6, 0.5, 0.15, 0.2, -0.3),
+                                               lobe(0.2, -1.2, 0.4, 0.12, 0.25, 0.1)})
+                                       : three_lobes();
+    set.weights = {mixture_weights(set.grid, truth)};
+    std::vector<EmTask> tasks;
+    for (int k : {1, 3, 5}) tasks.push_back({0, k, fixed(25)});
+    const auto ref = em_fit_reference(set, tasks);
+    for (EmPrecision prec : {EmPrecision::Auto, EmPrecision::Fp32}) {
+      const auto got = engine(prec).fit(set, tasks);
+      for (std::size_t i = 0; i < tasks.size(); ++i) {
+        INFO("map " << map_name(map) << ", precision " << precision_name(prec) << ", K = " << tasks[i].k);
+        REQUIRE(ref[i].ok);
+        REQUIRE(got[i].ok);
+        check_matches(got[i], ref[i]);
+      }
+    }
+  }
+}
+
 // Every K_MAX bucket the engine compiles (k_bucket: 4, 8, ..., 128 for kEmMaxK, the
 // largest K it and a config accept), each at a K inside it, K = 50 among them; the CPU layout in
 // both precisions and the GPU layout in fp32 (a GPU's usual precision). A slice of many

@@ -114,9 +114,12 @@ std::vector<double> amplitudes_for(const Gmm& g) {
 
 TEST_CASE("the L1 kernel matches its reference in every K bucket and layout", "[refine]") {
   const bool colour = GENERATE(false, true);
-  INFO((colour ? "with the R, G, B channels" : "the luminance alone"));
+  const Map map = GENERATE(Map::ThetaPhi, Map::Cylinder, Map::Disk);  // the programs' MAP
+  INFO((colour ? "with the R, G, B channels" : "the luminance alone") << ", map " << map_name(map));
   SliceSet set;
-  set.grid = make_slice_grid(Domain::Fiber, 90, 180);  // 16200 cells: the last chunk is padding in part
+  // 16200 cells: the last chunk is padding in part
+  set.grid = make_slice_grid(map == Map::Disk ? Domain::Hemisphere : Domain::Fiber, 90, 180);
+  set.grid.map = map;
   set.weights = {band_and_lobe(set.grid)};
   if (colour) {
     // A second slice, grey: its channels are the luminance's shape, so it has none in the
