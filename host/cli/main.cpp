@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
   cli::add_compare(app, common);
   cli::add_pack(app, common);
   cli::add_tune(app, common);
+  cli::add_recommend(app, common);
   cli::add_bench(app, common);
   try {
     app.parse(argc, argv);

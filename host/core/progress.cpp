@@ -27,6 +27,8 @@ void log_line(const std::string& text) {
   if (g_enabled) std::fprintf(stderr, "bsdfmix: %s\n", text.c_str());
 }
 
+void warn_line(const std::string& text) { std::fprintf(stderr, "warning: %s\n", text.c_str()); }
+
 Progress::Progress(std::string what, std::uint64_t total, std::string unit)
     : what_(std::move(what)), unit_(std::move(unit)), total_(total),
       start_(std::chrono::steady_clock::now()), last_print_(start_),

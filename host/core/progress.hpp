@@ -33,4 +33,8 @@ class Progress {
 // One log line on stderr, prefixed "bsdfmix: ", unless logging is off.
 void log_line(const std::string& text);
 
+// One warning on stderr, "warning: " and the text (what is wrong and what to do),
+// printed even when logging is off: it may save a wasted fit.
+void warn_line(const std::string& text);
+
 }  // namespace bsdfmix

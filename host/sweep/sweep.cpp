@@ -18,6 +18,7 @@
 #include "sweep/slice_plan.hpp"
 #include "sweep/slice_source.hpp"
 #include "sweep/sweep_outputs.hpp"
+#include "sweep/sweep_warnings.hpp"
 
 namespace bsdfmix {
 
@@ -118,6 +119,9 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   sum.resumed = resumed;
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   sum.devices = device_names;
+  for (const std::string& w : {k_cap_warning(result.mixture.k, result.mixture.l1_rel, fit.k_min, fit.k_max),
+                               negative_channel_warning(reader, plan)})
+    if (!w.empty()) sum.warnings.push_back(w);
   return sum;
 }
 

@@ -34,6 +34,8 @@ struct SweepSummary {
   std::size_t symmetry_factor = 1;       // phi_o slices one stored slice stands for
   double seconds = 0;
   std::string devices;
+  // Warnings on the result (sweep_warnings), printed after the summary on stderr.
+  std::vector<std::string> warnings;
   std::string text() const;          // the printed summary
 };
 

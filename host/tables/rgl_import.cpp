@@ -14,6 +14,7 @@
 #include "io/table.hpp"
 #include "tables/rgl_brdf.hpp"
 #include "tables/rgl_lobe.hpp"
+#include "tables/rgl_warnings.hpp"
 
 namespace bsdfmix {
 
@@ -26,6 +27,26 @@ bool parse_rgl_negative(const std::string& name, RglNegative& out) {
   return true;
 }
 
+namespace {
+
+// Raises the resolutions to the grid that resolves the narrowest lobe and logs it.
+void log_resolved_grid(const std::string& name, const std::vector<RglLobe>& lobes, std::size_t& n_theta_o,
+                       std::size_t& n_theta_i, std::size_t& n_phi_i) {
+  constexpr double kToDegrees = 57.29577951308232;
+  const RglGrid g = rgl_resolving_grid(lobes, n_theta_o, n_theta_i, n_phi_i);
+  n_theta_o = g.n_theta_o;
+  n_theta_i = g.n_theta_i;
+  n_phi_i = g.n_phi_i;
+  const double cells = double(n_theta_o) * double(n_theta_i) * double(n_phi_i);
+  log_line(name + ": narrowest lobe " + format_number(g.narrowest.fwhm_theta * kToDegrees, "%.2f") + " x " +
+           format_number(g.narrowest.fwhm_phi * kToDegrees, "%.2f") + " degrees (half-maximum width along theta_i, and along phi_i "
+           "on its arc) at theta_o " + format_number(g.narrowest.theta_o * kToDegrees, "%.1f") + " degrees: grid " +
+           std::to_string(n_theta_o) + " x " + std::to_string(n_theta_i) + " x " + std::to_string(n_phi_i) +
+           " (theta_o x theta_i x phi_i), " + rgl_table_bytes(cells) + " of float32 luminance and rgb");
+}
+
+}  // namespace
+
 void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) {
   if (opt.n_theta_o < 1 || opt.n_theta_i < 1 || opt.n_phi_i < 1)
     throw InputError("import rgl " + opt.file + ": resolutions must be >= 1 (theta_o " +
@@ -34,19 +55,9 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   const RglBrdf brdf(opt.file);
   const std::string name = std::filesystem::path(opt.file).filename().string();
   std::size_t n_theta_o = opt.n_theta_o, n_theta_i = opt.n_theta_i, n_phi_i = opt.n_phi_i;
-  if (opt.resolve) {
-    constexpr double kToDegrees = 57.29577951308232;
-    const RglGrid g = rgl_resolving_grid(rgl_lobes(brdf), n_theta_o, n_theta_i, n_phi_i);
-    n_theta_o = g.n_theta_o;
-    n_theta_i = g.n_theta_i;
-    n_phi_i = g.n_phi_i;
-    const double cells = double(n_theta_o) * double(n_theta_i) * double(n_phi_i);
-    log_line(name + ": narrowest lobe " + format_number(g.narrowest.fwhm_theta * kToDegrees, "%.2f") + " x " +
-             format_number(g.narrowest.fwhm_phi * kToDegrees, "%.2f") + " degrees (half-maximum width along theta_i, and along phi_i "
-             "on its arc) at theta_o " + format_number(g.narrowest.theta_o * kToDegrees, "%.1f") + " degrees: grid " +
-             std::to_string(n_theta_o) + " x " + std::to_string(n_theta_i) + " x " + std::to_string(n_phi_i) +
-             " (theta_o x theta_i x phi_i), " + format_number(cells * 16 / 1048576.0, "%.1f") + " MiB of float32 luminance and rgb");
-  }
+  // The lobes set the grid under --resolve, and tell whether the grid misses the peak.
+  const std::vector<RglLobe> lobes = rgl_lobes(brdf);
+  if (opt.resolve) log_resolved_grid(name, lobes, n_theta_o, n_theta_i, n_phi_i);
 
   TableMeta meta = make_grid(Domain::Hemisphere, n_theta_o, 1, n_theta_i, n_phi_i, true);
   meta.rgb = true;
@@ -73,6 +84,7 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   TableWriter writer(out_path, meta);
   Progress progress("import " + name, n_to, "slices");
   std::atomic<std::size_t> negative{0}, negative_channel{0};
+  std::vector<float> slice_max(n_to, 0.0f);  // the largest f of each slice
 
   std::vector<std::vector<float>> values(batch), rgb(batch);
   for (std::size_t first = 0; first < n_to; first += batch) {
@@ -104,6 +116,7 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
         }
         negative += neg;
         negative_channel += neg_channel;
+        slice_max[first + j] = *std::max_element(v.begin(), v.end());
         progress.advance();
       }
     };
@@ -116,9 +129,14 @@ void import_rgl_table(const RglImportOptions& opt, const std::string& out_path) 
   }
   writer.commit();
   progress.finish();
-  if (negative_channel)
+  const std::string coarse = rgl_coarse_grid_warning(name, lobes, *std::max_element(slice_max.begin(), slice_max.end()),
+                                                     n_theta_o, n_theta_i, n_phi_i, opt.resolve);
+  if (!coarse.empty()) warn_line(coarse);
+  const std::string signed_channels = rgl_negative_warning(name, negative_channel, n_to * cells, clip);
+  if (!signed_channels.empty()) warn_line(signed_channels);
+  else if (negative_channel)
     log_line(name + ": " + std::to_string(negative_channel.load()) + " of " + std::to_string(n_to * cells) +
-             " cells hold a negative channel (out of the sRGB gamut), " + (clip ? "clipped to 0" : "kept signed"));
+             " cells hold a negative channel (out of the sRGB gamut), clipped to 0");
   if (negative) log_line(name + ": " + std::to_string(negative.load()) + " cells with negative luminance stored as 0");
 }
 

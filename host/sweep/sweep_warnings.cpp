@@ -1,0 +1,50 @@
+// The fit's warnings (sweep/sweep_warnings.hpp).
+#include "sweep/sweep_warnings.hpp"
+
+#include <algorithm>
+
+#include "core/format.hpp"
+
+namespace bsdfmix {
+
+namespace {
+
+// The median as `fit` and `compare` report it: the upper middle value.
+double upper_median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+std::string percent(double v) { return format_number(100 * v, "%.2f") + "%"; }
+
+}  // namespace
+
+std::string k_cap_warning(const std::vector<std::int32_t>& k, const std::vector<double>& l1_rel, int k_min, int k_max) {
+  if (k_min >= k_max || k.empty()) return "";
+  std::vector<double> capped, others;
+  for (std::size_t s = 0; s < k.size(); ++s) (k[s] >= k_max ? capped : others).push_back(s < l1_rel.size() ? l1_rel[s] : 0);
+  if (double(capped.size()) < kKCapShare * double(k.size())) return "";
+  std::string text = "K reached k_max " + std::to_string(k_max) + " on " + std::to_string(capped.size()) + " of " +
+                     std::to_string(k.size()) + " slices: raise fit.k_max (relative L1 median " +
+                     percent(upper_median(capped)) + " on those slices";
+  if (!others.empty()) text += ", " + percent(upper_median(others)) + " on the others";
+  return text + ")";
+}
+
+std::string negative_channel_warning(const TableReader& table, const std::vector<SliceRef>& plan) {
+  if (!table.meta().rgb || plan.empty()) return "";
+  std::size_t negative = 0, cells = 0;
+  for (const SliceRef& r : plan) {
+    const std::vector<float> rgb = table.read_slice_rgb(r.t_o, r.p_o);
+    for (std::size_t c = 0; c + 2 < rgb.size(); c += 3) negative += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
+    cells += rgb.size() / 3;
+  }
+  if (!negative) return "";
+  return table.path() + ": " + format_number(100.0 * double(negative) / double(cells), "%.1f") +
+         "% of the fitted cells hold a negative R, G or B (kept signed), and the colour copies fit them: Mitsuba and "
+         "pbrt clip them to 0 when they render the measured file; import it with --negative clip to match those "
+         "renderers (docs/rgl.md)";
+}
+
+}  // namespace bsdfmix
