@@ -42,7 +42,7 @@ std::string negative_channel_warning(const TableReader& table, const std::vector
   }
   if (!negative) return "";
   return table.path() + ": " + format_number(100.0 * double(negative) / double(cells), "%.1f") +
-         "% of the fitted cells hold a negative R, G or B (kept signed), and the colour copies fit them: Mitsuba and "
+         "% of the fitted cells hold a negative R, G or B (kept signed), and the mixture's colour fits them: Mitsuba and "
          "pbrt clip them to 0 when they render the measured file; import it with --negative clip to match those "
          "renderers (docs/rgl.md)";
 }

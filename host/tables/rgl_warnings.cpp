@@ -41,7 +41,7 @@ std::string rgl_coarse_grid_warning(const std::string& name, const std::vector<R
   const double cells = double(g.n_theta_o) * double(g.n_theta_i) * double(g.n_phi_i);
   return text + "import with --resolve (" + std::to_string(g.n_theta_o) + " x " + std::to_string(g.n_theta_i) + " x " +
          std::to_string(g.n_phi_i) + " = " + format_number(cells, "%.3g") + " cells, " + rgl_table_bytes(cells) +
-         " of table)";
+         " of table)" + (g.n_theta_i >= 720 || g.n_phi_i >= 1440 ? ", at its caps, or sample the file with its own warps" : "");
 }
 
 std::string rgl_negative_warning(const std::string& name, std::size_t negative, std::size_t cells, bool clipped) {
