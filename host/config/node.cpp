@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/suggest.hpp"
 
 namespace bsdfmix {
 
@@ -117,8 +118,10 @@ void ConfigNode::reject_unknown(const std::set<std::string>& known) const {
     if (!known.count(k)) {
       std::string list;
       for (const auto& s : known) list += (list.empty() ? "" : ", ") + s;
+      const std::string guess = closest_name(k, std::vector<std::string>(known.begin(), known.end()));
       std::string w = file_ + ": " + (path_.empty() ? k : path_ + "." + k);
       if (kv.first.Mark().line >= 0) w += " (line " + std::to_string(kv.first.Mark().line + 1) + ")";
+      if (!guess.empty()) throw ConfigError(w + ": unknown key; did you mean '" + guess + "'? (known here: " + list + ")");
       throw ConfigError(w + ": unknown key (known here: " + list + ")");
     }
   }
