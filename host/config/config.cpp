@@ -100,7 +100,10 @@ std::string device_for(const Config& config, const std::string& cli_selector) {
 
 Config load_config(const std::string& path) {
   const std::optional<std::string> text = read_text(path);
-  if (!text) throw ConfigError(unreadable_file(path).empty() ? path + ": cannot read the config" : unreadable_file(path));
+  if (!text) {
+    const std::string why = unreadable_file(path);  // the one wording: "PATH: no such file"
+    throw ConfigError(why.empty() ? path + ": cannot read the config" : why);
+  }
   return parse_config(*text, path);
 }
 

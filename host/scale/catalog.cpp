@@ -142,7 +142,10 @@ Catalog parse_catalog(const std::string& text, const std::string& name) {
 
 Catalog load_catalog(const std::string& path) {
   const std::optional<std::string> text = read_text(path);
-  if (!text) throw ConfigError(unreadable_file(path).empty() ? path + ": cannot read the catalog" : unreadable_file(path));
+  if (!text) {
+    const std::string why = unreadable_file(path);  // the one wording: "PATH: no such file"
+    throw ConfigError(why.empty() ? path + ": cannot read the catalog" : why);
+  }
   return parse_catalog(*text, path);
 }
 
