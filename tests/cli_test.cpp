@@ -55,7 +55,8 @@ std::vector<std::string> help_section(const std::string& help, const std::string
       continue;
     }
     if (!inside) continue;
-    if (line.find_first_not_of(' ') >= 20 && !out.empty()) out.back() += "  " + line.substr(line.find_first_not_of(' '));
+    const std::size_t indent = line.find_first_not_of(' ');
+    if (indent >= 20 && !out.empty()) out.back() += "  " + line.substr(indent);  // a wrapped description
     else out.push_back(line);
   }
   return out;

@@ -24,7 +24,8 @@ void add_compare(CLI::App& app, Common& common) {
       "albedo");
   sub->add_option("mixture", args->mixture, "mixture file (HDF5)")->required()->check(existing_file());
   sub->add_option("table", args->table, "the table it was fitted to (HDF5)")->required()->check(existing_file());
-  sub->add_option("--csv", args->csv, "write one row per table slice here (docs/formats.md, \"Compare\"; default: no CSV)");
+  sub->add_option("--csv", args->csv,
+                  "write one row per table slice here (docs/formats.md, \"Compare\"; default: no CSV)");
   sub->add_option("--theta-o-deg", args->theta_o_deg,
                   "also print both albedos at this theta_o (degrees, any value in the domain; repeatable; default: "
                   "none): the stand-in's as a renderer sees it, the table's linear between its two nearest rows")

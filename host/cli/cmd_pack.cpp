@@ -21,7 +21,8 @@ void add_pack(CLI::App& app, Common& common) {
               "rgb_scale as float64 or float32 (docs/formats.md, \"Storage\")");
   sub->add_option("mixture", args->mixture, "mixture file (HDF5)")->required()->check(existing_file());
   sub->add_option("-o,--output", args->output, "the packed mixture file")->required();
-  sub->add_option("--storage", args->storage, "component arrays padded to the largest K or ragged; rgb_scale float64 or float32 (_f32)")
+  sub->add_option("--storage", args->storage,
+                  "component arrays padded to the largest K or ragged; rgb_scale float64 or float32 (_f32)")
       ->check(CLI::IsMember({"padded", "ragged", "padded_f32", "ragged_f32"}));
   sub->add_option("--interpolation", args->interpolation,
                   "between fitted slices: blend (mix the two slices' mixtures) or displace (move matched "

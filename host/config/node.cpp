@@ -121,8 +121,8 @@ void ConfigNode::reject_unknown(const std::set<std::string>& known) const {
       const std::string guess = closest_name(k, std::vector<std::string>(known.begin(), known.end()));
       std::string w = file_ + ": " + (path_.empty() ? k : path_ + "." + k);
       if (kv.first.Mark().line >= 0) w += " (line " + std::to_string(kv.first.Mark().line + 1) + ")";
-      if (!guess.empty()) throw ConfigError(w + ": unknown key; did you mean '" + guess + "'? (known here: " + list + ")");
-      throw ConfigError(w + ": unknown key (known here: " + list + ")");
+      const std::string hint = guess.empty() ? "" : "; did you mean '" + guess + "'?";
+      throw ConfigError(w + ": unknown key" + hint + " (known here: " + list + ")");
     }
   }
 }
