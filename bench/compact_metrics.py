@@ -115,7 +115,7 @@ def slice_errors(table, rgb_hat, y_hat=None, rows=None):
 
 
 def summary(e):
-    """Medians and p90s over the slices (compare's quantile: the ceil(q n)-th smallest), the RGB error
+    """Medians and p90s over the slices (compare's quantile: numpy's linear one), the RGB error
     less its negative share, and the largest energy error (noise channels left out)."""
     rgb = e["rgb_error"] * (1 - e["neg_share"])
     energy = np.maximum(np.abs(e["energy_y"]), np.where(e["noise"], 0.0, np.abs(e["energy_c"])).max(axis=1))
@@ -124,9 +124,8 @@ def summary(e):
 
 
 def quantile(v, q):
-    v = np.sort(np.asarray(v, dtype=np.float64))
-    i = min(len(v) - 1, int(math.ceil(q * len(v))) - (1 if q > 0 else 0))
-    return float(v[i])
+    """compare's quantile (host/core/stats.cpp): linear between the two nearest order statistics."""
+    return float(np.percentile(np.asarray(v, dtype=np.float64), 100 * q))
 
 
 def sampling_variance(table, prob):

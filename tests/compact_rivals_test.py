@@ -109,7 +109,7 @@ def main():
     cov_tt = (d * (T - 0.2) ** 2).sum()
     check(abs(d.sum() - 1) < 1e-6 and abs(mean_t - 0.2) < 1e-6 and abs(mean_p - 0.5) < 1e-6 and abs(cov_tt - 0.04) < 1e-5,
           "colour copies' moments")
-    check(cm.quantile([3, 1, 2, 4], 0.5) == 2 and cm.quantile(list(range(10)), 0.9) == 8, "compare's quantiles")
+    check(cm.quantile([3, 1, 2, 4], 0.5) == 2.5 and abs(cm.quantile(list(range(10)), 0.9) - 8.1) < 1e-12, "compare's quantiles")
     if FAILED:
         sys.exit("%d check(s) failed" % len(FAILED))
     print("all checks passed")

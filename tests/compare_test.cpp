@@ -1,8 +1,9 @@
 // `bsdfmix compare` (host/compare/): the stand-in against its table at every table slice.
 // A table made from a mixture's own stand-in compares to zero error and energy at the
 // fitted slices and between them; the same mixture scaled by 1.1 has 10% more energy and
-// 10% L1 in every channel; the CLI writes the CSV's exact header and fails with one line
-// on a mismatched pair.
+// 10% L1 in every channel; the albedos are the two integrals, at the slices and at any
+// theta_o asked for; the CLI writes the CSV's exact header and fails with one line on a
+// mismatched pair.
 // labels: compare
 #include <catch2/catch.hpp>
 
@@ -102,7 +103,7 @@ TEST_CASE("a table made of the stand-in compares to zero; a scaled stand-in by i
   }
   const std::string csv = comparison_csv(d);
   CHECK(csv.rfind("slice,theta_o,phi_o,fitted,l1_rel,l1_r,l1_g,l1_b,rgb_error,rgb_negative_share,energy,energy_r,"
-                  "energy_g,energy_b,noise\n", 0) == 0);
+                  "energy_g,energy_b,noise,albedo,albedo_stand_in\n", 0) == 0);
   CHECK_THAT(comparison_summary(d), Catch::Contains("between fitted (1 slices)"));
 }
 
@@ -122,7 +123,7 @@ TEST_CASE("a channel of noise around zero is flagged and left out of the energy 
   }
   const std::string summary = comparison_summary(c);
   CHECK_THAT(summary, Catch::Contains("largest energy error 0.00% (B is noise around zero in 3 slices, not compared)"));
-  CHECK_THAT(comparison_csv(c), Catch::Contains(",b\n"));
+  CHECK_THAT(comparison_csv(c), Catch::Contains(",b,"));
   // the grey table: no channel flagged
   const Comparison grey = compare_stand_in(mixture, table_of(exact, "table.h5"));
   for (const SliceComparison& s : grey.slices) CHECK_FALSE(s.noise[2]);
@@ -142,7 +143,7 @@ TEST_CASE("the CLI writes the compare CSV and refuses a mismatched pair with one
   std::string header;
   std::getline(in, header);
   CHECK(header == "slice,theta_o,phi_o,fitted,l1_rel,l1_r,l1_g,l1_b,rgb_error,rgb_negative_share,energy,energy_r,"
-                  "energy_g,energy_b,noise");
+                  "energy_g,energy_b,noise,albedo,albedo_stand_in");
   // a fiber table against a hemisphere mixture
   TableMeta fiber = make_grid(Domain::Fiber, 3, 1, 8, 16, true);
   const std::string other = (temp_dir() / "fiber.h5").string();
@@ -155,4 +156,61 @@ TEST_CASE("the CLI writes the compare CSV and refuses a mismatched pair with one
   const std::string msg = ss.str();
   CHECK_THAT(msg, Catch::Contains("hemisphere") && Catch::Contains(other));
   CHECK(std::count(msg.begin(), msg.end(), '\n') == 1);
+}
+
+TEST_CASE("compare gives both albedos per slice and at any theta_o", "[compare]") {
+  const MixtureFile exact = two_slice_mixture(1.0);
+  const std::string mixture = (temp_dir() / "albedo.h5").string();
+  write_mixture_file(mixture, exact);
+  const std::string table = table_of(exact, "albedo_table.h5");
+  const TableMeta grid = make_grid(Domain::Hemisphere, 3, 1, 24, 48, true);
+  // between rows 0 and 1, a quarter of the way; beyond the last row; on row 2
+  const double between = grid.theta_o[0] + 0.25 * (grid.theta_o[1] - grid.theta_o[0]);
+  const Comparison c = compare_stand_in(mixture, table, {between, 1.5, grid.theta_o[2]});
+  REQUIRE(c.slices.size() == 3);
+  const std::vector<float> ones(grid.cells_per_slice(), 1.f);
+  const std::vector<double> g = integrand_weights(grid.domain, grid.theta_i, grid.phi_i, ones.data());
+  const mix::MixtureSet set = to_mixture_set(exact);
+  for (const SliceComparison& r : c.slices) {
+    double a = 0;  // the table is the stand-in at the cell centers: one integral for both
+    for (std::size_t i = 0; i < grid.theta_i.size(); ++i)
+      for (std::size_t j = 0; j < grid.phi_i.size(); ++j)
+        a += g[i * grid.phi_i.size() + j] * double(float(set.eval_f(r.theta_o, 0, grid.theta_i[i], grid.phi_i[j])));
+    CHECK(r.albedo == Approx(a).epsilon(1e-9));
+    CHECK(r.albedo_stand_in == Approx(a).epsilon(1e-6));
+    CHECK(r.albedo > 0.3);
+  }
+  REQUIRE(c.asked.size() == 3);
+  CHECK(c.asked[0].row_lo == 0);
+  CHECK(c.asked[0].row_hi == 1);
+  CHECK(c.asked[0].table == Approx(0.75 * c.slices[0].albedo + 0.25 * c.slices[1].albedo));
+  CHECK(c.asked[1].row_lo == 2);
+  CHECK(c.asked[1].row_hi == 2);
+  CHECK(c.asked[1].table == Approx(c.slices[2].albedo));
+  CHECK(c.asked[2].table == Approx(c.slices[2].albedo));
+  CHECK(c.asked[2].stand_in == Approx(c.slices[2].albedo_stand_in));
+  // the stand-in between slices is the blend a renderer evaluates, not the table's interpolation
+  double a = 0;
+  for (std::size_t i = 0; i < grid.theta_i.size(); ++i)
+    for (std::size_t j = 0; j < grid.phi_i.size(); ++j)
+      a += g[i * grid.phi_i.size() + j] * set.eval_f(between, 0, grid.theta_i[i], grid.phi_i[j]);
+  CHECK(c.asked[0].stand_in == Approx(a));
+  const std::string summary = comparison_summary(c);
+  CHECK_THAT(summary, Catch::Contains("albedo (integral of f cos theta_i d omega_i): table "));
+  CHECK_THAT(summary, Catch::Contains("albedo at theta_o 85.94 deg: table") && Catch::Contains("its nearest row"));
+  CHECK_THROWS_WITH(compare_stand_in(mixture, table, {1.6}), Catch::Contains("outside the hemisphere domain"));
+
+  // a table of f = (row + 1) / pi: albedo row + 1 (the midpoint rule on 24 x 48 cells),
+  // interpolated linearly between rows
+  std::vector<float> lambert;
+  for (std::size_t t = 0; t < 3; ++t)
+    for (std::size_t k = 0; k < grid.cells_per_slice(); ++k) lambert.push_back(float(double(t + 1) / kPi));
+  write_table((temp_dir() / "lambert.h5").string(), grid, lambert);
+  const Comparison l = compare_stand_in(mixture, (temp_dir() / "lambert.h5").string(), {between});
+  for (std::size_t t = 0; t < 3; ++t) CHECK(l.slices[t].albedo == Approx(double(t + 1)).epsilon(2e-3));
+  CHECK(l.asked[0].table == Approx(1.25).epsilon(2e-3));
+  // the scaled stand-in's albedo: its scale
+  write_mixture_file((temp_dir() / "albedo_scaled.h5").string(), two_slice_mixture(1.1));
+  const Comparison d = compare_stand_in((temp_dir() / "albedo_scaled.h5").string(), table);
+  for (std::size_t s = 0; s < 3; ++s) CHECK(d.slices[s].albedo_stand_in == Approx(1.1 * c.slices[s].albedo_stand_in));
 }

@@ -133,7 +133,7 @@ TEST_CASE("converge.rgl: the RGL file of is_rgl and mis_light_rgl, by default im
   CHECK_THAT(config_error(t + "converge:\n  estimators: [mis_light_rgl]\n  rgl: ~\n"),
              Catch::Contains("converge.rgl") && Catch::Contains("mis_light_rgl samples with an RGL file's own warps"));
   CHECK_THAT(config_error(t + "converge:\n  estimators: [is_rgl]\n  rgl: nowhere/x.bsdf\n"),
-             Catch::Contains("converge.rgl (line 4): file 'nowhere/x.bsdf' not found"));
+             Catch::Contains("converge.rgl (line 4): nowhere/x.bsdf: no such file"));
   // never among the default estimators
   const Config lit = parse_config(t + "converge:\n  scene:\n    constant: 1\n", "cfg.yaml");
   for (const auto& e : lit.converge->estimators) CHECK(e.find("rgl") == std::string::npos);
@@ -172,14 +172,14 @@ TEST_CASE("wrong types and impossible values are named", "[config]") {
 
 TEST_CASE("missing files and missing keys are named", "[config]") {
   CHECK_THAT(config_error("fit:\n  k_max: 3\n"), Catch::Contains("cfg.yaml: table: missing"));
-  CHECK_THAT(config_error("table: nowhere/t.h5\nfit:\n"), Catch::Contains("table (line 1): file 'nowhere/t.h5' not found"));
+  CHECK_THAT(config_error("table: nowhere/t.h5\nfit:\n"), Catch::Contains("table (line 1): nowhere/t.h5: no such file"));
   CHECK_THAT(config_error("table: " + existing_table() + "\nconverge:\n  scene: nowhere/scene.yaml\n"),
-             Catch::Contains("converge.scene (line 3): file 'nowhere/scene.yaml' not found"));
+             Catch::Contains("converge.scene (line 3): nowhere/scene.yaml: no such file"));
   try {
     load_config("nowhere/config.yaml");
     FAIL("no error");
   } catch (const ConfigError& e) {
-    CHECK_THAT(e.what(), Catch::Contains("nowhere/config.yaml: cannot read config file"));
+    CHECK_THAT(e.what(), Catch::Contains("nowhere/config.yaml: no such file"));
   }
   // A generate section makes the missing table acceptable.
   CHECK(config_error("table: nowhere/t.h5\ngenerate:\n  preset: silk\n") == "(no error)");

@@ -325,7 +325,7 @@ TEST_CASE("scenes: PFM environment map, frame, errors naming file and key", "[co
              Catch::Contains("bad.yaml: lobes[0].radius") && Catch::Contains("unknown key"));
   CHECK_THAT(error_of("lobes:\n  - direction: [0, 0]\n    kappa: 3\n    radiance: 1\n"),
              Catch::Contains("lobes[0].direction") && Catch::Contains("3-vector"));
-  CHECK_THAT(error_of("envmap:\n  file: nowhere.pfm\n"), Catch::Contains("envmap.file") && Catch::Contains("not found"));
+  CHECK_THAT(error_of("envmap:\n  file: nowhere.pfm\n"), Catch::Contains("envmap.file") && Catch::Contains("nowhere.pfm: no such file"));
   CHECK_THAT(error_of("frame:\n  tangent: [1, 0, 0]\n  normal: [2, 0, 0]\n"), Catch::Contains("parallel"));
   CHECK_THAT(error_of("sky: 1\n"), Catch::Contains("bad.yaml: sky") && Catch::Contains("unknown key"));
   std::ofstream(dir / "broken.pfm") << "P6\n1 1\n255\n";

@@ -804,7 +804,7 @@ TEST_CASE("bad render configs are rejected with one line naming the key", "[rend
   CHECK_THAT(error("  camera: {position: [0, 1]}\n"), Catch::Contains("render.camera.position") &&
                                                          Catch::Contains("three numbers"));
   CHECK_THAT(error("  cloth: {weav: plain}\n"), Catch::Contains("render.cloth.weav") && Catch::Contains("unknown key"));
-  CHECK_THAT(error("  scene: nowhere.yaml\n"), Catch::Contains("render.scene") && Catch::Contains("not found"));
+  CHECK_THAT(error("  scene: nowhere.yaml\n"), Catch::Contains("render.scene") && Catch::Contains("nowhere.yaml: no such file"));
   CHECK_THAT(error("  width: 0\n"), Catch::Contains("render.width (line 3)"));
   CHECK_THAT(error("  ground: {albedo: 2}\n"), Catch::Contains("render.ground.albedo"));
   CHECK_THAT(error("  product_share: 1\n"), Catch::Contains("render.product_share (line 3)") &&

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "core/error.hpp"
 #include "io/mixture_file.hpp"
@@ -220,6 +221,13 @@ TEST_CASE("bsdfmix pack writes the same mixtures in the storage asked for", "[st
                           temp_path("pack.log") + " 2>&1";
   REQUIRE(std::system(cmd.c_str()) == 0);
   const MixtureFile r = read_mixture_file(out);
+  // the line gives the file's bytes beside the payload's, before and after (the payload last)
+  std::ifstream log(temp_path("pack.log"));
+  const std::string line((std::istreambuf_iterator<char>(log)), {});
+  CHECK_THAT(line, Catch::Contains(": file " + std::to_string(std::filesystem::file_size(in)) + " -> " +
+                                   std::to_string(std::filesystem::file_size(out)) + " bytes, payload " +
+                                   std::to_string(m.payload_bytes()) + " -> " + std::to_string(r.payload_bytes()) +
+                                   " bytes\n"));
   CHECK(r.storage == MixtureStorage{true, true});  // the default, ragged_f32
   CHECK(r.weights == m.weights);
   CHECK(r.fit_settings == m.fit_settings);

@@ -37,7 +37,7 @@ void add_bench(CLI::App& app, Common& common) {
   struct Args {  // the options, kept alive by the callback
     bench::EmBenchOptions o;
     bench::SamplingPeersOptions s;
-    bool list_views = false;
+    bool list_views = false, no_peers = false, no_reference = false, peers = false, reference = false;
     std::string share = "0.1";  // --uniform-fraction: a number or earned
   };
   const auto args = std::make_shared<Args>();
@@ -51,19 +51,28 @@ void add_bench(CLI::App& app, Common& common) {
                  "keeps its fastest run")
       ->capture_default_str();
   em->add_option("--queues", args->o.queues, "work queues per device")->capture_default_str();
-  em->add_option("--precision", args->o.precision, "auto, fp32 or fp64 accumulation")->capture_default_str();
+  em->add_option("--precision", args->o.precision, "accumulation: auto (fp64 where the device has it), fp32 or fp64")
+      ->capture_default_str()->check(CLI::IsMember({"auto", "fp32", "fp64"}));
   em->add_option("--seed", args->o.seed, "data and initialization seed")->capture_default_str();
-  em->add_flag("--peers,!--no-peers", args->o.peers, "run the peer programs of bench/peers (default: on)");
-  em->add_flag("--reference,!--no-reference", args->o.reference, "time the CPU reference (default: on)");
+  em->add_flag("--no-peers", args->no_peers, "skip the peer programs of bench/peers (default: run them)");
+  em->add_flag("--peers", args->peers, "run the peer programs (the default)");
+  em->add_flag("--no-reference", args->no_reference, "skip the CPU reference (default: time it)");
+  em->add_flag("--reference", args->reference, "time the CPU reference (the default)");
   add_common_options(*em, common);
   auto* sp = sub->add_subcommand(
       "sampling", "a material's samplers against each other (an RGL file's own sampler, the mixture, the table CDF, "
                   "uniform; under a scene also light sampling, MIS and the product)");
-  sp->add_option("--rgl", args->s.rgl, "the RGL file (.bsdf): f everywhere, and its warps; without it f is the table");
-  sp->add_option("--mixture", args->s.mixture, "the mixture file fitted to the table");
-  sp->add_option("--table", args->s.table, "the table (imported from the RGL file, or a fiber table)");
-  sp->add_option("--csv", args->s.csv, "CSV output file");
-  sp->add_option("--scene", args->s.scenes, "a scene file studied besides constant light (repeatable)");
+  sp->add_option("--rgl", args->s.rgl, "the RGL file (.bsdf): f everywhere, and its warps; default: f is the table")
+      ->check(existing_file());
+  // required but for --list-views: checked in bench_sampling, marked here
+  sp->add_option("--mixture", args->s.mixture, "the mixture file fitted to the table (not needed with --list-views)")
+      ->check(existing_file())->option_text("FILE REQUIRED");
+  sp->add_option("--table", args->s.table,
+                 "the table (imported from the RGL file, or a fiber table; not needed with --list-views)")
+      ->check(existing_file())->option_text("FILE REQUIRED");
+  sp->add_option("--csv", args->s.csv, "CSV output file (not needed with --list-views)")->option_text("TEXT REQUIRED");
+  sp->add_option("--scene", args->s.scenes, "a scene file studied besides constant light (repeatable; default: none)")
+      ->default_str("");
   sp->add_option("--light-cache", args->s.light_cache,
                  "where the scenes' lighting mixtures are cached (default: light_mixtures beside --csv)");
   sp->add_option("--directions", args->s.directions, "view elevations, uniform in [0, --theta-max]")->capture_default_str();
@@ -97,6 +106,8 @@ void add_bench(CLI::App& app, Common& common) {
   em->callback([args, &common] {
     if (common.quiet) Progress::set_enabled(false);
     bench::EmBenchOptions o = args->o;
+    o.peers = !args->no_peers;
+    o.reference = !args->no_reference;
     const EngineOptions engine = run_environment().engine;
     // BSDFMIX_PRECISION sets a precision left at auto
     if (parse_precision(o.precision) == EmPrecision::Auto) o.precision = precision_name(engine.precision);

@@ -18,7 +18,7 @@ void add_catalog(CLI::App& app, Common& common) {
                                  "fit every table of a catalog (fiber presets, RGL files, table files) as one job: "
                                  "one mixture file per table and a summary CSV; shares the work under mpirun");
   sub->add_option("catalog", args->file, "catalog YAML (docs/scale.md)")->required();
-  add_common_options(*sub, common);
+  add_common_options(*sub, common, "the catalog's device:");
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
     const scale::Catalog cat = scale::load_catalog(args->file);

@@ -22,7 +22,8 @@ void add_fit(CLI::App& app, Common& common) {
                                  "mixture file and the fit report CSV",
                                  args->file);
   sub->add_option("--max-batches", args->max_batches,
-                  "commit at most this many batches, then stop (a later run resumes)");
+                  "commit at most this many batches, then stop (a later run resumes; default: no limit)")
+      ->default_str("");
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
     const RunEnvironment env = run_environment();

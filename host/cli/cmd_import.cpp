@@ -18,7 +18,7 @@ void add_import(CLI::App& app, Common& common) {
     std::string negative = "keep";
   };
   const auto args = std::make_shared<Args>();
-  rgl->add_option("file", args->opt.file, "the RGL .bsdf file")->required()->check(CLI::ExistingFile);
+  rgl->add_option("file", args->opt.file, "the RGL .bsdf file")->required()->check(existing_file());
   add_grid_options(*rgl, "[0, pi/2]", args->opt.n_theta_o, args->opt.n_theta_i, args->opt.n_phi_i);
   rgl->add_flag("--resolve", args->opt.resolve,
                 "raise the three resolutions until the file's narrowest lobe spans 3 cells (docs/rgl.md, \"Resolving "

@@ -38,11 +38,12 @@ void add_render(CLI::App& app, Common& common) {
   const auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand(
       "render",
-      "render fiber cloth with the table and the mixtures (Embree): the reference, every estimator at equal "
-      "samples and equal time, the stand-in against the table; EXR/PFM images, render.csv, render.json, figures");
+      "render a scene of cloth or spheres (docs/render.md) with the table and the mixtures (Embree): the reference, "
+      "every estimator at equal samples and equal time, the stand-in against the table; EXR/PFM images, render.csv, "
+      "render.json, figures");
   sub->add_option("config", args->file, "config YAML with table, fit and render sections (docs/render.md)")->required();
   sub->add_flag("--no-figures", args->no_figures, "skip scripts/render_figures.py");
-  add_common_options(*sub, common);
+  add_common_options(*sub, common, "the config's device:");
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
     const RunEnvironment env = run_environment();

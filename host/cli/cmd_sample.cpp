@@ -26,12 +26,12 @@ void add_sample(CLI::App& app, Common& common) {
       "sample",
       "draw samples from a mixture file for one outgoing direction; writes theta,phi,pdf_omega,valid "
       "(angles in radians, phi in [-pi, pi); pdf_omega per steradian, 0 when invalid; valid 1 or 0)");
-  sub->add_option("mixture", args->file, "mixture file (HDF5)")->required()->check(CLI::ExistingFile);
+  sub->add_option("mixture", args->file, "mixture file (HDF5)")->required()->check(existing_file());
   sub->add_option("--theta-o", args->theta_o, "outgoing theta (radians; degrees with --degrees)")->required();
   sub->add_option("--phi-o", args->phi_o, "outgoing phi (radians; degrees with --degrees)");
-  sub->add_option("-n", args->n, "number of samples (default 1000)")->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 32));
+  sub->add_option("-n", args->n, "number of samples")->check(CLI::Range(std::uint64_t(1), std::uint64_t(1) << 32));
   sub->add_option("-o,--output", args->output, "output CSV")->required();
-  sub->add_option("--seed", args->seed, "seed of the counter-based generator (default 1): sample i is the same on every device");
+  sub->add_option("--seed", args->seed, "seed of the counter-based generator: sample i is the same on every device");
   sub->add_flag("--cpu", args->cpu, "sample with the CPU header (include/bsdfmix/mixture.hpp) instead of an OpenCL device");
   sub->add_flag("--degrees", args->degrees, "--theta-o and --phi-o are in degrees");
   add_common_options(*sub, common);

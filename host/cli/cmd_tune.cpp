@@ -22,7 +22,8 @@ void add_tune(CLI::App& app, Common& common) {
   sub->add_option("--slices", args->o.slices, "slices of the timed fits")->check(CLI::Range(1, 4096));
   sub->add_option("--grid", args->o.theta, "theta rows of a slice (phi columns: twice as many)")->check(CLI::Range(4, 1024));
   sub->add_option("--runs", args->o.runs, "timed runs per shape (the best is kept)")->check(CLI::Range(1, 100));
-  sub->add_option("--out", args->o.out, "shapes file to record the fastest shape in (BSDFMIX_SHAPES reads it)");
+  sub->add_option("--out", args->o.out,
+                  "shapes file to record the fastest shape in (BSDFMIX_SHAPES reads it; default: print only)");
   sub->add_flag("--table", args->table, "print the built-in shape table and exit");
   add_common_options(*sub, common);
   sub->callback([args, &common] {

@@ -48,8 +48,12 @@ void render_figures(const std::string& output, const std::string& summary_figure
 render::RenderInputs render_inputs(const Config& config, const std::string& device_selector,
                                    const EngineOptions& engine);
 
-// Adds --device and --quiet to a subcommand.
-void add_common_options(CLI::App& sub, Common& common);
+// Adds --device and --quiet to a subcommand; `device_key` names the input key that
+// selects the device before $BSDFMIX_DEVICE ("the config's device:"), "" for none.
+void add_common_options(CLI::App& sub, Common& common, const std::string& device_key = "");
+
+// A validator of an input file argument: a missing one is an InputError, "PATH: no such file".
+CLI::Validator existing_file();
 
 // The table grid's --theta-o, --theta-i (both over theta_range) and --phi-i of a
 // subcommand that tabulates.

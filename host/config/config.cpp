@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/file_errors.hpp"
 
 namespace bsdfmix {
 
@@ -89,7 +90,7 @@ Config parse_config(const std::string& text, const std::string& name) {
             .fail("rgl", e + " samples with an RGL file's own warps: name the .bsdf file the table was imported "
                              "from here (or import the table in this config, import.rgl)");
   if (!c.generate && !c.import && !exists_quiet(c.table))
-    root.fail("table", "file '" + c.table + "' not found (and no generate or import section makes it)");
+    root.fail("table", c.table + ": no such file (and no generate or import section makes it)");
   return c;
 }
 
@@ -99,7 +100,10 @@ std::string device_for(const Config& config, const std::string& cli_selector) {
 
 Config load_config(const std::string& path) {
   const std::optional<std::string> text = read_text(path);
-  if (!text) throw ConfigError(path + ": cannot read config file (missing or not readable)");
+  if (!text) {
+    const std::string why = unreadable_file(path);  // the one wording: "PATH: no such file"
+    throw ConfigError(why.empty() ? path + ": cannot read the config" : why);
+  }
   return parse_config(*text, path);
 }
 

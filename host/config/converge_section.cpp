@@ -14,7 +14,7 @@ namespace {
 void add_scene(const ConfigNode& n, const YAML::Node& s, ConvergeSection& c) {
   if (s.IsScalar()) {
     const std::string file = s.Scalar();
-    if (!exists_quiet(file)) n.fail("scene", "file '" + file + "' not found");
+    if (!exists_quiet(file)) n.fail("scene", file + ": no such file");
     try {
       c.scenes.push_back(YAML::LoadFile(file));
     } catch (const YAML::Exception& e) {
@@ -102,7 +102,7 @@ ConvergeSection parse_converge(const ConfigNode& n) {
   c.cpu = n.boolean("cpu");
   if (n.has("rgl")) {
     c.rgl = n.str("rgl");
-    if (!exists_quiet(c.rgl)) n.fail("rgl", "file '" + c.rgl + "' not found");
+    if (!exists_quiet(c.rgl)) n.fail("rgl", c.rgl + ": no such file");
   }
   return c;
 }

@@ -26,7 +26,7 @@ ImportSection parse_import(const ConfigNode& n) {
   ImportSection s;
   if (!n.has("rgl")) n.fail("rgl", "missing: name the .bsdf file to import");
   s.rgl = n.str("rgl");
-  if (!exists_quiet(s.rgl)) n.fail("rgl", "file '" + s.rgl + "' not found");
+  if (!exists_quiet(s.rgl)) n.fail("rgl", s.rgl + ": no such file");
   s.theta_o = static_cast<int>(n.integer("theta_o", 1, 100000));
   s.theta_i = static_cast<int>(n.integer("theta_i", 2, 100000));
   s.phi_i = static_cast<int>(n.integer("phi_i", 2, 100000));

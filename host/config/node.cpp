@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/suggest.hpp"
 
 namespace bsdfmix {
 
@@ -117,9 +118,11 @@ void ConfigNode::reject_unknown(const std::set<std::string>& known) const {
     if (!known.count(k)) {
       std::string list;
       for (const auto& s : known) list += (list.empty() ? "" : ", ") + s;
+      const std::string guess = closest_name(k, std::vector<std::string>(known.begin(), known.end()));
       std::string w = file_ + ": " + (path_.empty() ? k : path_ + "." + k);
       if (kv.first.Mark().line >= 0) w += " (line " + std::to_string(kv.first.Mark().line + 1) + ")";
-      throw ConfigError(w + ": unknown key (known here: " + list + ")");
+      const std::string hint = guess.empty() ? "" : "; did you mean '" + guess + "'?";
+      throw ConfigError(w + ": unknown key" + hint + " (known here: " + list + ")");
     }
   }
 }

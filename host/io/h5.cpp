@@ -10,6 +10,7 @@
 
 
 #include "core/error.hpp"
+#include "core/file_errors.hpp"
 
 namespace bsdfmix::h5 {
 
@@ -112,10 +113,11 @@ void probe_metadata(const std::string& path, const std::string& name, hid_t fapl
 
 Handle open_file(const std::string& path) {
   quiet_errors();
-  FILE* probe = std::fopen(path.c_str(), "rb");
-  if (!probe) throw InputError(path + ": cannot open (no such file or not readable)");
-  std::fclose(probe);
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  require_readable(path);
+  if (H5Fis_hdf5(path.c_str()) <= 0) {
+    if (const std::string hint = rgl_file_hint(path, file_head(path, 12)); !hint.empty()) throw InputError(hint);
+    throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  }
   probe_metadata(path, path, H5P_DEFAULT);
   Handle f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
   if (!f.valid()) throw InputError(path + ": cannot open as HDF5 (corrupt or truncated file)");
@@ -129,7 +131,10 @@ Handle open_image(const std::string& path, const std::string& bytes) {
   bool hdf5 = false;
   for (std::size_t at = 0; !hdf5 && at + 8 <= bytes.size(); at = at ? 2 * at : 512)
     hdf5 = bytes.compare(at, 8, kSignature, 8) == 0;
-  if (!hdf5) throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  if (!hdf5) {
+    if (const std::string hint = rgl_file_hint(path, bytes.substr(0, 12)); !hint.empty()) throw InputError(hint);
+    throw InputError(path + ": not an HDF5 file (corrupt or wrong format)");
+  }
   // The core driver over a copy of the bytes, no backing file. It opens only a name that
   // names no file: one below the file itself, which no file system holds.
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS));

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "core/stats.hpp"
 #include "io/h5.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
@@ -168,14 +169,9 @@ std::string describe_generic(const std::string& path) {
       std::size_t copied = 0;
       for (std::size_t i = 0; i < m.slices(); ++i) copied += m.slice_copies(i).empty() ? 0 : 1;
       if (copied > 0) s << "; colour copies (4 per component) on " << copied << " of " << m.slices() << " slices";
-      std::vector<double> l1 = m.l1_rel;
-      std::sort(l1.begin(), l1.end());
-      char buf[160];
-      if (!l1.empty()) {
-        std::snprintf(buf, sizeof buf, "\n  l1_rel     median %.2f%%, p90 %.2f%%, max %.2f%%", 100 * l1[l1.size() / 2],
-                      100 * l1[std::min(l1.size() - 1, (l1.size() * 9 + 9) / 10 - 1)], 100 * l1.back());
-        s << buf;
-      }
+      if (!m.l1_rel.empty())
+        s << "\n  l1_rel     median " << percent_text(quantile(m.l1_rel, 0.5)) << ", p90 "
+          << percent_text(quantile(m.l1_rel, 0.9)) << ", max " << percent_text(quantile(m.l1_rel, 1.0));
       s << "\n  datasets   " << bytes_text(double(m.payload_bytes())) << " as stored ([S, Kmax] arrays, Kmax "
         << m.kmax << ")\n";
     }

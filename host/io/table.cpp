@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/file_errors.hpp"
 #include "core/format.hpp"
 #include "core/hash.hpp"
 #include "io/h5.hpp"
@@ -169,7 +170,8 @@ void TableReader::Impl::open() {
 
 LoadedTable load_table(const std::string& path) {
   const std::optional<std::string> bytes = read_text(path);
-  if (!bytes) throw InputError(path + ": cannot open (no such file or not readable)");
+  if (!bytes) require_readable(path);
+  if (!bytes) throw InputError(path + ": cannot read it");
   return LoadedTable{hash_file_bytes(*bytes), TableReader(path, *bytes)};
 }
 

@@ -17,7 +17,7 @@ void stage_converge(const Config& config, const std::string& device_selector, co
   spec.table = config.table;
   spec.mixture = converge_mixture_path(config);
   if (!std::filesystem::exists(spec.mixture))
-    throw ConfigError(config.file + ": converge: mixture file '" + spec.mixture + "' not found (run the fit stage first)");
+    throw ConfigError(config.file + ": converge: " + spec.mixture + ": no such file (run the fit stage first)");
   spec.table_label = std::filesystem::path(config.table).stem().string();
   Domain domain;
   {

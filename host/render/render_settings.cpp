@@ -84,7 +84,7 @@ Lighting parse_lighting(const RenderSection& section, const ConfigNode& n) {
     const YAML::Node sc = n.raw("scene");
     if (sc.IsScalar()) {
       const std::string path = sc.Scalar();
-      if (!exists_quiet(path)) n.fail("scene", "file '" + path + "' not found");
+      if (!exists_quiet(path)) n.fail("scene", path + ": no such file");
       l = parse_scene(YAML::LoadFile(path), path, "", Domain::Hemisphere);
     } else if (sc.IsMap()) {
       l = parse_scene(sc, section.file, "render.scene", Domain::Hemisphere);

@@ -13,6 +13,7 @@
 #include "config/node.hpp"
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
+#include "core/file_errors.hpp"
 #include "core/progress.hpp"
 #include "pipeline/stages.hpp"
 #include "scale/mpi_farm.hpp"
@@ -141,7 +142,10 @@ Catalog parse_catalog(const std::string& text, const std::string& name) {
 
 Catalog load_catalog(const std::string& path) {
   const std::optional<std::string> text = read_text(path);
-  if (!text) throw ConfigError(path + ": cannot read catalog file (missing or not readable)");
+  if (!text) {
+    const std::string why = unreadable_file(path);  // the one wording: "PATH: no such file"
+    throw ConfigError(why.empty() ? path + ": cannot read the catalog" : why);
+  }
   return parse_catalog(*text, path);
 }
 

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "core/suggest.hpp"
 #include "io/pfm.hpp"
 
 namespace bsdfmix {
@@ -28,7 +29,9 @@ void check_keys(const Ctx& c, const std::string& path, const YAML::Node& n, cons
     if (!known.count(k)) {
       std::string list;
       for (const auto& s : known) list += (list.empty() ? "" : ", ") + s;
-      c.fail(path.empty() ? k : path + "." + k, kv.first, "unknown key (known: " + list + ")");
+      const std::string guess = closest_name(k, std::vector<std::string>(known.begin(), known.end()));
+      c.fail(path.empty() ? k : path + "." + k, kv.first,
+             "unknown key" + (guess.empty() ? "" : "; did you mean '" + guess + "'?") + " (known: " + list + ")");
     }
   }
 }
@@ -123,7 +126,7 @@ Lighting parse_scene(const YAML::Node& node, const std::string& file, const std:
       const auto beside = std::filesystem::path(file).parent_path() / path;
       if (std::filesystem::exists(beside)) path = beside.string();
     }
-    if (!std::filesystem::exists(path)) c.fail("envmap.file", e["file"], "file '" + path + "' not found");
+    if (!std::filesystem::exists(path)) c.fail("envmap.file", e["file"], path + ": no such file");
     PfmImage img;
     try {
       img = read_pfm(path);

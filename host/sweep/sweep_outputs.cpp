@@ -11,6 +11,7 @@
 #include "core/atomic_file.hpp"
 #include "core/format.hpp"
 #include "core/hash.hpp"
+#include "core/stats.hpp"
 #include "device/program.hpp"
 #include "sweep/row_fields.hpp"
 
@@ -73,13 +74,9 @@ SweepSummary write_outputs(const SweepResult& result, const std::string& table_p
   sum.slices = out.slices();
   sum.failed = result.failed();
   for (std::int32_t k : out.k) sum.k_histogram[k]++;
-  std::vector<double> l1s = out.l1_rel;
-  std::sort(l1s.begin(), l1s.end());
-  if (!l1s.empty()) {
-    sum.l1_median = l1s[l1s.size() / 2];
-    sum.l1_p90 = l1s[std::min(l1s.size() - 1, std::size_t(std::ceil(0.9 * double(l1s.size()))) - 1)];
-    sum.l1_max = l1s.back();
-  }
+  sum.l1_median = quantile(out.l1_rel, 0.5);
+  sum.l1_p90 = quantile(out.l1_rel, 0.9);
+  sum.l1_max = quantile(out.l1_rel, 1.0);
   sum.mixture_file_bytes = std::filesystem::file_size(fit.output);
   sum.mixture_bytes = out.payload_bytes();
   sum.table_file_bytes = std::filesystem::file_size(table_path);
@@ -147,9 +144,8 @@ std::string SweepSummary::text() const {
   char buf[256];
   std::snprintf(buf, sizeof buf, " (mean %.1f)\n", slices ? double(total_k) / double(slices) : 0.0);
   s << buf;
-  std::snprintf(buf, sizeof buf, "  relative L1      median %.2f%%, p90 %.2f%%, max %.2f%%\n", 100 * l1_median,
-                100 * l1_p90, 100 * l1_max);
-  s << buf;
+  s << "  relative L1      median " << percent_text(l1_median) << ", p90 " << percent_text(l1_p90) << ", max "
+    << percent_text(l1_max) << "\n";
   auto ratio = [](std::uint64_t a, std::uint64_t b) { return num(double(a) / double(std::max<std::uint64_t>(b, 1)), "%.0f") + "x"; };
   s << "  mixture          file " << size(double(mixture_file_bytes)) << " on disk, datasets " << size(double(mixture_bytes))
     << " (padded to the largest K)\n";

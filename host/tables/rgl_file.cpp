@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/file_errors.hpp"
 
 namespace bsdfmix {
 
@@ -59,11 +60,14 @@ struct Cursor {
 
 constexpr char kMagic[12] = {'t', 'e', 'n', 's', 'o', 'r', '_', 'f', 'i', 'l', 'e', '\0'};
 constexpr std::size_t kHeaderBytes = 12 + 2 + 4;
+// What to do about a file cut short (an interrupted download).
+constexpr char kRedownload[] = "; the file is cut short: download it again from https://rgl.epfl.ch/materials";
 
 }  // namespace
 
 RglFile::RglFile(const std::string& path) : path_(path) {
   std::ifstream in(path, std::ios::binary);
+  if (!in) require_readable(path);
   if (!in) throw IoError(path + ": cannot open the RGL file");
   bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   if (in.bad()) throw IoError(path + ": read error");
@@ -74,7 +78,7 @@ RglFile::RglFile(const std::string& path) : path_(path) {
     throw InputError(path + ": bad magic, not an RGL tensor file (expected \"tensor_file\\0\")");
   if (size < kHeaderBytes)
     throw InputError(path + ": truncated header (" + std::to_string(size) + " bytes, needs " +
-                     std::to_string(kHeaderBytes) + ")");
+                     std::to_string(kHeaderBytes) + ")" + kRedownload);
   Cursor c{bytes_, 12};
   version_[0] = c.get<std::uint8_t>();
   version_[1] = c.get<std::uint8_t>();
@@ -86,7 +90,7 @@ RglFile::RglFile(const std::string& path) : path_(path) {
   if (n_fields == 0 || std::uint64_t(n_fields) * 13 > size - kHeaderBytes)
     throw InputError(path + ": truncated header (" + std::to_string(n_fields) + " fields need at least " +
                      std::to_string(kHeaderBytes + std::uint64_t(n_fields) * 13) + " bytes, file has " +
-                     std::to_string(size) + ")");
+                     std::to_string(size) + ")" + kRedownload);
 
   std::set<std::string> names;
   for (std::uint32_t i = 0; i < n_fields; ++i) {
@@ -94,7 +98,7 @@ RglFile::RglFile(const std::string& path) : path_(path) {
     auto need = [&](std::size_t n, const char* what) {
       if (!c.has(n))
         throw InputError(path + ": truncated header of " + which + " (" + what + " at byte " +
-                         std::to_string(c.pos) + ", file has " + std::to_string(size) + " bytes)");
+                         std::to_string(c.pos) + ", file has " + std::to_string(size) + " bytes)" + kRedownload);
     };
     RglField f;
     need(2, "name length");
@@ -128,7 +132,7 @@ RglFile::RglFile(const std::string& path) : path_(path) {
     if (f.offset > size || nbytes > size - f.offset)
       throw InputError(path + ": field '" + f.name + "': truncated data (" + rgl_dtype_name(f.dtype) + " " +
                        f.shape_text() + " needs bytes " + std::to_string(f.offset) + ".." +
-                       std::to_string(f.offset + nbytes) + ", file has " + std::to_string(size) + ")");
+                       std::to_string(f.offset + nbytes) + ", file has " + std::to_string(size) + ")" + kRedownload);
   }
 }
 

@@ -1,0 +1,93 @@
+// One median and one rounding in every summary (host/core/stats.*): the quantile is
+// numpy's linear one (an even count's median is the mean of the two middle values), and
+// `fit`, `inspect` and `compare` print it with two decimals, the same figures for the same
+// values.
+// labels: cli compare
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "compare/compare.hpp"
+#include "core/stats.hpp"
+#include "io/mixture_file.hpp"
+#include "io/table.hpp"
+
+using namespace bsdfmix;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / "bsdfmix_summary_test";
+  fs::create_directories(d);
+  return d;
+}
+
+// stdout of `bsdfmix ARGS` (the command must succeed).
+std::string output_of(const std::string& args) {
+  const std::string out = (temp_dir() / "out.txt").string();
+  REQUIRE(std::system((std::string(BSDFMIX_BINARY) + " " + args + " > " + out + " 2>/dev/null").c_str()) == 0);
+  std::ifstream f(out);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("the quantile is numpy's linear one", "[summary]") {
+  CHECK(quantile({}, 0.5) == 0);
+  CHECK(quantile({7}, 0.9) == 7);
+  CHECK(quantile({4, 1, 3, 2}, 0.5) == Approx(2.5));  // the mean of the two middle values
+  CHECK(quantile({1, 2, 3}, 0.5) == 2);
+  CHECK(quantile({4, 1, 3, 2}, 0.9) == Approx(3.7));  // numpy.percentile([1, 2, 3, 4], 90)
+  CHECK(quantile({4, 1, 3, 2}, 1.0) == 4);
+  CHECK(quantile({4, 1, 3, 2}, 0.0) == 1);
+  std::vector<double> v;
+  for (int i = 1; i <= 90; ++i) v.push_back(i);
+  CHECK(quantile(v, 0.5) == Approx(45.5));
+  CHECK(quantile(v, 0.9) == Approx(81.1));
+  CHECK(percent_text(0.045249) == "4.52%");
+  CHECK(percent_text(0.04525001) == "4.53%");
+}
+
+TEST_CASE("compare's summary takes the one quantile", "[summary]") {
+  Comparison c;
+  for (double l1 : {0.01, 0.02, 0.03, 0.04}) {
+    SliceComparison s;
+    s.l1 = l1;
+    s.fitted = true;
+    c.slices.push_back(s);
+  }
+  const std::string text = comparison_summary(c);
+  CHECK_THAT(text, Catch::Contains("relative L1 median 2.50%, p90 3.70%"));
+}
+
+TEST_CASE("fit and inspect print the same median of the file's l1_rel", "[summary]") {
+  // a 4-slice table of one lobe moving with theta_o: an even count of slices
+  TableMeta meta = make_grid(Domain::Hemisphere, 4, 1, 12, 24, true);
+  std::vector<float> values;
+  for (double to : meta.theta_o)
+    for (double th : meta.theta_i)
+      for (double ph : meta.phi_i)
+        values.push_back(float(0.2 + 3 * std::exp(-((th - to) * (th - to) + ph * ph) / 0.08)));
+  const std::string table = (temp_dir() / "t.h5").string(), mixture = (temp_dir() / "m.h5").string();
+  write_table(table, meta, values);
+  const std::string config = (temp_dir() / "fit.yaml").string();
+  std::ofstream(config) << "table: " << table << "\nfit:\n  output: " << mixture << "\n  report: "
+                        << (temp_dir() / "fit.csv").string() << "\n  search_report: "
+                        << (temp_dir() / "search.csv").string() << "\n  k_max: 2\n";
+  fs::remove(mixture);
+  const std::string fit = output_of("fit -q " + config);
+  const MixtureFile m = read_mixture_file(mixture);
+  REQUIRE(m.l1_rel.size() == 4);
+  const std::string median = "median " + percent_text(quantile(m.l1_rel, 0.5)) + ", p90 " +
+                             percent_text(quantile(m.l1_rel, 0.9)) + ", max " + percent_text(quantile(m.l1_rel, 1));
+  CHECK_THAT(fit, Catch::Contains("relative L1      " + median));
+  CHECK_THAT(output_of("inspect -q " + mixture), Catch::Contains("l1_rel     " + median));
+}
