@@ -1,7 +1,7 @@
 """Builds and installs the Python module `bsdfmix` (python/bsdfmix_module.cpp and the readers it
 links, host/io and host/core) with setuptools, pybind11 and the HDF5 C library, offline:
 
-    python3 -m venv --system-site-packages V
+    /usr/bin/python3 -m venv --system-site-packages V
     V/bin/python -m pip install --no-build-isolation --no-index ./python
 
 (Debian: python3-setuptools, python3-wheel, python3-pybind11, libhdf5-dev; scripts/setup installs
