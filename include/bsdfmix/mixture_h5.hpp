@@ -24,6 +24,7 @@
 #include <bsdfmix/mixture.hpp>
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
