@@ -287,7 +287,7 @@ __kernel void eval_mixture(__global const float* q, __global const VF* pd, __glo
   if (theta_inside(theta)) {
     r = mixture_omega(q, pd, theta, wrap_phi(phi - q[Q_ROTATE]));
 #if HEMISPHERE
-    if (r.y != 0.0f) r.y /= cos(theta);
+    r.y = theta < THETA_HI ? r.y / cos(theta) : 0.0f;  // f is 0 at the horizon (the header's f_inside)
 #endif
   }
   out[i] = r;

@@ -6,7 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <bsdfmix/mixture.hpp>
+#include <bsdfmix/mixture_h5.hpp>
 
 #include <cstdint>
 #include <string>
@@ -14,6 +14,7 @@
 
 #include "core/domain.hpp"
 #include "core/error.hpp"
+#include "io/h5.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 
@@ -26,7 +27,7 @@ using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
 // `bsdfmix sample`'s counter stream (host/sampling/sampling.hpp, kSampleStream), so that
 // sample_counter with the defaults gives the samples of `bsdfmix sample --cpu`.
-constexpr std::uint32_t kSampleStream = 0x73616d70u;
+constexpr std::uint32_t kSampleStream = mix::kSampleStream;
 
 // The arguments broadcast against each other (numpy rules), each as a C-contiguous double array.
 std::vector<Array> broadcast(const std::vector<py::object>& args, std::vector<py::ssize_t>& shape) {
@@ -363,8 +364,18 @@ void bind_mixture_set_sampling(py::class_<mix::MixtureSet>& cls) {
 // The project's readers: mixture files (load_mixture, mixture_info) and tables (Table).
 void bind_files(py::module_& m) {
   m.def(
-      "load_mixture", [](const std::string& path) { return to_mixture_set(read_mixture_file(path)); }, py::arg("path"),
-      "a mixture file (any storage) as a prepared MixtureSet, read and checked by bsdfmix's reader");
+      "load_mixture",
+      [](const std::string& path) {
+        h5::open_file(path);  // bsdfmix's probe first: metadata that crashes HDF5 is an error, not a crash
+        try {
+          return mix::load_mixture_h5(path);
+        } catch (const std::runtime_error& e) {
+          throw InputError(e.what());  // bsdfmix.Error, as every reader of the module raises
+        }
+      },
+      py::arg("path"),
+      "a mixture file (any storage) as a prepared MixtureSet: the header loader, mix::load_mixture_h5 "
+      "(include/bsdfmix/mixture_h5.hpp)");
   m.def(
       "mixture_info",
       [](const std::string& path) {

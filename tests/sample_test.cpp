@@ -371,6 +371,20 @@ TEST_CASE("eval kernel: pdf_omega and the stand-in f match the header", "[sample
     CHECK(set.eval_f(0.0, 0.0, t, 0.5) == Approx(1.1 * set.pdf_omega(0.0, 0.0, t, 0.5)).epsilon(1e-12));
 }
 
+TEST_CASE("eval kernel: f is 0 at and past the hemisphere's horizon, as the header's", "[sample]") {
+  for (const auto& set : {hemisphere_set(), disk_set()}) {
+    const std::vector<std::pair<double, double>> dirs = {{kPi / 2, 0.4}, {kPi / 2, -2.0}, {1.6, 0.4}, {kPi / 2 - 1e-3, 0.4}};
+    const auto r = eval_device(device(), set, 0.8, -1.0, dirs);
+    for (std::size_t k = 0; k < 3; ++k) {
+      CHECK(r[k].second == 0.0f);
+      CHECK(set.eval_f(0.8, -1.0, dirs[k].first, dirs[k].second) == 0.0);
+      CHECK(std::isfinite(r[k].first));
+    }
+    CHECK(r[3].second > 0.0f);  // just inside: finite and positive, as the header's
+    CHECK(r[3].second == Approx(set.eval_f(0.8, -1.0, dirs[3].first, dirs[3].second)).epsilon(1e-3));
+  }
+}
+
 TEST_CASE("eval kernel: phi images about the conditional mean (strong correlation, broad and sharp lobes)", "[sample]") {
   // The kernel takes each component's phi image nearest its conditional mean and then only
   // the images that can matter in float (host: make_query); the header sums every image

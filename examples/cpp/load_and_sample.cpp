@@ -2,9 +2,9 @@
 //
 //   load_and_sample MIXTURE.h5 [TABLE.h5 COMPARE.csv]
 //
-// It needs only include/bsdfmix/mixture.hpp and the HDF5 C library. It
-//  1. reads the mixture file (docs/formats.md, "Mixture file": padded or ragged storage,
-//     with or without colour) with the HDF5 C API into a bsdfmix::mix::MixtureSet;
+// It needs only include/bsdfmix/mixture.hpp, mixture_h5.hpp and the HDF5 C library. It
+//  1. reads the mixture file (any storage, colour, map and interpolation) into a prepared
+//     bsdfmix::mix::MixtureSet with one call, bsdfmix::mix::load_mixture_h5;
 //  2. picks an outgoing direction between two fitted slices (the first grid slice of the
 //     table the file does not hold, or halfway between the first two fitted slices);
 //  3. evaluates the stand-in f and its colour there, and draws importance samples of it;
@@ -14,7 +14,7 @@
 // it reads the table's integral at that slice and checks its estimate of the stand-in's
 // energy (its integral over the table's, minus 1) against compare's `energy` column.
 // Exit status 0 when the check passes (or there is nothing to check), 1 otherwise.
-#include <bsdfmix/mixture.hpp>
+#include <bsdfmix/mixture_h5.hpp>
 #include <hdf5.h>
 
 #include <cmath>
@@ -30,9 +30,7 @@ namespace mix = bsdfmix::mix;
 
 namespace {
 
-// --- A few HDF5 C API helpers -------------------------------------------------------------
-
-// Closes an HDF5 handle when it leaves scope.
+// Closes an HDF5 handle when it leaves scope (for the table read below).
 struct H5 {
   hid_t id;
   herr_t (*close)(hid_t);
@@ -44,9 +42,7 @@ struct H5 {
   H5& operator=(const H5&) = delete;
 };
 
-bool has(hid_t group, const char* name) { return H5Lexists(group, name, H5P_DEFAULT) > 0; }
-
-// A whole dataset as doubles (HDF5 converts float32 to double exactly).
+// A whole dataset as doubles.
 std::vector<double> read_doubles(hid_t group, const char* name) {
   H5 d(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose, name);
   H5 space(H5Dget_space(d.id), H5Sclose, name);
@@ -54,103 +50,6 @@ std::vector<double> read_doubles(hid_t group, const char* name) {
   if (H5Dread(d.id, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) < 0)
     throw std::runtime_error(std::string("HDF5: cannot read ") + name);
   return v;
-}
-
-std::vector<int> read_ints(hid_t group, const char* name) {
-  H5 d(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose, name);
-  H5 space(H5Dget_space(d.id), H5Sclose, name);
-  std::vector<int> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space.id)));
-  if (H5Dread(d.id, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) < 0)
-    throw std::runtime_error(std::string("HDF5: cannot read ") + name);
-  return v;
-}
-
-// A string attribute, variable length (as bsdfmix writes them) or fixed.
-std::string read_string_attr(hid_t obj, const char* name) {
-  H5 a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose, name);
-  H5 type(H5Aget_type(a.id), H5Tclose, name);
-  H5 mem(H5Tcopy(H5T_C_S1), H5Tclose, name);
-  H5Tset_cset(mem.id, H5Tget_cset(type.id));  // UTF-8 as written: HDF5 converts no character set
-  std::string out;
-  if (H5Tis_variable_str(type.id) > 0) {
-    H5Tset_size(mem.id, H5T_VARIABLE);
-    char* s = nullptr;
-    if (H5Aread(a.id, mem.id, &s) < 0) throw std::runtime_error(std::string("HDF5: cannot read ") + name);
-    out = s ? s : "";
-    H5free_memory(s);
-  } else {
-    std::vector<char> buf(H5Tget_size(type.id) + 1, '\0');
-    H5Tset_size(mem.id, buf.size() - 1);
-    if (H5Aread(a.id, mem.id, buf.data()) < 0) throw std::runtime_error(std::string("HDF5: cannot read ") + name);
-    out = buf.data();
-  }
-  return out;
-}
-
-// --- The mixture file into a MixtureSet ------------------------------------------------------
-
-// Group /mixture; component c of slice s is row offset[s] + c of the ragged arrays, or row
-// s * Kmax + c of the padded ones (docs/formats.md, "Storage").
-mix::MixtureSet load_mixture(const std::string& path) {
-  H5 file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, path);
-  H5 g(H5Gopen2(file.id, "mixture", H5P_DEFAULT), H5Gclose, path + ": /mixture");
-  mix::MixtureSet set;
-  set.domain = read_string_attr(g.id, "domain") == "hemisphere" ? mix::Domain::Hemisphere : mix::Domain::Fiber;
-  set.azimuthal = read_string_attr(g.id, "symmetry") == "azimuthal";
-  // The plane of the Gaussians; files before format version 2 have no `map`: (theta, phi).
-  if (H5Aexists(g.id, "map") > 0) set.map = mix::map_from_name(read_string_attr(g.id, "map"));
-  // optional: how omega_o between fitted slices is served (absent: blend)
-  if (H5Aexists(g.id, "interpolation") > 0 && read_string_attr(g.id, "interpolation") == "displace")
-    set.interpolation = mix::Interpolation::Displace;
-
-  const std::vector<double> theta_o = read_doubles(g.id, "theta_o"), phi_o = read_doubles(g.id, "phi_o");
-  const std::vector<double> scale = read_doubles(g.id, "scale");
-  const std::vector<int> k = read_ints(g.id, "k");
-  const std::vector<double> w = read_doubles(g.id, "weights"), mu = read_doubles(g.id, "means"),
-                            cov = read_doubles(g.id, "covariances");
-  const bool rgb = has(g.id, "rgb_scale");
-  const std::vector<double> amp = rgb ? read_doubles(g.id, "rgb_scale") : std::vector<double>{};
-  const std::size_t S = theta_o.size();
-
-  std::vector<std::size_t> first(S);  // the row of each slice's first component
-  if (has(g.id, "offset")) {
-    const std::vector<int> offset = read_ints(g.id, "offset");
-    for (std::size_t s = 0; s < S; ++s) first[s] = std::size_t(offset[s]);
-  } else {
-    const std::size_t kmax = w.size() / S;
-    for (std::size_t s = 0; s < S; ++s) first[s] = s * kmax;
-  }
-  // Colour copies (optional): rows copies_offset[s] .. + k[s] of rgb_copies [M, 4, 3].
-  std::vector<int> copies_offset;
-  std::vector<double> copies;
-  if (rgb && has(g.id, "rgb_copies")) {
-    copies_offset = read_ints(g.id, "copies_offset");
-    copies = read_doubles(g.id, "rgb_copies");
-  }
-
-  for (std::size_t s = 0; s < S; ++s) {
-    const std::size_t r = first[s];  // slice s's first row
-    mix::SliceMixture sm = mix::slice_from_arrays(std::size_t(k[s]), w.data() + r, mu.data() + 2 * r,
-                                                  cov.data() + 3 * r, rgb ? amp.data() + 3 * r : nullptr);
-    sm.theta_o = theta_o[s];
-    sm.phi_o = phi_o[s];
-    sm.scale = scale[s];
-    if (!copies_offset.empty() && copies_offset[s] >= 0) {
-      const std::size_t n = std::size_t(k[s]) * mix::kCopies * 3, at = std::size_t(copies_offset[s]) * mix::kCopies * 3;
-      sm.set_copies(std::vector<double>(copies.begin() + long(at), copies.begin() + long(at + n)));
-    }
-    set.slices.push_back(sm);
-  }
-  // The table's omega_o grid, on which the slices are blended (older files: their own slices).
-  if (has(g.id, "table_theta_o")) {
-    set.grid_theta_o = read_doubles(g.id, "table_theta_o");
-    set.grid_phi_o = read_doubles(g.id, "table_phi_o");
-  } else {
-    set.grid_theta_o = theta_o;
-    set.grid_phi_o = set.azimuthal ? std::vector<double>{0.0} : phi_o;
-  }
-  set.prepare();  // normalizes weights, factors covariances, builds the grid lookup
-  return set;
 }
 
 // --- The table's integral at one slice -----------------------------------------------------
@@ -204,7 +103,7 @@ int main(int argc, char** argv) try {
     std::fprintf(stderr, "usage: %s MIXTURE.h5 [TABLE.h5 COMPARE.csv]\n", argv[0]);
     return 2;
   }
-  const mix::MixtureSet set = load_mixture(argv[1]);
+  const mix::MixtureSet set = mix::load_mixture_h5(argv[1]);
   const bool hemisphere = set.domain == mix::Domain::Hemisphere;
   std::printf("%s: %s domain%s, %zu fitted slices on a grid of %zu x %zu omega_o\n", argv[1],
               hemisphere ? "hemisphere" : "fiber", set.azimuthal ? ", azimuthal symmetry" : "", set.slices.size(),
@@ -231,14 +130,15 @@ int main(int argc, char** argv) try {
     std::printf(" slice %d at theta_o %.4f (weight %.3f)", blend.slice[k], set.slices[blend.slice[k]].theta_o, blend.weight[k]);
   std::printf("\n");
 
-  // Importance samples of the mixture (reproducible: Philox stream 1, seed 7) and the Monte
+  // Importance samples of the mixture (reproducible: seed 7 on the stream of `bsdfmix sample
+  // --seed 7`, mix::kSampleStream) and the Monte
   // Carlo estimate of the slice integral: the mean of f [cos theta_i] / pdf_omega, an invalid
   // sample (theta outside the domain) counting 0.
   const std::uint64_t n = 1u << 20;
   double sum = 0, sum2 = 0, rgb_sum[3] = {0, 0, 0};
   std::uint64_t valid = 0;
   for (std::uint64_t i = 0; i < n; ++i) {
-    const mix::Sample s = set.sample_counter(theta_o, phi_o, 7, 1, i);
+    const mix::Sample s = set.sample_counter(theta_o, phi_o, 7, mix::kSampleStream, i);
     if (!s.valid) continue;
     ++valid;
     const double cos_i = hemisphere ? std::cos(s.theta) : 1.0;

@@ -286,10 +286,12 @@ std::string read_string_attr(hid_t obj, const std::string& name, const std::stri
     H5free_memory(s);
     return out;
   }
+  // One byte more than the file's: a fixed-length string that fills its size (NULLPAD, as
+  // h5py writes numpy bytes) keeps its last character beside the terminator.
   const std::size_t size = H5Tget_size(type.get());
-  std::string out(size, '\0');
+  std::string out(size + 1, '\0');
   Handle mem(H5Tcopy(H5T_C_S1));
-  H5Tset_size(mem.get(), size);
+  H5Tset_size(mem.get(), size + 1);
   H5Tset_cset(mem.get(), H5Tget_cset(type.get()));
   if (H5Aread(a.get(), mem.get(), out.data()) < 0)
     throw InputError(where + ": cannot read attribute '" + name + "'");

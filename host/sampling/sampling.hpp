@@ -24,7 +24,7 @@ namespace bsdfmix {
 class RglBrdf;
 
 // Counter streams (third counter word): sample CLI and each estimator.
-constexpr std::uint32_t kSampleStream = 0x73616d70u;  // "samp"
+constexpr std::uint32_t kSampleStream = mix::kSampleStream;  // "samp", the header's
 std::uint32_t estimator_stream(int estimator);
 
 // ---- the mixture serving one omega_o, flattened (kernels/sample.cl layout) -----------

@@ -13,6 +13,23 @@
 // with colour (has_rgb), channel c of it is sum_k rgb[c] of component k times its density,
 // over J [and cos(theta_i)] alike (eval_rgb); a slice with colour copies (SliceMixture::colour)
 // sums their densities instead, kCopies copies of each component (copy_of).
+//
+// Loading: bsdfmix/mixture_h5.hpp reads a mixture file into a prepared MixtureSet
+// (load_mixture_h5). Filled by hand, a set needs every slice's components, its colour copies
+// (SliceMixture::set_copies, 12 amplitudes per component: skipping them changes eval_rgb),
+// the file's map, symmetry and interpolation, then MixtureSet::prepare(), which refuses a
+// grid that contradicts the slices or the symmetry.
+//
+// The horizon. On the hemisphere eval_f and eval_rgb are 0 at theta_i = pi/2 (90 deg) and
+// beyond, as a renderer expects; pdf_omega is the sampling density: 0 past pi/2, and at
+// pi/2 itself its finite limit on the disk map. On the fiber sphere both are 0 outside
+// [-pi/2, pi/2]. bsdfmix's device kernels (kernels/sample.cl) return the same.
+//
+// Random streams. sample_counter(theta_o, phi_o, seed, stream, i) is sample() fed with
+// uniforms(seed, stream, i), a counter-based Philox generator: sample i is the same on
+// every device and for any batching. `bsdfmix sample --seed S` (S = 1 by default) gives
+// samples 0, 1, ... of stream kSampleStream; so does the Python module's sample_counter with
+// its defaults (seed 1, stream kSampleStream).
 #pragma once
 
 #include <algorithm>
@@ -743,6 +760,9 @@ inline PhiloxBlock philox4x32_10(const std::uint32_t ctr[4], const std::uint32_t
 // A 32-bit word to a uniform in [0, 1) with 24 bits: exact in float and double alike.
 inline double to_uniform(std::uint32_t x) { return double(x >> 8) * (1.0 / 16777216.0); }
 
+// The stream of `bsdfmix sample` and of the Python module's sample_counter ("samp").
+constexpr std::uint32_t kSampleStream = 0x73616d70u;
+
 // The four uniforms of sample `index` of `stream` under `seed` (layout above).
 inline void uniforms(std::uint64_t seed, std::uint32_t stream, std::uint64_t index, double u[4]) {
   const std::uint32_t ctr[4] = {std::uint32_t(index), std::uint32_t(index >> 32), stream, 0u};
@@ -763,8 +783,10 @@ class MixtureSet {
   Interpolation interpolation = Interpolation::Blend;  // between fitted slices along theta_o
 
   // Prepares components, the grid lookup and (Displace) the transport plans between
-  // neighbouring fitted slices. Call once after filling the fields.
+  // neighbouring fitted slices. Call once after filling the fields. Throws
+  // std::invalid_argument when the fields contradict each other (check_grid).
   void prepare() {
+    check_grid();
     for (auto& s : slices) {
       s.map = map;
       s.prepare();
@@ -786,6 +808,46 @@ class MixtureSet {
         if (below >= 0) plan_up_[std::size_t(below)] = transport_plan(slices[std::size_t(below)], slices[std::size_t(s)]);
         below = s;
       }
+    }
+  }
+
+  // Throws std::invalid_argument, naming the field, when the grid and the slices disagree:
+  // an empty, unsorted or non-uniform axis; azimuthal with more than one grid_phi_o column;
+  // not azimuthal with a single column (one column at phi_o = 0 is what azimuthal symmetry
+  // stores: set azimuthal); a slice off the grid, or two slices on one grid cell.
+  void check_grid() const {
+    auto bad = [](const std::string& what) {
+      throw std::invalid_argument("bsdfmix::mix::MixtureSet: " + what);
+    };
+    for (const auto* axis : {&grid_theta_o, &grid_phi_o}) {
+      const char* name = axis == &grid_theta_o ? "grid_theta_o" : "grid_phi_o";
+      if (axis->empty()) bad(std::string(name) + " is empty");
+      const std::size_t n = axis->size();
+      const double step = n > 1 ? (axis->back() - axis->front()) / double(n - 1) : 0.0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite((*axis)[i]) || (n > 1 && !(step > 0)) ||
+            std::abs((*axis)[i] - (axis->front() + double(i) * step)) > 1e-6 * step)
+          bad(std::string(name) + " is not a finite, increasing, uniformly spaced axis (value " + std::to_string(i) + ")");
+    }
+    if (azimuthal && grid_phi_o.size() != 1)
+      bad("azimuthal = true needs one grid_phi_o column (" + std::to_string(grid_phi_o.size()) + " given)");
+    if (!azimuthal && grid_phi_o.size() < 2 && !one_omega_o_)
+      bad("azimuthal = false needs 2 or more grid_phi_o columns (1 given); a single column is azimuthal symmetry: set "
+          "azimuthal = true");
+    const std::size_t np = azimuthal ? 1 : grid_phi_o.size();
+    std::vector<int> cell(grid_theta_o.size() * np, -1);
+    for (std::size_t s = 0; s < slices.size(); ++s) {
+      const std::size_t t = nearest(grid_theta_o, slices[s].theta_o);
+      const std::size_t p = azimuthal ? 0 : nearest(grid_phi_o, slices[s].phi_o);
+      const double dt = grid_theta_o.size() > 1 ? grid_theta_o[1] - grid_theta_o[0] : 1.0;
+      const double dp = grid_phi_o.size() > 1 ? grid_phi_o[1] - grid_phi_o[0] : 1.0;
+      if (!(std::abs(slices[s].theta_o - grid_theta_o[t]) <= 1e-6 * dt) ||
+          (!azimuthal && !(std::abs(slices[s].phi_o - grid_phi_o[p]) <= 1e-6 * dp)))
+        bad("slice " + std::to_string(s) + " (theta_o " + std::to_string(slices[s].theta_o) + ", phi_o " +
+            std::to_string(slices[s].phi_o) + ") lies on no grid_theta_o x grid_phi_o point");
+      int& c = cell[t * np + p];
+      if (c >= 0) bad("slices " + std::to_string(c) + " and " + std::to_string(s) + " lie on one grid point");
+      c = int(s);
     }
   }
 
@@ -929,10 +991,16 @@ class MixtureSet {
     return j > 0 ? pdf_param(theta_o, phi_o, theta, phi) / j : 0.0;
   }
 
+  // Where eval_f and eval_rgb may be non-zero: the domain, less the horizon of the
+  // hemisphere (theta_i = pi/2, where f = (f cos) / cos has nothing left to divide).
+  bool f_inside(double theta) const {
+    return theta >= theta_lo(domain) && (domain == Domain::Hemisphere ? theta < theta_hi(domain) : theta <= theta_hi(domain));
+  }
+
   // The mixture as a stand-in for f: scale * pdf_omega [/ cos(theta_i) for the hemisphere],
-  // each slice with its own scale, blended.
+  // each slice with its own scale, blended; 0 outside f_inside.
   double eval_f(double theta_o, double phi_o, double theta, double phi) const {
-    if (theta < theta_lo(domain) || theta > theta_hi(domain)) return 0;
+    if (!f_inside(theta)) return 0;
     if (map != Map::ThetaPhi) {
       const double f = map_sum(theta_o, phi_o, theta, phi, true);
       return domain == Domain::Hemisphere ? f / std::cos(theta) : f;
@@ -958,7 +1026,7 @@ class MixtureSet {
   // without rgb gives eval_f's value in all three channels.
   void eval_rgb(double theta_o, double phi_o, double theta, double phi, double rgb[3]) const {
     rgb[0] = rgb[1] = rgb[2] = 0;
-    if (theta < theta_lo(domain) || theta > theta_hi(domain)) return;
+    if (!f_inside(theta)) return;
     if (map != Map::ThetaPhi) return eval_rgb_map(theta_o, phi_o, theta, phi, rgb);
     const double j = jacobian(domain, theta);
     if (!(j > 0)) return;
@@ -1042,6 +1110,7 @@ class MixtureSet {
     one.slices = {at(theta_o, azimuthal ? 0.0 : phi_o)};
     one.slices[0].theta_o = theta_o;
     one.slices[0].phi_o = one.grid_phi_o[0];
+    one.one_omega_o_ = true;  // one column serves its one phi_o, symmetric or not
     one.prepare();
     return one;
   }
@@ -1065,6 +1134,7 @@ class MixtureSet {
 
  private:
   std::vector<Transport> plan_up_;  // per slice: the plan to the next fitted slice above
+  bool one_omega_o_ = false;        // serving()'s set: one column without symmetry
 
   // On an equal-area map: the density per steradian (stand_in false) or the stand-in's
   // f [cos] per steradian (true) of the slices serving omega_o at (theta, phi).
