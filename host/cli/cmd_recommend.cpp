@@ -22,19 +22,22 @@ void add_recommend(CLI::App& app, Common& common) {
       "recommend",
       "the sampler to take for a material, measured in seconds: each candidate's variance at a few view "
       "elevations, BSDF only and, with --scene, with lighting (docs/sampling.md, \"Choosing a sampler\")");
-  sub->add_option("mixture", args->o.mixture, "mixture file (HDF5)")->required()->check(CLI::ExistingFile);
-  sub->add_option("table", args->o.table, "the table it was fitted to (HDF5)")->required()->check(CLI::ExistingFile);
-  sub->add_option("--rgl", args->o.rgl, "the RGL file the table came from: f is the file, its own sampler a candidate")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--scene", args->o.scene, "a scene file (configs/scenes/): the candidates with its lighting too")
-      ->check(CLI::ExistingFile);
+  sub->add_option("mixture", args->o.mixture, "mixture file (HDF5)")->required()->check(existing_file());
+  sub->add_option("table", args->o.table, "the table it was fitted to (HDF5)")->required()->check(existing_file());
+  sub->add_option("--rgl", args->o.rgl, "the RGL file the table came from: f is the file, its own sampler a candidate "
+                  "(default: none)")
+      ->check(existing_file());
+  sub->add_option("--scene", args->o.scene, "a scene file (configs/scenes/): the candidates with its lighting too "
+                  "(default: none, BSDF only)")
+      ->check(existing_file());
   sub->add_option("--views", args->o.views, "view elevations, cell centers of [0, --theta-max]")->capture_default_str();
   sub->add_option("--theta-max", args->o.theta_max_deg, "largest view elevation (degrees)")->capture_default_str();
   sub->add_option("--samples", args->o.samples, "samples per candidate and view")->capture_default_str();
   sub->add_option("--seed", args->o.seed, "seed of the samples")->capture_default_str();
   sub->add_option("--light-fraction", args->o.light_fraction, "light sampling's share in the mis_light_* candidates")
       ->capture_default_str();
-  sub->add_option("-o,--csv", args->csv, "write one row per candidate here (docs/formats.md, \"Recommend\")");
+  sub->add_option("-o,--csv", args->csv, "write one row per candidate here (docs/formats.md, \"Recommend\"; "
+                  "default: none)");
   add_common_options(*sub, common);
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
