@@ -1,4 +1,4 @@
-"""The failure map's tables (docs/guide_estimators.md "Where each estimator fails", docs/stability.md
+"""The failure map's tables (docs/studies/failure_map.md, docs/stability.md
 "Measured") from bench/results/failure_map.csv, the CSV of `scripts/failure_map.py`
 (scripts/doc_tables.py writes them between their markers)."""
 import csv
