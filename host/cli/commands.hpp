@@ -36,6 +36,7 @@ void add_render(CLI::App& app, Common& common);
 void add_compare(CLI::App& app, Common& common);
 void add_pack(CLI::App& app, Common& common);
 void add_tune(CLI::App& app, Common& common);
+void add_standin(CLI::App& app, Common& common);
 
 // The render's figures and summary figure (scripts/render_figures.py) over the outputs
 // of a render into `output` (cmd_render.cpp).
