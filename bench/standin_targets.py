@@ -5,7 +5,8 @@ the four fiber presets.
 For each material: the table (an RGL file imported with `bsdfmix import rgl`, a preset tabulated with
 `bsdfmix generate fiber`, both at --rows theta_o x 90 x 180), then `bsdfmix standin TABLE --target T`
 with its default K caps and strides. One CSV row per material: the chosen candidate (or the closest,
-`met` 0), the candidates measured, the command's wall time, and beside it the fewest bytes of the
+`met` 0), the candidates measured, the fit seconds of its K caps (`fit_seconds`, as first fitted) and
+this run's wall time (`seconds`: a rerun reuses the fits), and beside it the fewest bytes of the
 hand-made stand-ins of bench/results/stand_in_bytes.csv that meet the same target (ragged_f32, on
 30 theta_o rows; empty where that study has no such stand-in). Writes
 bench/results/standin_targets.csv with the machine (bench/machine.py).

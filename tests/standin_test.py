@@ -8,7 +8,8 @@
 - a candidate of stride s holds the slices a fit with `theta_o_stride: s` writes, with its error;
 - an impossible target exits 1 naming the closest candidate, and writes no stand-in;
 - a byte budget is respected, and one below every candidate exits 1;
-- a rerun reuses the fits; an RGL file is refused with the import command.
+- a rerun reuses the fits; --extra-caps fits one cap past the first meeting the target;
+- an RGL file is refused with the import command.
 """
 import argparse
 import csv
@@ -52,7 +53,7 @@ def compare_median(bsdfmix, mixture, table):
 
 def stand_in(bsdfmix, table, out, target, *extra, expect=0):
     return run(bsdfmix, "standin", table, "--target", str(target), "-o", out, "--k-caps", CAPS,
-               "--strides", STRIDES, "--quiet", *extra, expect=expect)
+               "--strides", STRIDES, "--extra-caps", "0", "--quiet", *extra, expect=expect)
 
 
 def same_mixtures(a, b):
@@ -113,9 +114,12 @@ def main():
     check(abs(strided - 100 * float(cand["median"])) < 0.05,
           "and its error (%.2f%% against %.2f%%)" % (strided, 100 * float(cand["median"])))
 
-    # a rerun reuses the fits
-    again = run(b, "standin", table, "--target", "25", "-o", out, "--k-caps", CAPS, "--strides", STRIDES)
-    check("reusing" in again.stderr and "fitting all" not in again.stderr, "a rerun reuses the fits")
+    # a rerun reuses the fits; --extra-caps 1 fits one cap more than the first meeting, no further
+    again = run(b, "standin", table, "--target", "25", "-o", out, "--k-caps", CAPS + ",8", "--strides", STRIDES,
+                "--extra-caps", "1", "--csv", os.path.join(work, "e.csv"))
+    check("K cap 2: reusing" in again.stderr and "K cap 4: fitting all" in again.stderr
+          and "K cap 8" not in again.stderr, "a rerun reuses the fits, and fits one cap more")
+    check(len(candidates(os.path.join(work, "e.csv"))) == 6, "the extra cap's candidates are measured")
 
     # an impossible target: exit 1, the closest named, no stand-in written
     none_out = os.path.join(work, "none.h5")

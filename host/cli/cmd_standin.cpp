@@ -9,6 +9,7 @@
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "fit/em.hpp"
 #include "standin/standin.hpp"
 
 namespace bsdfmix::cli {
@@ -31,7 +32,8 @@ void add_standin(CLI::App& app, Common& common) {
     std::string table, output, work, metric = "median", config, csv;
     double target = 0;
     std::uint64_t max_bytes = 0;
-    std::vector<int> k_caps{4, 8, 16, 32}, strides{1, 2, 3, 4, 5, 6, 8, 10, 12, 16};
+    int extra_caps = 1;
+    std::vector<int> k_caps{4, 6, 8, 12, 16, 24, 32}, strides{1, 2, 3, 4, 5, 6, 8, 10, 12, 16};
   };
   const auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand(
@@ -48,8 +50,11 @@ void add_standin(CLI::App& app, Common& common) {
   sub->add_option("-o,--output", args->output, "the stand-in (a ragged_f32 mixture file)")->required();
   sub->add_option("--work", args->work, "fits and candidate files, reused by a rerun (default: OUT without .h5, "
                                         "plus .standin)");
-  sub->add_option("--k-caps", args->k_caps, "K caps fitted, increasing")->capture_default_str()
-      ->delimiter(',')->check(CLI::Range(1, 64));
+  sub->add_option("--k-caps", args->k_caps, "K caps fitted, smallest first")->capture_default_str()
+      ->delimiter(',')->check(CLI::Range(1, kEmMaxK));
+  sub->add_option("--extra-caps", args->extra_caps,
+                  "caps fitted past the first at which every row meets the target (a larger K may let a "
+                  "coarser stride meet it in fewer bytes)")->capture_default_str()->check(CLI::Range(0, 64));
   sub->add_option("--strides", args->strides, "theta_o strides tried at each cap (first and last row kept)")
       ->capture_default_str()->delimiter(',')->check(CLI::Range(1, 100000));
   sub->add_option("--config", args->config, "take the fit settings from this config's fit section "
@@ -69,6 +74,7 @@ void add_standin(CLI::App& app, Common& common) {
     o.p90 = args->metric == "p90";
     o.max_bytes = args->max_bytes;
     o.k_caps = args->k_caps;
+    o.extra_caps = args->extra_caps;
     std::sort(o.k_caps.begin(), o.k_caps.end());
     o.strides = args->strides;
     o.fit = base_fit(args->config);

@@ -90,6 +90,7 @@ StandinResult choose_stand_in(const StandinOptions& o) {
   prepare_output(o.work + "/k.h5", 1 << 20);
   const std::vector<int> strides = distinct_strides(o.strides, meta.theta_o.size());
   Progress progress("standin " + o.table, o.k_caps.size(), "K caps");
+  int left = -1;  // caps still to fit once every row meets the target
   for (int cap : o.k_caps) {
     const CapFit fit = fit_all_rows(o, meta, cap);
     bool all_rows_meet = false;
@@ -100,7 +101,9 @@ StandinResult choose_stand_in(const StandinOptions& o) {
       if (c.rows == meta.theta_o.size() && metric(o, c) <= o.target) all_rows_meet = true;
     }
     progress.advance();
-    if (all_rows_meet) break;  // a larger cap only adds bytes
+    if (left < 0 && all_rows_meet) left = o.extra_caps;
+    else if (left > 0) --left;
+    if (left == 0) break;
   }
   progress.finish();
   choose(o, r);

@@ -2,7 +2,8 @@
 // target"): the smallest stand-in whose error, measured as `bsdfmix compare` measures it
 // at every table slice, meets a target, within an optional byte budget.
 //
-// Slices are fitted independently, so each K cap is fitted once on every table row; a
+// Slices are fitted independently, so each K cap is fitted once on every table row (caps
+// in increasing order, `extra_caps` past the first whose every-row candidate meets); a
 // candidate of theta_o stride s is the subset of that fit on stride_rows (the first and
 // last row included), exactly the file a fit with `theta_o_stride: s` writes. Each
 // candidate is packed ragged_f32 and compared with the table at every slice.
@@ -22,7 +23,10 @@ struct StandinOptions {
   double target = 0.05;             // the error to meet, a fraction
   bool p90 = false;                 // the metric: the median (false) or the p90 over the table slices
   std::uint64_t max_bytes = 0;      // payload bytes at most; 0: no budget
-  std::vector<int> k_caps;          // increasing; raising stops once stride 1 meets the target
+  std::vector<int> k_caps;          // increasing
+  // caps fitted past the first at which every row meets the target (a larger K can let a
+  // coarser stride meet it in fewer bytes); then raising stops
+  int extra_caps = 1;
   std::vector<int> strides;         // theta_o strides tried at each cap
   FitSettings fit;                  // the fit settings (k_max and the slices are set per cap)
   std::string device;
