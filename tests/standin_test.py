@@ -4,7 +4,7 @@
     /usr/bin/python3 tests/standin_test.py --bsdfmix build/bsdfmix [--work DIR]
 
 - the chosen stand-in meets its target as `bsdfmix compare` measures it, and is the
-  candidate of fewest bytes that does;
+  candidate of fewest bytes that does (the median, and the p90 with --metric p90);
 - a candidate of stride s holds the slices a fit with `theta_o_stride: s` writes, with its error;
 - an impossible target exits 1 naming the closest candidate, and writes no stand-in;
 - a byte budget is respected, and one below every candidate exits 1;
@@ -99,6 +99,14 @@ def main():
     check(measured <= 25 and abs(measured - 100 * float(c["median"])) < 0.01,
           "compare measures the stand-in at %.2f%% (the command said %.2f%%)" % (measured, 100 * float(c["median"])))
     check("chose stride" in first.stdout and "fewest bytes" in first.stdout, "the command says why")
+
+    # the p90 metric: the fewest bytes whose p90 meets the target
+    stand_in(b, table, os.path.join(work, "p90.h5"), 25, "--metric", "p90", "--csv", os.path.join(work, "p.csv"))
+    prow = candidates(os.path.join(work, "p.csv"))
+    pc = [r for r in prow if r["chosen"] == "1"][0]
+    p_ok = [int(r["bytes"]) for r in prow if float(r["p90"]) <= 0.25]
+    check(float(pc["p90"]) <= 0.25 and int(pc["bytes"]) == min(p_ok),
+          "--metric p90 chooses the fewest bytes whose p90 meets 25%% (%s bytes, p90 %s)" % (pc["bytes"], pc["p90"]))
 
     # a candidate is the fit with theta_o_stride
     cfg = os.path.join(work, "stride.yaml")
