@@ -128,6 +128,11 @@ def main():
     check("K cap 2: reusing" in again.stderr and "K cap 4: fitting all" in again.stderr
           and "K cap 8" not in again.stderr, "a rerun reuses the fits, and fits one cap more")
     check(len(candidates(os.path.join(work, "e.csv"))) == 6, "the extra cap's candidates are measured")
+    # stride 1 is always measured: without it in --strides, raising K still stops
+    r = run(b, "standin", table, "--target", "25", "-o", out, "--k-caps", CAPS + ",8", "--strides", "2,3",
+            "--extra-caps", "0", "--csv", os.path.join(work, "n.csv"))
+    strides = sorted({x["stride"] for x in candidates(os.path.join(work, "n.csv"))})
+    check(strides == ["1", "2", "3"] and "K cap 4" not in r.stderr, "stride 1 is measured when not named")
 
     # an impossible target: exit 1, the closest named, no stand-in written
     none_out = os.path.join(work, "none.h5")

@@ -33,7 +33,7 @@ void add_standin(CLI::App& app, Common& common) {
     double target = 0;
     std::uint64_t max_bytes = 0;
     int extra_caps = 1;
-    std::vector<int> k_caps{4, 6, 8, 12, 16, 24, 32}, strides{1, 2, 3, 4, 5, 6, 8, 10, 12, 16};
+    std::vector<int> k_caps{4, 6, 8, 12, 16, 24, 32}, strides{1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 24, 32, 48};
   };
   const auto args = std::make_shared<Args>();
   auto* sub = app.add_subcommand(
@@ -55,7 +55,7 @@ void add_standin(CLI::App& app, Common& common) {
   sub->add_option("--extra-caps", args->extra_caps,
                   "caps fitted past the first at which every row meets the target (a larger K may let a "
                   "coarser stride meet it in fewer bytes)")->capture_default_str()->check(CLI::Range(0, 64));
-  sub->add_option("--strides", args->strides, "theta_o strides tried at each cap (first and last row kept)")
+  sub->add_option("--strides", args->strides, "theta_o strides tried at each cap (first and last row kept; 1 always)")
       ->capture_default_str()->delimiter(',')->check(CLI::Range(1, 100000));
   sub->add_option("--config", args->config, "take the fit settings from this config's fit section "
                                             "(default: configs/defaults.yaml's)");

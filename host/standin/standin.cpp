@@ -28,12 +28,15 @@ std::string metric_name(const StandinOptions& o, bool rgb) {
   return std::string(o.p90 ? "p90 " : "median ") + (rgb ? "RGB error" : "relative L1");
 }
 
-// The strides whose row sets differ on n rows, in the order given (a stride past the
-// axis keeps the first and last row only).
+// Stride 1 (every row: when it meets the target, raising K stops), then the strides whose
+// row sets differ on n rows, in the order given (a stride past the axis keeps the first
+// and last row only).
 std::vector<int> distinct_strides(const std::vector<int>& strides, std::size_t n) {
   std::set<std::vector<std::size_t>> seen;
   std::vector<int> out;
-  for (int s : strides)
+  std::vector<int> all{1};
+  all.insert(all.end(), strides.begin(), strides.end());
+  for (int s : all)
     if (seen.insert(stride_rows(n, std::size_t(s))).second) out.push_back(s);
   return out;
 }
