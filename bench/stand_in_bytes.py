@@ -1,14 +1,16 @@
 #!/usr/bin/python3
-"""How small a stand-in can be: bytes against error for the shipped RGL materials.
+"""How small a stand-in can be: bytes against error, on the shipped RGL materials or any input.
 
-For each data/rgl/*.bsdf: import (30 theta_o x 90 x 180, or --rows theta_o), fit stand-ins on every 1st,
-2nd and 4th table theta_o slice at K max 4, 8, 16 (the fit settings of
-configs/converge_light_satin.yaml otherwise), pack each fit in every storage
-(padded / ragged, rgb_scale float64 / float32), compare each with its table at every
-table slice, and write bench/results/stand_in_bytes.csv and docs/images/stand_in_bytes.png.
+For each input (default: --materials, data/rgl/<name>_rgb.bsdf): an RGL file (.bsdf) is imported at
+30 theta_o x 90 x 180 (or --rows theta_o); a table (.h5) is used at its own grid. Then: fit stand-ins
+on every 1st, 2nd and 4th table theta_o row from the first (`fit.theta_o_rows`) at
+K max 4, 8, 16 (the fit settings of configs/converge_light_satin.yaml otherwise), pack each fit in
+every storage (padded / ragged, rgb_scale float64 / float32), compare each with its table at every
+table slice, and write bench/results/stand_in_bytes.csv (its `grid` column: theta_o x theta_i x
+phi_i) and docs/images/stand_in_bytes.png.
 
-    /usr/bin/python3 bench/stand_in_bytes.py [--materials a,b] [--steps 1,2,4] [--kmax 4,8,16]
-                                             [--rows 30] [--csv F] [--png P, "" for none]
+    /usr/bin/python3 bench/stand_in_bytes.py [INPUT.bsdf|TABLE.h5 ...] [--materials a,b] [--steps 1,2,4]
+                                             [--kmax 4,8,16] [--rows 30] [--csv F] [--png P, "" for none]
 
 Storage does not change the mixtures (float32 rounding of rgb_scale aside), so each fit
 is compared once per rgb precision; padded and ragged files of one precision hold the
@@ -35,10 +37,31 @@ def run(cmd):
     return r.stdout
 
 
-def table_theta_o(path):
+def table_grid(path):
+    """The table's theta_o rows and its grid as "theta_o x theta_i x phi_i"."""
     import h5py
     with h5py.File(path, "r") as f:
-        return [float(x) for x in f["table"]["theta_o"][()]]
+        t = f["table"]
+        rows = [float(x) for x in t["theta_o"][()]]
+        return rows, "%dx%dx%d" % (len(rows), len(t["theta_i"]), len(t["phi_i"]))
+
+
+def inputs(a):
+    """(name, table path) per input: RGL files imported into WORK, tables as they are."""
+    paths = a.inputs or [os.path.join(ROOT, "data", "rgl", m + "_rgb.bsdf") for m in a.materials.split(",")]
+    out = []
+    for p in paths:
+        name = os.path.basename(p).rsplit(".", 1)[0]
+        if not p.endswith(".bsdf"):
+            out.append((name, p))
+            continue
+        name = name[:-4] if name.endswith("_rgb") else name
+        table = os.path.join(WORK, "%s_table%s.h5" % (name, "" if a.rows == 30 else "_%d" % a.rows))
+        if not os.path.exists(table):
+            run([BIN, "import", "rgl", p, "--theta-o", str(a.rows), "--theta-i", "90", "--phi-i", "180", "-o", table,
+                 "--quiet"])
+        out.append((name, table))
+    return out
 
 
 def compare_stats(csv_path):
@@ -57,6 +80,7 @@ def compare_stats(csv_path):
 
 def main():
     ap = argparse.ArgumentParser()
+    ap.add_argument("inputs", nargs="*", help="RGL files (.bsdf, imported at --rows) or tables (.h5)")
     ap.add_argument("--materials", default="satin_rosaline,paper_white,cg_sunflower")
     ap.add_argument("--steps", default="1,2,4")
     ap.add_argument("--kmax", default="4,8,16")
@@ -79,28 +103,25 @@ def main():
     cores = os.cpu_count()
     t_start = time.time()
     out = []
-    for mat in a.materials.split(","):
-        bsdf = os.path.join(ROOT, "data", "rgl", mat + "_rgb.bsdf")
-        table = os.path.join(WORK, "%s_table%s.h5" % (mat, "" if a.rows == 30 else "_%d" % a.rows))
-        if not os.path.exists(table):
-            run([BIN, "import", "rgl", bsdf, "--theta-o", str(a.rows), "--theta-i", "90", "--phi-i", "180", "-o", table, "--quiet"])
-        axis = table_theta_o(table)
+    for mat, table in inputs(a):
+        axis, grid = table_grid(table)
         for step in [int(x) for x in a.steps.split(",")]:
-            chosen = axis[::step]
+            chosen = list(range(0, len(axis), step))  # the last row only when the step lands on it
+            n_fitted = len(chosen)
             for kmax in [int(x) for x in a.kmax.split(",")]:
-                stem = os.path.join(WORK, "%s_r%d_s%d_k%d" % (mat, a.rows, step, kmax))
+                stem = os.path.join(WORK, "%s_%s_s%d_k%d" % (mat, grid, step, kmax))
                 mixture = stem + ".h5"
                 cfg = stem + ".yaml"
                 with open(cfg, "w") as f:  # converge_light_satin.yaml's fit, but k_max and theta_o
                     f.write("table: %s\nfit:\n  output: %s\n  report: %s_fit.csv\n  search_report: %s_search.csv\n"
-                            "  k_min: 1\n  k_max: %d\n  seed: 1\n  theta_o: [%s]\n"
-                            % (table, mixture, stem, stem, kmax, ", ".join("%.17g" % t for t in chosen)))
+                            "  k_min: 1\n  k_max: %d\n  seed: 1\n  theta_o_rows: [%s]\n"
+                            % (table, mixture, stem, stem, kmax, ", ".join(map(str, chosen))))
                 t0 = time.time()
                 if not os.path.exists(mixture):  # a cached fit keeps the seconds it took
                     run([BIN, "fit", cfg, "--quiet"])
                     fitted = len(list(csv.DictReader(open(stem + "_fit.csv"))))
-                    if fitted != len(chosen):
-                        sys.exit("%s: %d slices fitted for %d planned" % (cfg, fitted, len(chosen)))
+                    if fitted != n_fitted:
+                        sys.exit("%s: %d slices fitted for %d planned" % (cfg, fitted, n_fitted))
                     with open(stem + ".seconds", "w") as f:
                         f.write("%.1f\n" % (time.time() - t0))
                 fit_s = float(open(stem + ".seconds").read()) if os.path.exists(stem + ".seconds") else float("nan")
@@ -115,7 +136,7 @@ def main():
                         run([BIN, "compare", packed, table, "--csv", cmp_csv, "--quiet"])
                         stats[prec] = compare_stats(cmp_csv)
                     s = stats[prec]
-                    out.append(dict(material=mat, rows=len(axis), slices_fitted=len(chosen), every=step, k_max=kmax, storage=st,
+                    out.append(dict(material=mat, grid=grid, rows=len(axis), slices_fitted=n_fitted, every=step, k_max=kmax, storage=st,
                                     bytes=payload, file_bytes=os.path.getsize(packed),
                                     median_rgb_error=s["median_rgb"], p90_rgb_error=s["p90_rgb"],
                                     median_l1=s["median_l1"], max_energy_error=s["max_energy"],
@@ -165,7 +186,9 @@ def chart(rows, png):
         ax.set_xlabel("payload bytes (log)")
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("median RGB error (less negative share), %")
-    fig.suptitle("stand-in bytes against error over all 30 table slices (label: slices fitted 1/n, K max)", fontsize=9)
+    grids = ", ".join(sorted(set(r.get("grid") or "%sx90x180" % r["rows"] for r in rows)))
+    fig.suptitle("stand-in bytes against error over every table slice, grid %s (theta_o x theta_i x phi_i; "
+                 "label: rows fitted 1/n, K max)" % grids, fontsize=9)
     axes[0][-1].legend(fontsize=7, loc="upper right")
     fig.tight_layout()
     os.makedirs(os.path.dirname(png), exist_ok=True)

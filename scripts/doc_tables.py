@@ -140,19 +140,20 @@ def rgb_copies():
 
 
 def stand_in_smallest():
-    every = {"1": "every row (30)", "2": "every 2nd (15)", "4": "every 4th (8)"}
-    out = ["| material | slices fitted | K max | storage | bytes | file bytes | median / p90 RGB error | median L1 | "
-           "largest energy error |", "|---|---|---|---|---|---|---|---|---|"]
+    every = {"1": "every row", "2": "every 2nd", "4": "every 4th"}
+    out = ["| material | grid | slices fitted | K max | storage | bytes | file bytes | median / p90 RGB error | "
+           "median L1 | largest energy error |", "|---|---|---|---|---|---|---|---|---|---|"]
     all_rows = rows("stand_in_bytes.csv")
     for m in ("satin_rosaline", "paper_white", "cg_sunflower"):
         ok = sorted((r for r in all_rows if r["material"] == m and float(r["median_rgb_error"]) <= 0.05),
                     key=lambda r: int(r["bytes"]))
         if not ok:
-            out.append("| %s | none at 5%% or less in this grid | | | | | | | |" % m)
+            out.append("| %s | | none at 5%% or less in this grid | | | | | | | |" % m)
             continue
         r = ok[0]
-        out.append("| %s | %s | %s | %s | %s | %s | %s / %s | %s | %.2g%% |" % (
-            m, every.get(r["every"], "every %s" % r["every"]), r["k_max"], r["storage"], r["bytes"], r["file_bytes"],
+        out.append("| %s | %s | %s (%s) | %s | %s | %s | %s | %s / %s | %s | %.2g%% |" % (
+            m, r.get("grid") or "%sx90x180" % r["rows"], every.get(r["every"], "every %s" % r["every"]),
+            r["slices_fitted"], r["k_max"], r["storage"], r["bytes"], r["file_bytes"],
             pct(r["median_rgb_error"]), pct(r["p90_rgb_error"], 1), pct(r["median_l1"]),
             100 * float(r["max_energy_error"])))
     return out

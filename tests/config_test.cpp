@@ -170,6 +170,27 @@ TEST_CASE("wrong types and impossible values are named", "[config]") {
   CHECK_THAT(config_error(t + "converge:\n  product_components: 0\n"), Catch::Contains("converge.product_components (line 3): 0 is out of range"));
 }
 
+TEST_CASE("fit rows without radians: a stride, row indices and degrees", "[config]") {
+  const std::string t = "table: " + existing_table() + "\n";
+  const Config c = parse_config(t + "fit:\n  theta_o_stride: 3\n  theta_o_rows: [0, 2, 4]\n  theta_o_deg: [10, 37.5]\n",
+                                "cfg.yaml");
+  REQUIRE(c.fit);
+  CHECK(c.fit->theta_o_stride == 3);
+  CHECK(c.fit->theta_o_rows == std::vector<int>{0, 2, 4});
+  CHECK(c.fit->theta_o_deg == std::vector<double>{10, 37.5});
+  CHECK(c.fit->theta_o.empty());
+  const Config d = parse_config(t + "fit:\n", "cfg.yaml");
+  CHECK(d.fit->theta_o_stride == 0);
+  CHECK(d.fit->theta_o_rows.empty());
+  CHECK(d.fit->theta_o_deg.empty());
+  CHECK_THAT(config_error(t + "fit:\n  theta_o_stride: 0\n"), Catch::Contains("fit.theta_o_stride (line 3): 0 is out of range"));
+  CHECK_THAT(config_error(t + "fit:\n  theta_o_rows: [1, 2.5]\n"),
+             Catch::Contains("fit.theta_o_rows (line 3): 2.5 is not a row index"));
+  CHECK_THAT(config_error(t + "fit:\n  theta_o_rows: -1\n"), Catch::Contains("-1 is not a row index"));
+  CHECK_THAT(config_error(t + "fit:\n  theta_o_deg: [10, 95]\n"),
+             Catch::Contains("fit.theta_o_deg (line 3): angle 95 deg is outside [-90, 90]"));
+}
+
 TEST_CASE("missing files and missing keys are named", "[config]") {
   CHECK_THAT(config_error("fit:\n  k_max: 3\n"), Catch::Contains("cfg.yaml: table: missing"));
   CHECK_THAT(config_error("table: nowhere/t.h5\nfit:\n"), Catch::Contains("table (line 1): nowhere/t.h5: no such file"));

@@ -222,6 +222,37 @@ TEST_CASE("scene-driven plans fit the slices around each direction", "[fit][plan
   CHECK(q[1].index == 1 * 8 + 7);
 }
 
+TEST_CASE("rows chosen by stride, index and degrees", "[fit][plan]") {
+  CHECK(stride_rows(10, 3) == std::vector<std::size_t>{0, 3, 6, 9});
+  CHECK(stride_rows(10, 4) == std::vector<std::size_t>{0, 4, 8, 9});  // the last row always kept
+  CHECK(stride_rows(10, 20) == std::vector<std::size_t>{0, 9});
+  CHECK(stride_rows(3, 1) == std::vector<std::size_t>{0, 1, 2});
+  const TableMeta m = make_grid(Domain::Hemisphere, 10, 1, 4, 8, true);  // rows at 4.5, 13.5, ... 85.5 degrees
+  FitSettings f;
+  CHECK(plan_fit_slices(m, f).size() == 10);
+  f.theta_o_stride = 4;
+  CHECK(chosen_rows(m.theta_o, f) == std::vector<std::size_t>{0, 4, 8, 9});
+  f.theta_o_rows = {2, 4};
+  f.theta_o_deg = {10, 37};  // nearest rows: 13.5 (1), 40.5 (4)
+  CHECK(chosen_rows(m.theta_o, f) == std::vector<std::size_t>{0, 1, 2, 4, 8, 9});
+  f.theta_o_stride = 0;
+  f.theta_o = {m.theta_o[6] + 0.01};  // radians add the two rows around
+  const std::vector<SliceRef> p = plan_fit_slices(m, f);
+  std::vector<std::size_t> rows;
+  for (const SliceRef& r : p) rows.push_back(r.t_o);
+  CHECK(rows == std::vector<std::size_t>{1, 2, 4, 6, 7});
+  f.theta_o_rows = {10};
+  CHECK_THROWS_WITH(chosen_rows(m.theta_o, f), Catch::Contains("fit.theta_o_rows: row 10 is past the table's 10 theta_o rows"));
+  // without symmetry a row holds every phi_o slice
+  const TableMeta n = make_grid(Domain::Hemisphere, 4, 3, 4, 8, false);
+  FitSettings g;
+  g.theta_o_rows = {1};
+  const std::vector<SliceRef> q = plan_fit_slices(n, g);
+  REQUIRE(q.size() == 3);
+  CHECK(q[0].index == 3);
+  CHECK(q[2].index == 5);
+}
+
 TEST_CASE("the search picks the K a slice deserves", "[fit][search]") {
   Progress::set_enabled(false);
   // Slice 0: three well separated Gaussians. Slice 1: one smooth lobe.

@@ -37,6 +37,7 @@ void add_compare(CLI::App& app, Common& common);
 void add_pack(CLI::App& app, Common& common);
 void add_tune(CLI::App& app, Common& common);
 void add_recommend(CLI::App& app, Common& common);
+void add_standin(CLI::App& app, Common& common);
 
 // The render's figures and summary figure (scripts/render_figures.py) over the outputs
 // of a render into `output` (cmd_render.cpp).

@@ -139,6 +139,7 @@ int main(int argc, char** argv) {
   cli::add_render(app, common);
   cli::add_compare(app, common);
   cli::add_pack(app, common);
+  cli::add_standin(app, common);
   cli::add_tune(app, common);
   cli::add_recommend(app, common);
   cli::add_bench(app, common);

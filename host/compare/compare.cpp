@@ -239,4 +239,10 @@ std::string comparison_summary(const Comparison& c) {
   return s.str();
 }
 
+double comparison_error(const Comparison& c, double q) {
+  std::vector<double> e;
+  for (const SliceComparison& r : c.slices) e.push_back(c.rgb ? r.rgb_error - r.rgb_error * r.negative_share : r.l1);
+  return quantile(e, q);
+}
+
 }  // namespace bsdfmix

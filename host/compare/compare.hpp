@@ -60,4 +60,9 @@ Comparison compare_stand_in(const std::string& mixture, const std::string& table
 std::string comparison_csv(const Comparison& c);
 std::string comparison_summary(const Comparison& c);
 
+// The error comparison_summary reports over every table slice, at quantile q (0.5 the
+// median, 0.9 the p90): the RGB error less its negative share with `rgb`, else the
+// luminance's relative L1.
+double comparison_error(const Comparison& c, double q);
+
 }  // namespace bsdfmix

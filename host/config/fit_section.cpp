@@ -1,6 +1,9 @@
 // The `fit` section: the Gaussian-count search and the final fits.
+#include <cmath>
+
 #include "config/config.hpp"
 #include "core/domain.hpp"
+#include "core/format.hpp"
 #include "fit/em.hpp"
 
 namespace bsdfmix {
@@ -45,6 +48,17 @@ FitSection parse_fit(const ConfigNode& n) {
   }
   if (n.has("phi_o")) f.phi_o = n.numbers("phi_o");
   if (!f.phi_o.empty() && f.theta_o.empty()) n.fail("phi_o", "needs theta_o");
+  if (n.has("theta_o_stride")) f.theta_o_stride = static_cast<int>(n.integer("theta_o_stride", 1, 1000000));
+  if (n.has("theta_o_rows"))
+    for (double r : n.numbers("theta_o_rows")) {
+      if (r < 0 || r != std::floor(r) || r > 1e6) n.fail("theta_o_rows", format_number(r, "%g") + " is not a row index (0, 1, 2, ...)");
+      f.theta_o_rows.push_back(static_cast<int>(r));
+    }
+  if (n.has("theta_o_deg")) {
+    f.theta_o_deg = n.numbers("theta_o_deg");
+    for (double d : f.theta_o_deg)
+      if (!(d >= -90 && d <= 90)) n.fail("theta_o_deg", "angle " + format_number(d, "%g") + " deg is outside [-90, 90]");
+  }
   return f;
 }
 

@@ -35,7 +35,9 @@ bool same_result_settings(const FitSettings& a, const FitSettings& b) { return r
 bool operator==(const FitSettings& a, const FitSettings& b) {
   return same_result_settings(a, b) &&
          std::tie(a.output, a.report, a.search_report, a.batch, a.theta_o, a.phi_o) ==
-             std::tie(b.output, b.report, b.search_report, b.batch, b.theta_o, b.phi_o);
+             std::tie(b.output, b.report, b.search_report, b.batch, b.theta_o, b.phi_o) &&
+         std::tie(a.theta_o_stride, a.theta_o_rows, a.theta_o_deg) ==
+             std::tie(b.theta_o_stride, b.theta_o_rows, b.theta_o_deg);
 }
 
 bool operator!=(const FitSettings& a, const FitSettings& b) { return !(a == b); }

@@ -45,6 +45,12 @@ struct FitSettings {
   // the hemisphere, the cylinder on the fiber sphere) or theta_phi (files before maps).
   std::string map = "theta_phi";
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
+  // Rows without radians (sweep/slice_plan.hpp plan_fit_slices), each adding its rows:
+  // every Nth table row with the first and last (0: none), row indices, and degrees
+  // snapped to the nearest row. None set and theta_o empty: every slice.
+  int theta_o_stride = 0;
+  std::vector<int> theta_o_rows;
+  std::vector<double> theta_o_deg;
 };
 
 // Every field equal, paths and slices included.

@@ -48,7 +48,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   TableReader reader(table_path);
   const TableSlices source(reader);
   const TableMeta& meta = reader.meta();
-  const std::vector<SliceRef> plan = plan_slices(meta, fit.theta_o, fit.phi_o);
+  const std::vector<SliceRef> plan = plan_fit_slices(meta, fit);
   for (const auto* out : {&fit.output, &fit.report, &fit.search_report}) prepare_output(*out, 1 << 20);
 
   const std::vector<Device> devices = select_devices(device_selector);
