@@ -8,6 +8,7 @@ links, host/io and host/core) with setuptools, pybind11 and the HDF5 C library, 
 them). The CMake build makes the same module (python/CMakeLists.txt, target bsdfmix_python).
 """
 import os
+import re
 import shlex
 import subprocess
 
@@ -16,9 +17,20 @@ from setuptools import Extension, setup
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-# The sources of python/CMakeLists.txt's bsdfmix_readers_pic, and the module itself.
-READERS = ["host/io/h5.cpp", "host/io/mixture_file.cpp", "host/io/mixture_parts.cpp", "host/io/table.cpp",
-           "host/core/atomic_file.cpp", "host/core/domain.cpp", "host/core/format.cpp", "host/core/hash.cpp"]
+
+
+def readers():
+    """The sources of python/CMakeLists.txt's bsdfmix_readers_pic (one list, kept there)."""
+
+    with open(os.path.join(HERE, "CMakeLists.txt"), encoding="utf-8") as f:
+        text = f.read()
+    found = re.findall(r"\$\{CMAKE_SOURCE_DIR\}/(host/[\w/]+\.cpp)", text)
+    if not found:
+        raise SystemExit("setup.py: python/CMakeLists.txt names no host/ source for the readers")
+    return found
+
+
+READERS = readers()
 
 
 def hdf5_flags():

@@ -59,7 +59,8 @@ void add_standin(CLI::App& app, Common& common) {
       ->capture_default_str()->delimiter(',')->check(CLI::Range(1, 100000));
   sub->add_option("--config", args->config, "take the fit settings from this config's fit section "
                                             "(default: configs/defaults.yaml's)");
-  sub->add_option("--csv", args->csv, "write the candidates here (docs/formats.md, \"Stand-in candidates\")");
+  sub->add_option("--csv", args->csv, "write the candidates here (docs/formats.md, \"Stand-in candidates\"; "
+                                      "default: none)");
   add_common_options(*sub, common);
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
