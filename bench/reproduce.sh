@@ -33,6 +33,7 @@ studies=(
   "rgb_refine:25:no:the channels in the L1 refinement, variant by variant, against the luminance alone (rgb_refine.csv)"
   "quickstart:2:quick:the quickstart from a clean out/quickstart/ and its summary figure (docs/images/quickstart.png)"
   "stand_in_bytes:5:quick:bytes against error (stand_in_bytes.csv, docs/images/stand_in_bytes.png)"
+  "standin_targets:20:no:bsdfmix standin at a 5% median RGB error on the four RGL files and the four presets at 30 rows, four at 45, paper_white at 90 (standin_targets*.csv)"
   "compact_rivals:30:no:the stand-in against a smaller table and spherical harmonics at 2 to 32 KiB, per slice on the fiber presets and the RGL materials, and in the image (compact_rivals.csv, compact_rivals_image.csv, docs/images/compact_rivals.png)"
   "render_rgl:5:quick:the RGL materials on a sphere under the sky map, and the small polyester render, satin and polyester fitted closer too (render/*_skymap*/, render/polyester_sky_small*/)"
   "search_before_after:31:no:the walk of this build against BEFORE's, with this build's colour work off too (search_before_after.csv, search_before_after_chi_square.csv)"
@@ -107,6 +108,7 @@ outputs() {
     rgb_refine) echo "$results/rgb_refine.csv" ;;
     quickstart) echo "docs/images/quickstart.png" ;;
     stand_in_bytes) echo "$results/stand_in_bytes.csv docs/images/stand_in_bytes.png" ;;
+    standin_targets) echo "$results/standin_targets*.csv" ;;
     compact_rivals) echo "$results/compact_rivals.csv $results/compact_rivals.txt $results/compact_rivals_image.csv $results/compact_rivals_image.txt docs/images/compact_rivals.png" ;;
     render_rgl) echo "$results/render/*_skymap/* $results/render/satin_skymap_target2/* $results/render/polyester_sky_small*/* docs/images/render_*_skymap_stand_in.png docs/images/render_polyester_sky_small_stand_in.png" ;;
     search_before_after) echo "$results/search_before_after.csv $results/search_before_after_chi_square.csv" ;;
@@ -169,6 +171,11 @@ run_study() {
       $bin run configs/quickstart.yaml
       cp out/quickstart/render/quickstart.png docs/images/quickstart.png ;;
     stand_in_bytes) rm -rf out/stand_in_bytes && $py bench/stand_in_bytes.py ;;
+    standin_targets)  # out/standin_targets/ keeps the fits: a rerun compares and chooses again
+      $py bench/standin_targets.py --rows 30
+      $py bench/standin_targets.py --rows 45 --only satin_rosaline,paper_white,cotton,cg_sunflower \
+        --csv $results/standin_targets_45.csv
+      $py bench/standin_targets.py --rows 90 --only paper_white --csv $results/standin_targets_90.csv ;;
     compact_rivals)  # the per-slice study writes the 8 KiB representations the image study renders
       rm -rf out/compact_rivals
       $py bench/compact_rivals.py | tee $results/compact_rivals.txt

@@ -9,8 +9,9 @@ The guides are read in order, in one scratch folder that links the project's `bu
 scratch folder's own); each `--alone` page gets a scratch folder of its own. Fenced blocks are acted on by their language:
 
 - ```sh: each line runs in bash (`set -e`), from the scratch folder;
-- ```yaml, ```cpp, ```python whose first line is a comment naming a path
-  (`# out/mine/paper.yaml`, `// out/mine/render.cpp`): written to that path;
+- ```yaml, ```cpp, ```python whose first line is a comment naming a path: under `out/`
+  (`# out/mine/paper.yaml`) written there; under `examples/` (`// examples/cpp/albedo.cpp`)
+  checked to be that file, line for line, so a program shown is the program shipped;
 - ```python without such a line: run with /usr/bin/python3.
 
 Other blocks are read, not run. A failing command stops the run with its guide, line
@@ -59,6 +60,15 @@ def run(cmd, cwd, where, shell):
 def act(guide, lang, start, body, work):
     where = f"{guide}:{start}"
     named = PATH_COMMENT.match(body[0]) if body else None
+    if named and named.group(1).startswith("examples/"):
+        with open(os.path.join(work, named.group(1)), encoding="utf-8") as f:
+            shipped = f.read().rstrip("\n").split("\n")
+        if shipped != body:
+            diff = next(i for i in range(max(len(body), len(shipped)))
+                        if i >= len(body) or i >= len(shipped) or body[i] != shipped[i])
+            raise SystemExit(f"{guide}:{start + diff}: the block differs from {named.group(1)} at its line {diff + 1}")
+        print(f"[{where}] is {named.group(1)}", flush=True)
+        return 0
     if named and lang in ("yaml", "cpp", "python", "text"):
         path = os.path.join(work, named.group(1))
         os.makedirs(os.path.dirname(path), exist_ok=True)

@@ -1,4 +1,5 @@
-// albedo: the shortest complete use of a mixture file. Loads it (bsdfmix/mixture_h5.hpp),
+// examples/cpp/albedo.cpp
+// The shortest complete use of a mixture file. Loads it (bsdfmix/mixture_h5.hpp),
 // samples it at theta_o = 37 deg and estimates the albedo per channel by Monte Carlo:
 //   g++ -std=c++17 -O2 -I include examples/cpp/albedo.cpp $(pkg-config --cflags --libs hdf5) -o albedo
 //   ./albedo MIXTURE.h5
