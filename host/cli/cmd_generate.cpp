@@ -45,6 +45,8 @@ void add_generate(CLI::App& app, Common& common) {
     args->opt.symmetry = !args->no_symmetry;
     if (args->opt.symmetry && fiber->count("--phi-o") > 0 && args->opt.n_phi_o != 1)
       throw ConfigError("generate fiber: --phi-o needs --no-symmetry");
+    if (!args->opt.symmetry && fiber->count("--phi-o") > 0 && args->opt.n_phi_o < 2)
+      throw ConfigError("generate fiber: --no-symmetry needs --phi-o 2 or more (one column is symmetry)");
     if (args->opt.symmetry) args->opt.n_phi_o = 1;
     const auto start = std::chrono::steady_clock::now();
     generate_fiber_table(args->opt, common.device, args->output);

@@ -16,6 +16,7 @@ GenerateSection parse_generate(const ConfigNode& n) {
   g.phi_o = static_cast<int>(n.integer("phi_o", 1, 100000));
   g.symmetry = n.boolean("symmetry");
   if (g.symmetry && g.phi_o != 1) n.fail("phi_o", "must be 1 with symmetry: true");
+  if (!g.symmetry && g.phi_o < 2) n.fail("phi_o", "must be 2 or more with symmetry: false (one column is symmetry)");
   g.noise = n.number("noise", 0.0, 10.0);
   g.seed = static_cast<std::uint64_t>(n.integer("seed", 0, INT64_MAX));
   g.force = n.boolean("force");
