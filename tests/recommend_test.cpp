@@ -4,8 +4,6 @@
 // cos(theta_i) up to its variation inside a cell, so it beats the mixture and uniform.
 #include <catch2/catch.hpp>
 
-#include <sys/wait.h>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +13,8 @@
 #include <vector>
 
 #include "bench/sampler_choice.hpp"
+
+#include "run_cli.hpp"
 
 using namespace bsdfmix;
 using Catch::Matchers::Contains;
@@ -30,20 +30,9 @@ std::string temp_path(const std::string& name) {
 
 std::string rgl_file() { return std::string(BSDFMIX_SOURCE_DIR) + "/data/rgl/paper_white_rgb.bsdf"; }
 
-struct Run {
-  int code;
-  std::string out, err;
-};
+using Run = test::CliRun;
 
-Run run(const std::string& args) {
-  const std::string out = temp_path("out.txt"), err = temp_path("err.txt");
-  const int status = std::system((std::string(BSDFMIX_BINARY) + " " + args + " >" + out + " 2>" + err).c_str());
-  auto slurp = [](const std::string& p) {
-    std::ifstream f(p);
-    return std::string((std::istreambuf_iterator<char>(f)), {});
-  };
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+Run run(const std::string& args) { return test::run_cli(args, fs::temp_directory_path() / "bsdfmix_recommend_test"); }
 
 using Row = std::map<std::string, std::string>;
 

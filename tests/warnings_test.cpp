@@ -3,8 +3,6 @@
 // Each appears once, on stderr, as "warning: ...", when it should, and not otherwise.
 #include <catch2/catch.hpp>
 
-#include <sys/wait.h>
-
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +15,8 @@
 #include "sweep/sweep_warnings.hpp"
 #include "tables/rgl_lobe.hpp"
 #include "tables/rgl_warnings.hpp"
+
+#include "run_cli.hpp"
 
 using namespace bsdfmix;
 using Catch::Matchers::Contains;
@@ -32,20 +32,9 @@ std::string temp_path(const std::string& name) {
   return (dir / name).string();
 }
 
-struct Run {
-  int code;
-  std::string out, err;
-};
+using Run = test::CliRun;
 
-Run run(const std::string& args) {
-  const std::string out = temp_path("out.txt"), err = temp_path("err.txt");
-  const int status = std::system((std::string(BSDFMIX_BINARY) + " " + args + " >" + out + " 2>" + err).c_str());
-  auto slurp = [](const std::string& p) {
-    std::ifstream f(p);
-    return std::string((std::istreambuf_iterator<char>(f)), {});
-  };
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
+Run run(const std::string& args) { return test::run_cli(args, fs::temp_directory_path() / "bsdfmix_warnings_test"); }
 
 // How many lines of `text` start with "warning: " and contain `what`.
 int warnings(const std::string& text, const std::string& what) {
