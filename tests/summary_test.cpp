@@ -16,6 +16,7 @@
 #include "core/stats.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
+#include "sweep/sweep.hpp"
 
 using namespace bsdfmix;
 namespace fs = std::filesystem;
@@ -90,4 +91,15 @@ TEST_CASE("fit and inspect print the same median of the file's l1_rel", "[summar
                              percent_text(quantile(m.l1_rel, 0.9)) + ", max " + percent_text(quantile(m.l1_rel, 1));
   CHECK_THAT(fit, Catch::Contains("relative L1      " + median));
   CHECK_THAT(output_of("inspect -q " + mixture), Catch::Contains("l1_rel     " + median));
+}
+
+TEST_CASE("the fit summary gives the CPU time and the share of the cores it kept busy", "[summary]") {
+  SweepSummary s;
+  s.seconds = 10;
+  s.cpu_seconds = 15;
+  s.cores = 2;
+  CHECK(s.cpu_utilization() == Approx(0.75));
+  CHECK_THAT(s.text(), Catch::Matchers::Contains("cpu time         15.0 s: 75% of 2 cores over the wall time"));
+  s.seconds = 0;  // a run that took no measurable time: no division by zero
+  CHECK(s.cpu_utilization() == 0.0);
 }

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
+#include <thread>
 #include <unordered_map>
 
 #include "core/atomic_file.hpp"
@@ -44,6 +46,7 @@ BatchPart BatchWorker::fit(const std::vector<SliceRef>& batch) { return impl_->f
 SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
                        const SweepOptions& options) {
   const auto t_start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();  // this process's CPU time, every thread's
   const OutputLock lock(fit.output);  // a second run on the same output fails here, at once
   TableReader reader(table_path);
   const TableSlices source(reader);
@@ -119,6 +122,8 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   sum.resumed = resumed;
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   sum.devices = device_names;
+  sum.cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+  sum.cores = std::max(1u, std::thread::hardware_concurrency());
   for (const std::string& w : {k_cap_warning(result.mixture.k, result.mixture.l1_rel, fit.k_min, fit.k_max),
                                negative_channel_warning(reader, plan)})
     if (!w.empty()) sum.warnings.push_back(w);

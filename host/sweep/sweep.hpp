@@ -33,10 +33,13 @@ struct SweepSummary {
   std::uint64_t full_bytes = 0;          // the fitted slices' cells without azimuthal symmetry (float32)
   std::size_t symmetry_factor = 1;       // phi_o slices one stored slice stands for
   double seconds = 0;
+  double cpu_seconds = 0;  // this process's CPU time over the run (MPI workers' not counted)
+  unsigned cores = 1;      // the machine's logical CPUs
   std::string devices;
   // Warnings on the result (sweep_warnings), printed after the summary on stderr.
   std::vector<std::string> warnings;
   std::string text() const;          // the printed summary
+  double cpu_utilization() const;    // cpu_seconds over seconds x cores: 1 keeps every core busy
 };
 
 // The fit settings that make a result, as JSON (the mixture file's `fit_settings`

@@ -124,6 +124,10 @@ std::string fit_settings_json(const FitSettings& f) {
   return s.str();
 }
 
+double SweepSummary::cpu_utilization() const {
+  return seconds > 0 ? cpu_seconds / (seconds * double(std::max(1u, cores))) : 0.0;
+}
+
 std::string SweepSummary::text() const {
   auto size = [](double b) {
     char buf[32];
@@ -159,6 +163,9 @@ std::string SweepSummary::text() const {
       << " phi_o; without it those cells would be " << size(double(full_bytes)) << " ("
       << ratio(full_bytes, mixture_bytes) << " the mixture's datasets)\n";
   std::snprintf(buf, sizeof buf, "  wall time        %.1f s on %s\n", seconds, devices.c_str());
+  s << buf;
+  std::snprintf(buf, sizeof buf, "  cpu time         %.1f s: %.0f%% of %u cores over the wall time\n", cpu_seconds,
+                100.0 * cpu_utilization(), cores);
   s << buf;
   return s.str();
 }
