@@ -11,6 +11,7 @@
 
 #include "chi_square.hpp"
 #include "gaussians.hpp"
+#include "lighting_frames.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -25,39 +26,12 @@ using namespace bsdfmix::render;
 namespace {
 
 constexpr std::uint64_t kSeed = 20261206ull;
-
-mix::Gaussian gauss(double w, double mt, double mp, double st, double sp, double rho) {
-  mix::Gaussian g = test::gaussian(w, mt, mp, st, sp, rho);
-  g.prepare();
-  return g;
-}
-
-// A random frame from uniforms: the axis uniform on the sphere, e1 perpendicular to it.
-LocalAxes random_frame(std::uint32_t index, Domain d) {
-  double u[4];
-  mix::uniforms(kSeed, 7, index, u);
-  const double z = 2 * u[0] - 1, a = 2 * kPi * u[1], r = std::sqrt(std::max(0.0, 1 - z * z));
-  LocalAxes f;
-  f.domain = d;
-  f.axis = {r * std::cos(a), r * std::sin(a), z};
-  const Vec3 any = std::abs(f.axis[2]) < 0.9 ? Vec3{0, 0, 1} : Vec3{1, 0, 0};
-  const Vec3 p = normalized(cross(f.axis, any)), q = cross(f.axis, p);
-  const double b = 2 * kPi * u[2];
-  for (int i = 0; i < 3; ++i) f.e1[i] = std::cos(b) * p[i] + std::sin(b) * q[i];
-  f.e2 = cross(f.axis, f.e1);
-  return f;
-}
+constexpr auto& gauss = test::prepared_gaussian;
+render::LocalAxes random_frame(std::uint32_t index, Domain d) { return test::random_frame(kSeed, index, d); }
 
 // The world lighting over the world's (theta, phi): two compact lobes, one correlated.
 const std::vector<mix::Gaussian> kWorld = {gauss(0.6, 0.5, 0.6, 0.08, 0.1, 0.3), gauss(0.4, -0.3, -2.0, 0.1, 0.12, -0.3)};
-
-// The world mixture's value (sum of weight x density over (theta, phi)) at a direction.
-double world_value(const Vec3& w) {
-  double th, ph, v = 0;
-  local_angles(kWorldAxes, w, th, ph);
-  for (const auto& g : kWorld) v += g.weight * g.density(th, ph);
-  return v;
-}
+double world_value(const Vec3& w) { return test::world_value(kWorld, w); }
 
 // The stand-in of frame k over its domain's equal-area map: a lobe at the specular cone
 // (fiber) or mirror direction (surface) and a broad one.
