@@ -102,7 +102,10 @@ def main():
         if ax is axes[0]:
             fig.colorbar(im, ax=axes[:2], label="f (1/sr), log scale", shrink=0.9)
         elif ax is axes[2]:
-            fig.colorbar(im, ax=ax, label="difference (1/sr)", shrink=0.9)
+            d = 10.0 ** np.floor(np.log10(dmax))  # decades down to the linear band, which the ticks leave out
+            ticks = [v for v in (d, d / 10, d / 100) if v > 2 * sym.linthresh]
+            fig.colorbar(im, ax=ax, label="difference (1/sr)", shrink=0.9,
+                         ticks=sorted([-v for v in ticks] + [0.0] + ticks))
     axes[0].set_ylabel("theta_i (deg)")
     axes[3].plot(deg(phi[valid]), deg(theta[valid]), ".", ms=2, color="cyan")
     axes[3].set_xlim(extent[:2])
