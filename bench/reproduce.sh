@@ -57,6 +57,7 @@ studies=(
   "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
   "em_builds:3:no:EM throughput of this build beside BEFORE's at K 8, 16, 50, best of 5 (em_builds.csv)"
   "house_speed:5:no:EM throughput and the render's ns per vertex of this build beside BEFORE's, alternating, best of 5 (house_speed.csv)"
+  "fit_speed:25:no:default fits of the four RGL files by this build and BEFORE's, alternating, best of 3: wall, CPU, utilization, L1, same mixtures (fit_speed.csv)"
   "mixed_devices:6:no:a thesis-length silk sweep on PoCL alone and on PoCL beside oclgrind, best of 3 (mixed_devices.csv)"
   "em_precision:1:no:the EM kernels against their reference, both precisions (em_precision.csv)"
   "theta_border:1:no:known mixtures with a lobe near the theta border, the three search methods (theta_border.csv)"
@@ -116,6 +117,7 @@ outputs() {
     search_time) echo "$results/search_time.csv" ;;
     em_builds) echo "$results/em_builds.csv" ;;
     house_speed) echo "$results/house_speed.csv" ;;
+    fit_speed) echo "$results/fit_speed.csv" ;;
     mixed_devices) echo "$results/mixed_devices.csv" ;;
     pinned_k) echo "$results/pinned_k.csv" ;;
     parameterization) echo "$results/parameterization.csv" ;;
@@ -234,6 +236,9 @@ run_study() {
     house_speed)
       if [ -z "${BEFORE:-}" ]; then echo "reproduce: house_speed skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
       $py bench/house_speed.py --old "$BEFORE" --new build/bsdfmix --rounds 5 --csv $results/house_speed.csv ;;
+    fit_speed)
+      if [ -z "${BEFORE:-}" ]; then echo "reproduce: fit_speed skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
+      $py bench/fit_speed.py --old "$BEFORE" --new build/bsdfmix --rounds 3 --csv $results/fit_speed.csv ;;
     mixed_devices) $py bench/mixed_devices.py --runs 3 --csv $results/mixed_devices.csv ;;
     pinned_k)
       [ -f out/bench_rgb/satin.h5 ] || { echo "reproduce: pinned_k needs the tables of rgb_stand_in (run it first)" >&2; return 1; }

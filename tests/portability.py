@@ -5,7 +5,8 @@ every memory access, API call and data race. Run twice: oclgrind's own limits, a
 GPU-like profile (work-group 256, local memory 32 KiB, global memory small enough that a
 fit's work is split into several batches). Any report of oclgrind fails, as does a
 non-zero exit; the fit must agree with PoCL's (the same K per slice, relative L1 within
-0.5 points).
+0.5 points). With fp64, equal-area fits run too: the silk table on the cylinder and a small
+import of paper_white on the disk (fit.map: equal_area), each agreeing with PoCL's and sampled.
 
     /usr/bin/python3 tests/portability.py --bsdfmix build/bsdfmix [--keep DIR]
 """
@@ -70,6 +71,22 @@ def run(cmd, env, log=None):
     return r.stdout
 
 
+def equal_area_config(cfg, table, out):
+    """The portability fit's config on `table` in the equal-area map, writing under `out`."""
+    os.makedirs(out, exist_ok=True)
+    text = FIT.format(table=table, out=out).split("converge:")[0] + "  map: equal_area\n"
+    with open(cfg, "w") as f:
+        f.write(text)
+    return cfg
+
+
+def agree(what, expected, got):
+    for s, (k, l1) in expected.items():
+        gk, gl1 = got[s]
+        if gk != k or abs(gl1 - l1) > 0.005:
+            fail("%s: slice %d fitted K %d, L1 %.4f; PoCL K %d, L1 %.4f" % (what, s, gk, gl1, k, l1))
+
+
 def report(path):
     return {int(r["slice"]): (int(r["k"]), float(r["l1_rel"])) for r in csv.DictReader(open(path))}
 
@@ -118,6 +135,16 @@ def main():
         f.write(FIT.format(table=table, out=pocl))
     run([exe, "fit", os.path.join(pocl, "fit.yaml"), "-q"], base)
     expected = report(os.path.join(pocl, "fit.csv"))
+    # The equal-area fits PoCL makes: silk on the cylinder, paper_white (2 x 8 x 16) on the disk.
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    paper = os.path.join(tmp, "paper.h5")
+    run([exe, "import", "rgl", os.path.join(root, "data", "rgl", "paper_white_rgb.bsdf"), "--theta-o", "2",
+         "--theta-i", "8", "--phi-i", "16", "-o", paper, "-q"], base)
+    mapped = {}
+    for label, t in (("silk", table), ("paper", paper)):
+        d = os.path.join(pocl, "ea_" + label)
+        run([exe, "fit", equal_area_config(os.path.join(tmp, "ea_%s.yaml" % label), t, d), "-q"], base)
+        mapped[label] = (t, report(os.path.join(d, "fit.csv")))
 
     for name in a.profiles.split(","):
         flags = PROFILES[name]
@@ -143,11 +170,15 @@ def main():
                 f.write(FIT.format(table=table, out=out))
             og("fit", cfg)
             got = report(os.path.join(out, "fit.csv"))
-            for s, (k, l1) in expected.items():
-                gk, gl1 = got[s]
-                if gk != k or abs(gl1 - l1) > 0.005:
-                    fail("%s %s: slice %d fitted K %d, L1 %.4f; PoCL K %d, L1 %.4f" % (name, precision, s, gk, gl1, k, l1))
+            agree("%s %s" % (name, precision), expected, got)
             if precision == "fp64":
+                for label, (t, want) in mapped.items():  # the equal-area kernels (-DMAP), fitted and sampled
+                    d = os.path.join(out, "ea_" + label)
+                    og("fit", equal_area_config(os.path.join(out, "ea_%s.yaml" % label), t, d))
+                    agree("%s %s equal_area %s" % (name, precision, label), want, report(os.path.join(d, "fit.csv")))
+                    og("sample", os.path.join(d, "mixture.h5"), "--theta-o", "0.5", "-n", "256", "-o",
+                       os.path.join(d, "samples.csv"))
+                    print("portability: %s %s: equal_area %s clean" % (name, precision, label))
                 og("sample", os.path.join(out, "mixture.h5"), "--theta-o", "0.5", "-n", "256", "-o",
                    os.path.join(out, "samples.csv"))
                 og("converge", cfg)

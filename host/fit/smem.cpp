@@ -94,12 +94,19 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
   const std::vector<double>& lw = dens.lw;
   std::vector<double> mass(k, 0.0);
   // log Z_k = log sum_i N_k(x_i), and the claimed mass A_k = sum_i w_i r_ik.
-  std::vector<double> zsum(k, 0.0);
+  // The responsibilities r_ij (cells of positive weight) are kept for the second pass.
+  std::vector<double> zsum(k, 0.0), resp(n * static_cast<std::size_t>(k), 0.0);
   for (std::size_t i = 0; i < n; ++i)
     for (int j = 0; j < k; ++j) {
       zsum[j] += exp_or_zero(logn[i * k + j] - zmax[j]);
-      if (w[i] > 0) mass[j] += w[i] * exp_or_zero(lw[j] + logn[i * k + j] - logs[i]);
+      if (w[i] > 0) mass[j] += w[i] * (resp[i * k + j] = exp_or_zero(lw[j] + logn[i * k + j] - logs[i]));
     }
+  // The logs the second pass takes per component, once.
+  std::vector<double> log_mass(k), log_zsum(k);
+  for (int j = 0; j < k; ++j) {
+    log_mass[j] = std::log(mass[j]);
+    log_zsum[j] = std::log(zsum[j]);
+  }
   ComponentScores out;
   out.split.assign(k, 0.0);
   std::vector<double> kl(k, 0.0), self(k, 0.0), cross(static_cast<std::size_t>(k) * k, 0.0);
@@ -116,14 +123,15 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
     if (!(w[i] > 0)) continue;
     active.clear();
     ract.clear();
+    const double log_w = std::log(w[i]);
     for (int j = 0; j < k; ++j) {
       const double lr = lw[j] + logn[i * k + j] - logs[i];
-      const double r = exp_or_zero(lr);
+      const double r = resp[i * k + j];
       if (!(r > 0) || !(mass[j] > 0)) continue;
       // f log(f / p), f = w r / A, p = N / Z.
       // f log(f / p) in logs (w r can underflow where log f cannot).
-      const double logf = std::log(w[i]) + lr - std::log(mass[j]);
-      const double logp = logn[i * k + j] - zmax[j] - std::log(zsum[j]);
+      const double logf = log_w + lr - log_mass[j];
+      const double logp = logn[i * k + j] - zmax[j] - log_zsum[j];
       kl[j] += std::exp(logf) * (logf - logp);
       self[j] += w[i] * r * r;
       double x, y;

@@ -88,6 +88,8 @@ struct Batch {
   // The L1 refinement of every kept fit and, with `with_neighbours`, of every fit below
   // and above it and beyond a stalled walk.
   void refine(bool with_neighbours);
+  void refine_queries(const EmEngine::L1Slices& slices, const std::vector<L1Query>& queries,
+                      const std::vector<Fitted*>& owners);
   // A slice with fewer non-zero cells than K is refitted with one component per cell.
   void reduce_k();
 };

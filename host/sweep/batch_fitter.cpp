@@ -126,28 +126,53 @@ void Batch::final_fits() {
   run(tasks);
 }
 
+// The refinement of a fit above the chosen K (the K above, or beyond a stalled walk) is
+// skipped when it cannot win: its score with its L1 error scaled by the chosen fit's
+// refinement gain stays this far above the chosen fit's refined score. On the shipped RGL
+// files the fits are the same as when every one is refined (docs/fitting.md).
+constexpr double kRefineMargin = 0.005;
+
 // The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `with_neighbours`,
-// of the candidate Ks below and above it and beyond a stalled walk (final_smem compares them
-// after). A refined mixture replaces its start only when its relative L1 error
-// (sweep/fit_error.cpp, the exact periodic density) is lower; its log-likelihood is
-// recomputed.
+// of the candidate K below it, then of those above it and beyond a stalled walk that can still
+// win (kRefineMargin; final_smem compares them after). A refined mixture replaces its start
+// only when its relative L1 error (sweep/fit_error.cpp, the exact periodic density) is lower;
+// its log-likelihood is recomputed.
 void Batch::refine(bool with_neighbours) {
   if (fit.refine != "l1") return;
   std::vector<L1Query> queries;
   std::vector<Fitted*> owners;
+  const auto add = [&](std::size_t s, Fitted& f) {
+    queries.push_back({s, f.gmm});
+    owners.push_back(&f);
+  };
+  std::vector<double> unrefined(size(), 0.0);
   for (std::size_t s = 0; s < size(); ++s) {
-    if (best[s].ok) {
-      queries.push_back({s, best[s].gmm});
-      owners.push_back(&best[s]);
-    }
-    for (std::vector<Fitted>* side : {&below, &above, &beyond})
-      if (with_neighbours && s < side->size() && (*side)[s].ok) {
-        queries.push_back({s, (*side)[s].gmm});
-        owners.push_back(&(*side)[s]);
-      }
+    if (best[s].ok) add(s, best[s]);
+    if (best[s].ok) unrefined[s] = best[s].l1;
+    if (with_neighbours && s < below.size() && below[s].ok) add(s, below[s]);
   }
   if (queries.empty()) return;
   const EmEngine::L1Slices slices = EmEngine::l1_prepare(full_set);  // once, not per evaluation
+  refine_queries(slices, queries, owners);
+  if (!with_neighbours) return;
+  queries.clear();
+  owners.clear();
+  for (std::size_t s = 0; s < size(); ++s) {
+    if (!best[s].ok) continue;
+    const double gain = unrefined[s] > 0 ? best[s].l1 / unrefined[s] : 1.0;
+    const double bar = candidate_score(best[s].gmm.k(), best[s].l1, fit.k_penalty) + kRefineMargin;
+    for (std::vector<Fitted>* side : {&above, &beyond})
+      if (s < side->size() && (*side)[s].ok &&
+          candidate_score((*side)[s].gmm.k(), (*side)[s].l1 * gain, fit.k_penalty) < bar)
+        add(s, (*side)[s]);
+  }
+  if (!queries.empty()) refine_queries(slices, queries, owners);
+}
+
+// The L1 refinement of `queries`; a refined mixture replaces its owner's fit only when
+// its relative L1 error is lower.
+void Batch::refine_queries(const EmEngine::L1Slices& slices, const std::vector<L1Query>& queries,
+                           const std::vector<Fitted*>& owners) {
   const L1Evaluator l1_values = [&](const SliceSet&, const std::vector<L1Query>& q, const L1Objective& o) {
     return engine.l1_values(slices, q, o);
   };
