@@ -62,6 +62,16 @@ Partial read_partial(const std::string& path, const std::string& key, int width,
   return p;
 }
 
+// The hash of the running executable (its code and embedded kernels): a build that renders
+// the reference another way gets another key. "unknown" where /proc/self/exe cannot be read.
+std::string code_hash() {
+  try {
+    return hex64(hash_file("/proc/self/exe"));
+  } catch (const Error&) {
+    return "unknown";
+  }
+}
+
 }  // namespace
 
 std::string scene_key(const RenderSettings& s, const std::string& table, std::uint64_t table_hash) {
@@ -84,7 +94,7 @@ std::string scene_key(const RenderSettings& s, const std::string& table, std::ui
   Hash64 h;
   h.update(s.lighting.env.data(), s.lighting.env.size() * sizeof(float));
   k << " env " << h.hex() << "\nreference " << path_estimator_name(s.reference_estimator) << " " << s.reference_spp
-    << "\nimage rgb\nversion " << BSDFMIX_VERSION << "\n";
+    << "\nimage rgb\nversion " << BSDFMIX_VERSION << "\ncode " << code_hash() << "\n";
   return k.str();
 }
 

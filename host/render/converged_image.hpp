@@ -15,7 +15,7 @@ namespace render {
 
 // Everything a render's pixels depend on but the estimator and the sample count; the
 // table by its path and the hash of its file's bytes (hash_file's value, as load_table
-// gives it).
+// gives it), and the running build (a hash of its executable).
 std::string scene_key(const RenderSettings& s, const std::string& table, std::uint64_t table_hash);
 
 // The converged image: read from <output>/reference.pfm when <output>/reference.key holds `key`,
