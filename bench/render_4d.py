@@ -2,22 +2,23 @@
 """The thesis's speed claim on the cloth (docs/render.md, "A full-4D table"): f from the
 full-4D wool table (90 x 180 x 90 x 180, no symmetry, 4.2 GB, memory-mapped) against its
 stand-in (K 8 pinned, one final restart, no L1 refinement, every PHI_STRIDE-th phi_o
-column and theta_o row), same scene, estimator (mis_light_gmm) and seed; beside them the same render with
-the small azimuthal table in memory and its stand-in. Per row: the best ns per vertex of
+column and theta_o row), same scene, estimator (mis_light_gmm) and seed; beside them the
+same render with the small azimuthal table in memory and its stand-in. Per row: the best ns per vertex of
 RUNS renders (the 4D and the azimuthal renders alternate; each render draws its table
 image, then its stand-in image), the error against the render's reference (the table's f
 at reference_spp), the table and stand-in images' difference, and memory (the table's
-bytes, the bytes mapped and resident, the peak RSS, the mixture's bytes). The tables and
-the fit stay in WORK (4.2 GB); the fit is timed once.
+bytes, the bytes mapped and resident, each render process's peak RSS, the mixture's
+bytes). The tables and the fit stay in WORK (4.2 GB); the fit is timed once.
 
-    bench/render_4d.py [--work out/render_4d] [--runs 3] [--phi-stride 2] [--theta-stride 2] [--csv bench/results/render_4d.csv]
+    bench/render_4d.py [--work out/render_4d] [--runs 5] [--phi-stride 2] [--theta-stride 2]
+                       [--csv bench/results/render_4d.csv]
 """
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
+import tempfile
 import time
 
 import h5py
@@ -31,15 +32,18 @@ GRID = ["--theta-o", "90", "--theta-i", "90", "--phi-i", "180", "--noise", "0.05
 
 
 def run(args, what):
-    """Runs `bsdfmix ARGS`: wall seconds and the child's CPU seconds; a failure ends the study."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t = time.perf_counter()
-    r = subprocess.run([BIN, *[str(a) for a in args]], capture_output=True, text=True, cwd=ROOT)
-    wall = time.perf_counter() - t
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if r.returncode != 0:
-        sys.exit("render_4d: %s failed: %s" % (what, (r.stderr.strip().splitlines() or ["?"])[-1]))
-    return wall, (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    """Runs `bsdfmix ARGS`: wall seconds, the child's CPU seconds and its peak RSS in bytes
+    (os.wait4's rusage of that child alone); a failure ends the study."""
+    with open(os.devnull, "w") as null, tempfile.TemporaryFile("w+") as err:
+        t = time.perf_counter()
+        p = subprocess.Popen([BIN, *[str(a) for a in args]], stdout=null, stderr=err, cwd=ROOT, text=True)
+        _, status, use = os.wait4(p.pid, 0)
+        p.returncode = os.waitstatus_to_exitcode(status)
+        wall = time.perf_counter() - t
+        if p.returncode != 0:
+            err.seek(0)
+            sys.exit("render_4d: %s failed: %s" % (what, (err.read().strip().splitlines() or ["?"])[-1]))
+    return wall, use.ru_utime + use.ru_stime, use.ru_maxrss * 1024
 
 
 def config(src, work, dst, extra=""):
@@ -72,7 +76,7 @@ def fit(work, stride, theta_stride):
         extra = "  theta_o: [%s]\n  phi_o: [%s]\n" % (", ".join("%.17g" % t for t in theta),
                                                        ", ".join("%.17g" % p for p in phi))
         cfg = config("configs/render/wool_4d_fit.yaml", work, os.path.join(work, "fit.yaml"), extra)
-        wall, cpu = run(["fit", cfg, "-q"], "the stand-in's fit")
+        wall, cpu, _ = run(["fit", cfg, "-q"], "the stand-in's fit")
         with open(times, "w") as f:
             json.dump({"wall": wall, "cpu": cpu, "phi_stride": stride, "theta_stride": theta_stride}, f)
     with open(times) as f:
@@ -86,10 +90,11 @@ def render(cfg, out):
     for name in ("render.csv", "render.json", "table_4d.csv"):
         if os.path.exists(os.path.join(out, name)):
             os.remove(os.path.join(out, name))
-    run(["render", cfg, "-q", "--no-figures"], "render " + cfg)
+    _, _, peak = run(["render", cfg, "-q", "--no-figures"], "render " + cfg)
     got = {r["mode"]: r for r in rows(os.path.join(out, "render.csv"))}
     with open(os.path.join(out, "render.json")) as f:
         facts = json.load(f)
+    facts["peak_rss"] = peak
     mem = os.path.join(out, "table_4d.csv")
     return got, facts, (rows(mem)[0] if os.path.exists(mem) else None)
 
@@ -97,7 +102,7 @@ def render(cfg, out):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=os.path.join(ROOT, "out", "render_4d"))
-    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--phi-stride", type=int, default=2)
     ap.add_argument("--theta-stride", type=int, default=2)
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "render_4d.csv"))
@@ -135,10 +140,11 @@ def main():
                 "rel_mse_vs_reference": got[m]["rel_mse"], "stand_in_difference": "%.6g" % facts["stand_in_difference"],
                 "stand_in_difference_4x4": "%.6g" % facts["stand_in_difference_4x4"],
                 "table_noise_4x4": "%.6g" % facts["table_noise_4x4"],
+                "stand_in_mean_difference": "%.6g" % facts["stand_in_mean_difference"],
                 "table_bytes": (mem["table_bytes"] if mem else facts["table_bytes"]) if table_row else "",
                 "mapped_bytes": mem["mapped_bytes"] if mem and table_row else "",
                 "resident_bytes": mem["resident_bytes"] if mem and table_row else "",
-                "peak_rss_bytes": mem["peak_rss_bytes"] if mem else "",
+                "peak_rss_bytes": facts["peak_rss"],
                 "mixture_bytes": "" if table_row else (mem["mixture_bytes"] if mem else facts["mixture_bytes"]),
                 "mixture_slices": "" if table_row else (mem["mixture_slices"] if mem else facts["slices_needed"]),
                 "fit_seconds": "%.1f" % ft["wall"] if kind == "full_4d" and not table_row else "",

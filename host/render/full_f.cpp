@@ -49,7 +49,8 @@ std::unique_ptr<FullF> open_full(const std::string& table_path, const std::strin
 
 void write_full_report(const std::string& csv, const FullF& full) {
   const MappedTable& t = *full.table;
-  std::string text = "table_bytes,mapped_bytes,resident_bytes,peak_rss_bytes,mixture_bytes,mixture_slices,table_slices\n";
+  std::string text =
+      "table_bytes,mapped_bytes,resident_bytes,peak_rss_bytes,mixture_bytes,mixture_slices,table_slices\n";
   text += std::to_string(t.table_bytes()) + "," + std::to_string(t.mapped_bytes()) + "," +
           std::to_string(t.resident_bytes()) + "," + std::to_string(peak_rss_bytes()) + "," +
           std::to_string(full.mixture_bytes) + "," + std::to_string(full.mixture_slices) + "," +

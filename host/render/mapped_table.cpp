@@ -22,7 +22,9 @@ namespace render {
 namespace {
 
 // The step of a uniform axis (1 for a single value).
-double step_of(const std::vector<double>& a) { return a.size() > 1 ? (a.back() - a.front()) / double(a.size() - 1) : 1.0; }
+double step_of(const std::vector<double>& a) {
+  return a.size() > 1 ? (a.back() - a.front()) / double(a.size() - 1) : 1.0;
+}
 
 // A position u on an axis of n points: the lower index and the weight of the upper one; a
 // position within 1e-9 of a grid point is that point (exact values at the cells).
@@ -45,7 +47,8 @@ MappedTable::MappedTable(const std::string& path) {
     const TableReader reader(path);  // the structure, axes and attributes, checked
     meta_ = reader.meta();
   }
-  if (meta_.domain != Domain::Fiber) throw InputError(path + ": the full-4D render needs a fiber table (domain fiber)");
+  if (meta_.domain != Domain::Fiber)
+    throw InputError(path + ": the full-4D render needs a fiber table (domain fiber)");
   if (meta_.azimuthal)
     throw InputError(path + ": the full-4D render needs a table without symmetry (this one is azimuthal)");
   read_layout(path);
@@ -60,7 +63,8 @@ MappedTable::MappedTable(const std::string& path) {
   base_ = static_cast<const unsigned char*>(p);
   const std::uint64_t slice_bytes = meta_.cells_per_slice() * sizeof(float);
   for (std::size_t s = 0; s < addr_.size(); ++s)
-    if (addr_[s] + slice_bytes > len_) throw InputError(path + ": slice " + std::to_string(s) + " lies past the file's end");
+    if (addr_[s] + slice_bytes > len_)
+      throw InputError(path + ": slice " + std::to_string(s) + " lies past the file's end");
   n_phi_i_ = meta_.phi_i.size();
   to0_ = meta_.theta_o.front();
   dto_ = step_of(meta_.theta_o);
@@ -78,7 +82,8 @@ void MappedTable::read_layout(const std::string& path) {
   const std::string where = path + ": /table/values";
   const h5::Handle values = h5::open_dataset(group.get(), "values", path + ": /table");
   const h5::Handle type(H5Dget_type(values.get()));
-  if (H5Tequal(type.get(), H5T_IEEE_F32LE) <= 0) throw InputError(where + ": the mapped render needs float32 little endian");
+  if (H5Tequal(type.get(), H5T_IEEE_F32LE) <= 0)
+    throw InputError(where + ": the mapped render needs float32 little endian");
   const h5::Handle dcpl(H5Dget_create_plist(values.get()));
   if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED) throw InputError(where + ": not chunked one slice per chunk");
   if (H5Pget_nfilters(dcpl.get()) != 0)
@@ -89,19 +94,19 @@ void MappedTable::read_layout(const std::string& path) {
     throw InputError(where + ": not chunked one slice per chunk");
   const std::size_t np = meta_.phi_o.size();
   addr_.assign(meta_.n_slices(), ~std::uint64_t(0));
-  const h5::Handle space(H5Dget_space(values.get()));
-  hsize_t n = 0;
-  if (H5Dget_num_chunks(values.get(), space.get(), &n) < 0) throw InputError(where + ": cannot count its chunks");
-  for (hsize_t k = 0; k < n; ++k) {
-    hsize_t off[4];
-    unsigned mask = 0;
-    haddr_t addr = 0;
-    hsize_t size = 0;
-    if (H5Dget_chunk_info(values.get(), space.get(), k, off, &mask, &addr, &size) < 0)
-      throw InputError(where + ": cannot read chunk " + std::to_string(k) + "'s address");
-    if (size != meta_.cells_per_slice() * sizeof(float)) throw InputError(where + ": a chunk's size is not a slice's");
-    addr_[std::size_t(off[0]) * np + std::size_t(off[1])] = addr;
-  }
+  // by coordinate: a B-tree lookup per slice (H5Dget_chunk_info by index walks the tree
+  // from its start each time, quadratic in the slices)
+  for (std::size_t t = 0; t < meta_.theta_o.size(); ++t)
+    for (std::size_t p = 0; p < np; ++p) {
+      const hsize_t off[4] = {t, p, 0, 0};
+      unsigned mask = 0;
+      haddr_t addr = HADDR_UNDEF;
+      hsize_t size = 0;
+      if (H5Dget_chunk_info_by_coord(values.get(), off, &mask, &addr, &size) < 0 || addr == HADDR_UNDEF) continue;
+      if (size != meta_.cells_per_slice() * sizeof(float))
+        throw InputError(where + ": a chunk's size is not a slice's");
+      addr_[t * np + p] = addr;
+    }
   for (std::size_t s = 0; s < addr_.size(); ++s)
     if (addr_[s] == ~std::uint64_t(0)) throw InputError(where + ": slice " + std::to_string(s) + " was never written");
 }
