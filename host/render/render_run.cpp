@@ -81,6 +81,8 @@ void run_render(const RenderSettings& s, const RenderInputs& in) {
   // f at fibers from a full-4D table, mapped, and its stand-in (the samplers stay the table's)
   std::unique_ptr<FullF> full;
   if (!s.table_4d.empty()) {
+    if (bsdf.meta().domain != Domain::Fiber)
+      throw InputError(in.table + ": render.table_4d needs a fiber table as `table` (its samplers draw directions)");
     full = open_full(s.table_4d, s.mixture_4d);
     bsdf.set_full(full.get());
   }
