@@ -69,6 +69,7 @@ studies=(
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
   "interpolation:6:no:blend against displace between slices, every other slice of the sampling_peers fits left out (interpolation.csv; runs sampling_peers first when out/sampling_peers/ lacks its fits)"
   "rgl_resolve:60:no:each RGL file at the default grid and at the grid that resolves its narrowest lobe, as a sampler against the file's own at 20 views; satin also with finer grids and more components (rgl_resolve.csv)"
+  "render_4d:40:no:the cloth with f from the full-4D wool table, memory-mapped, against its stand-in and the azimuthal table, best of 5 (render_4d.csv; the 4.2 GB table and the fit in out/render_4d/)"
   "render_material:6:no:the glossy RGL spheres with the light-sampling estimators, on the sphere's own pixels, under the sky map with and without the ground and under the analytic sky (render_material.csv)"
   "sampling_peers:60:no:each RGL file's own sampler against the fitted mixture, the table CDF and uniform, with the file's f, under constant light and the sky (with light sampling, MIS and the product), and the fiber presets (sampling_peers.csv)"
   "amplitude_objective:8:no:the stand-in's amplitude objective, three ways (amplitude_objective.csv; runs rgb_stand_in's fits first when out/bench_rgb/ lacks them)"
@@ -147,6 +148,7 @@ outputs() {
     interpolation) echo "$results/interpolation.csv" ;;
     rgl_resolve) echo "$results/rgl_resolve.csv" ;;
     render_material) echo "$results/render_material.csv" ;;
+    render_4d) echo "$results/render_4d.csv" ;;
     fiber_generate) echo "$results/fiber_generate.csv" ;;
   esac
 }
@@ -391,6 +393,7 @@ run_study() {
       $py bench/interpolation.py --csv $results/interpolation.csv ;;
     rgl_resolve) $py bench/rgl_resolve.py --csv $results/rgl_resolve.csv ;;
     render_material) $py bench/render_material.py --csv $results/render_material.csv ;;
+    render_4d) $py bench/render_4d.py --csv $results/render_4d.csv ;;
     failure_map) $py scripts/failure_map.py && cp out/failure_map/failure_map.csv $results/failure_map.csv ;;
     render_rays)
       local r=build/bench/bsdfmix_bench_render_rays

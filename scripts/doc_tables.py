@@ -72,6 +72,8 @@ The tables (NAME: CSV):
   rgl_negative         bench/results/rgl_negative.csv (docs/studies/rgl_negative.md)
   render_material      bench/results/render_material.csv (docs/studies/render_materials.md, "What limits
                        the glossy spheres"), by scripts/lobe_tables.py
+  render_4d            bench/results/render_4d.csv (docs/studies/render_4d.md), by
+                       scripts/render_4d_tables.py
 """
 import json
 import math
@@ -92,6 +94,7 @@ from readme_measured import pct, rows  # noqa: E402  (the one reader and percent
 import input_tables  # noqa: E402
 import compact_tables  # noqa: E402
 import lobe_tables  # noqa: E402
+import render_4d_tables  # noqa: E402
 
 
 def rgb_stand_in():
@@ -674,7 +677,7 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "compact_rivals": compact_tables.at_8k, "compact_rivals_budgets": compact_tables.budgets,
           "compact_rivals_cost": compact_tables.cost, "compact_rivals_image": compact_tables.image,
           "interpolation": lobe_tables.interpolation, "rgl_resolve": lobe_tables.rgl_resolve,
-          "render_material": lobe_tables.render_material}
+          "render_material": lobe_tables.render_material, "render_4d": render_4d_tables.table}
 MARKER = re.compile(r"(<!-- table: (\w+) -->\n)(.*?)(<!-- /table -->)", re.S)
 
 

@@ -176,5 +176,6 @@ def devices():
 
 def markdown():
     """The table, as lines."""
+    import render_4d_tables  # it reads this module's helpers
     return (["| what | measured | details |", "|---|---|---|", fit(), rivals(), constant(), peers(), lighting()]
-            + cloth_rows() + [devices()])
+            + cloth_rows() + [render_4d_tables.readme_row(), devices()])

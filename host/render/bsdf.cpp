@@ -4,13 +4,27 @@
 #include <algorithm>
 #include <cmath>
 
+#include "render/full_f.hpp"
+
 namespace bsdfmix {
 namespace render {
+
+template <>
+FiberBsdf::TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo)
+    : bxdf_(&bxdf), frame_(axis, wo, Domain::Fiber), full_(bxdf.full()) {
+  if (full_) phi_o_ = reference_phi(frame_.a.axis, wo);
+}
+
+template <>
+SurfaceBsdf::TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo)
+    : bxdf_(&bxdf), frame_(axis, wo, Domain::Hemisphere) {}
 
 template <>
 Rgb FiberBsdf::f(const Vec3& wi) const {
   double th, ph;
   frame_.to_local(wi, th, ph);
+  // the full-4D table's phi is about the reference e1; the frame's from omega_o's plane
+  if (full_) return Rgb(full_->f(bxdf_->source(), frame_.theta_o, phi_o_, th, wrap_phi(ph + phi_o_)));
   return bxdf_->f(frame_.theta_o, th, ph);
 }
 

@@ -37,7 +37,7 @@ class Bsdf {
 template <Domain D>
 class TabulatedBsdf : public Bsdf {
  public:
-  TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo) : bxdf_(&bxdf), frame_(axis, wo, D) {}
+  TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo);
   Rgb f(const Vec3& wi) const override;
   double pdf(const Vec3& wi) const override {
     double th, ph;
@@ -58,9 +58,15 @@ class TabulatedBsdf : public Bsdf {
  private:
   const SampledBxdf* bxdf_;
   HitFrame frame_;
+  const FullF* full_ = nullptr;  // a fiber's f from a full-4D table (render/full_f.hpp)
+  double phi_o_ = 0;             // then omega_o's azimuth in the fiber's reference frame
 };
 using FiberBsdf = TabulatedBsdf<Domain::Fiber>;
 using SurfaceBsdf = TabulatedBsdf<Domain::Hemisphere>;
+template <>
+FiberBsdf::TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo);
+template <>
+SurfaceBsdf::TabulatedBsdf(const SampledBxdf& bxdf, const Vec3& axis, const Vec3& wo);
 template <>
 Rgb FiberBsdf::f(const Vec3& wi) const;
 template <>

@@ -73,6 +73,9 @@ class SampledBxdf : public Bxdf {
   double pdf(double theta_o, double theta, double phi) const override {
     return own_ ? own_->pdf(*m_, theta_o, theta, phi) : draw_->pdf(theta_o, theta, phi);
   }
+  // Which f it integrates, and the full-4D table that gives it at fibers (nullptr: none).
+  FSource source() const { return f_; }
+  const FullF* full() const { return m_->full(); }
 
  private:
   const TableBsdf* m_;

@@ -14,6 +14,7 @@
 #include "render/comparisons.hpp"
 #include "render/light_carry.hpp"
 #include "render/converged_image.hpp"
+#include "render/full_f.hpp"
 #include "render/render_mixtures.hpp"
 #include "render/render_report.hpp"
 #include "render/render_scene.hpp"
@@ -77,6 +78,14 @@ void run_render(const RenderSettings& s, const RenderInputs& in) {
     rgl = std::make_unique<RglBrdf>(in.rgl);
     bsdf.set_rgl(rgl.get());
   }
+  // f at fibers from a full-4D table, mapped, and its stand-in (the samplers stay the table's)
+  std::unique_ptr<FullF> full;
+  if (!s.table_4d.empty()) {
+    if (bsdf.meta().domain != Domain::Fiber)
+      throw InputError(in.table + ": render.table_4d needs a fiber table as `table` (its samplers draw directions)");
+    full = open_full(s.table_4d, s.mixture_4d);
+    bsdf.set_full(full.get());
+  }
   const RenderScene scene(s, bsdf, s.file);
   log_line("render: " + scene.describe() + ", lighting '" + s.lighting.name + "', " + std::to_string(s.width) + " x " +
            std::to_string(s.height));
@@ -98,7 +107,7 @@ void run_render(const RenderSettings& s, const RenderInputs& in) {
 
   // 3. The converged image (cached under its key); 4. the comparisons against it, the
   // guided estimators learning with the leaves' fit settings.
-  const Image converged = converged_image(view, s, scene_key(s, in.table, table_hash));
+  const Image converged = converged_image(view, s, scene_key(s, in.table, table_hash) + (full ? full->key : ""));
   const GuideSetup guide = guide_setup(s, in.fit, in.device_selector, in.engine);
   const Comparisons comparisons = run_comparisons(view, s, converged, guide);
 
@@ -115,6 +124,7 @@ void run_render(const RenderSettings& s, const RenderInputs& in) {
   facts.fibers = scene.cloth().fibers.size();
   facts.segments = scene.cloth().segments();
   write_render_report(csv, json, s, facts, comparisons);
+  if (full) write_full_report((fs::path(s.output) / "table_4d.csv").string(), *full);
 }
 
 }  // namespace render

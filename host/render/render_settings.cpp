@@ -172,6 +172,10 @@ RenderSettings parse_render(const RenderSection& section) {
   r.sphere_rings = int(sp.integer("rings", 3, 4096));
   r.sphere_segments = int(sp.integer("segments", 3, 4096));
   r.room = parse_room(nested(section, n, "room"), r.camera.position);
+  if (n.has("table_4d")) r.table_4d = n.str("table_4d");
+  if (n.has("mixture_4d")) r.mixture_4d = n.str("mixture_4d");
+  if (r.table_4d.empty() != r.mixture_4d.empty())
+    n.fail(r.table_4d.empty() ? "table_4d" : "mixture_4d", "table_4d and mixture_4d go together (the table, its stand-in)");
   return r;
 }
 

@@ -64,6 +64,9 @@ struct RenderSettings {
   int sphere_rings = 96, sphere_segments = 192;
   // The room around the cloth or the sphere; when enabled its floor replaces the ground.
   RoomParams room;
+  // A full-4D fiber table and its stand-in (a mixture file fitted to it): f at fibers from
+  // them (docs/render.md, "A full-4D table"); empty: none.
+  std::string table_4d, mixture_4d;
 };
 
 RenderSettings parse_render(const RenderSection& section);

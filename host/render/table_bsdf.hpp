@@ -31,6 +31,8 @@ namespace bsdfmix {
 class RglBrdf;
 namespace render {
 
+struct FullF;
+
 enum class FSource { Table, StandIn };
 // BsdfSampler: the material's techniques (sampling/estimator.hpp)
 
@@ -45,6 +47,10 @@ class TableBsdf {
   // light direction with its warps. `rgl` must outlive this object; nullptr: none.
   void set_rgl(const RglBrdf* rgl);
   bool has_rgl() const { return rgl_ != nullptr; }
+  // A full-4D table and its stand-in (render/full_f.hpp) give f at fibers instead of this
+  // table; the samplers stay this table's. `full` must outlive this object; nullptr: none.
+  void set_full(const FullF* full) { full_ = full; }
+  const FullF* full() const { return full_; }
 
   const TableMeta& meta() const { return meta_; }
   std::size_t table_bytes() const { return f_.size() * sizeof(float); }
@@ -106,6 +112,7 @@ class TableBsdf {
   bool set_has_rgb_ = false;      // some slice of the mixtures has rgb amplitudes
   std::vector<int> fitted_;       // per theta_o grid slice: index into set_.slices, -1
   const RglBrdf* rgl_ = nullptr;  // BsdfSampler::Rgl's warps
+  const FullF* full_ = nullptr;   // f at fibers from a full-4D table
 };
 
 // A hit's frame for a tabulated material: the axis (a fiber's tangent: sin(theta) =
