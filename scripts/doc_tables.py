@@ -62,8 +62,8 @@ The tables (NAME: CSV):
                        bench/results/sampling_peers.csv (sampling_peers in docs/sampling.md, "Against the
                        file's own sampler"; the others in docs/studies/sampling_peers.md)
   compact_rivals, compact_rivals_budgets, compact_rivals_cost, compact_rivals_image
-                       bench/results/compact_rivals{,_image}.csv (compact_rivals in docs/fitting.md, "The
-                       stand-in against its rivals"; the others in docs/studies/compact_rivals.md), by
+                       bench/results/compact_rivals{,_image}.csv (docs/studies/compact_rivals.md; compact_rivals
+                       under "At 8 KiB"), by
                        scripts/compact_tables.py
   interpolation        bench/results/interpolation.csv (docs/studies/sampling_interpolation.md), by
                        scripts/lobe_tables.py
