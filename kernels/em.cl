@@ -16,19 +16,11 @@
       __global const int* restrict status, __global const float* restrict cparams,                         \
       __global real_t* restrict partials
 
-__kernel void em_constants(const uint n_problems, __global const int* prob_k,
-                           __global const real_t* state, __global float* cparams) {
-  const uint p = get_global_id(0);
-  if (p >= n_problems) return;
-  const int k = prob_k[p];
-  for (int j = 0; j < k; ++j) component_constants(state + p * NSTATE, cparams + p * NCONST, j);
-}
-
 // Cell vectors per step of em_estep: 8 where the vectors are wide (the statistics' loads
 // and stores then serve 8 vectors, and the vectors' chains of max and sum overlap; 2 past
 // K_MAX 64, which would take too much private memory), else 1. EM_KEEP 1: the first pass
 // keeps each component's offsets (dt, dp) for the statistics pass; 0: that pass recomputes
-// them. Measured on PoCL (AVX-512): docs/studies/em_kernels.md.
+// them. Measured on PoCL (AVX-512): docs/studies/em_kernels.md, "Steps of several cell vectors".
 #ifndef EM_NV
 #if VEC > 1 && CPW % 8 == 0 && K_MAX <= 64
 #define EM_NV 8
@@ -46,6 +38,14 @@ __kernel void em_constants(const uint n_problems, __global const int* prob_k,
 // would sit 4 KiB apart and alias in the L1 cache.
 #define EM_NE (1 + 2 * EM_KEEP)
 #define EM_NA (6 + EM_NE * EM_NV)
+
+__kernel void em_constants(const uint n_problems, __global const int* prob_k,
+                           __global const real_t* state, __global float* cparams) {
+  const uint p = get_global_id(0);
+  if (p >= n_problems) return;
+  const int k = prob_k[p];
+  for (int j = 0; j < k; ++j) component_constants(state + p * NSTATE, cparams + p * NCONST, j);
+}
 
 // E-step fused with the accumulation of the weighted sufficient statistics, centred
 // on the current means (phi offsets to the nearest image), and the weighted
