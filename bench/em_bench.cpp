@@ -41,14 +41,15 @@ struct Row {
 // Floating-point operations per point-component update in em_estep, counted from
 // kernels/em.cl (an FMA counts 2; compares, selects, fmax and integer ops count 0):
 //   log-density pass: dt, dp, the two wrap adds, cp3 * dp, dp * dp, 3 FMAs  = 12
-//   responsibility:   E - m, exp2_neg (3 adds for the rounding and f, 6 FMAs of
-//                     the degree-6 polynomial = 15), s += r                  = 17
-//   statistics pass:  dt, dp, the two wrap adds, f * E, rw * dt, rw * dp,
-//                     3 adds, 3 FMAs                                         = 16
-// 45 flops in 33 arithmetic instructions (12 of them FMAs), beside 16 compares,
+//   responsibility:   E - m, exp2_neg (3 adds for the rounding and f, 5 FMAs of
+//                     the degree-5 polynomial = 13), s += r                  = 15
+//   statistics pass:  f * E, rw * dt, rw * dp, 3 adds, 3 FMAs (dt and dp
+//                     kept from the first pass)                             = 12
+// 39 flops in 28 arithmetic instructions (11 of them FMAs), beside 9 compares,
 // selects, fmax and integer ops. Per-cell work (coordinates, w / s, log2) is
-// amortized over K and not counted. Keep in step with the kernel.
-constexpr double kFlopsPerUpdate = 45.0;
+// amortized over K and not counted (nor the 4 flops the GPU layout, VEC 1, spends
+// recomputing dt and dp: the percentage is a CPU's). Keep in step with the kernel.
+constexpr double kFlopsPerUpdate = 39.0;
 
 // How the host code (bsdfmix, the CPU reference) was compiled: set by bench/CMakeLists.txt.
 #ifdef BSDFMIX_CXX_BUILD

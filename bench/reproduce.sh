@@ -56,6 +56,7 @@ studies=(
   "render_room:30:no:the cloth of the four fibers in the room, the guided estimators against the baseline (render/<fiber>_room/)"
   "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
   "em_builds:3:no:EM throughput of this build beside BEFORE's at K 8, 16, 50, best of 5 (em_builds.csv)"
+  "em_speed:12:no:the EM and L1 kernels of this build beside BEFORE's: bench em at K 8, 16, 50 and the L1 refinement's CPU time in a silk fit, alternating, best of 5 (em_speed.csv)"
   "house_speed:5:no:EM throughput and the render's ns per vertex of this build beside BEFORE's, alternating, best of 5 (house_speed.csv)"
   "fit_speed:25:no:default fits of the four RGL files by this build and BEFORE's, alternating, best of 3: wall, CPU, utilization, L1, same mixtures (fit_speed.csv)"
   "mixed_devices:6:no:a thesis-length silk sweep on PoCL alone and on PoCL beside oclgrind, best of 3 (mixed_devices.csv)"
@@ -117,6 +118,7 @@ outputs() {
     search_unseen) echo "$results/search_unseen.csv" ;;
     search_time) echo "$results/search_time.csv" ;;
     em_builds) echo "$results/em_builds.csv" ;;
+    em_speed) echo "$results/em_speed.csv" ;;
     house_speed) echo "$results/house_speed.csv" ;;
     fit_speed) echo "$results/fit_speed.csv" ;;
     mixed_devices) echo "$results/mixed_devices.csv" ;;
@@ -235,6 +237,9 @@ run_study() {
     em_builds)
       if [ -z "${BEFORE:-}" ]; then echo "reproduce: em_builds skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
       $py bench/em_builds.py --before "$BEFORE" --k 8,16,50 --runs 5 --csv $results/em_builds.csv ;;
+    em_speed)
+      if [ -z "${BEFORE:-}" ]; then echo "reproduce: em_speed skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
+      $py bench/em_speed.py --old "$BEFORE" --new build/bsdfmix --k 8,16,50 --rounds 5 --csv $results/em_speed.csv ;;
     house_speed)
       if [ -z "${BEFORE:-}" ]; then echo "reproduce: house_speed skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
       $py bench/house_speed.py --old "$BEFORE" --new build/bsdfmix --rounds 5 --csv $results/house_speed.csv ;;

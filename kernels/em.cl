@@ -4,12 +4,6 @@
 // Built after kernels/common.cl and kernels/fit_common.cl (the cell layout, the defines
 // K_MAX, VEC, WG, CPW, EM_FP64 and the fast math).
 
-// EM's statistics: the six sums a[7 j + q], then `last` at LL_INDEX.
-inline void write_partials(const floatv* a, const floatv last, const int k, __global real_t* out,
-                           __local real_t* scratch) {
-  write_sums(a, last, k, 6, out, scratch);
-}
-
 // Status per problem: [2p] = 0 running, 1 done, 2 failed; [2p + 1] = iterations (M-steps) done.
 
 // The arguments of em_estep and em_loglik: the grid (host/fit/em_engine.cpp set_grid_args),
@@ -21,6 +15,29 @@ inline void write_partials(const floatv* a, const floatv last, const int k, __gl
       __global const int* restrict prob_slice, __global const int* restrict prob_k,                        \
       __global const int* restrict status, __global const float* restrict cparams,                         \
       __global real_t* restrict partials
+
+// Cell vectors per step of em_estep: 8 where the vectors are wide (the statistics' loads
+// and stores then serve 8 vectors, and the vectors' chains of max and sum overlap; 2 past
+// K_MAX 64, which would take too much private memory), else 1. EM_KEEP 1: the first pass
+// keeps each component's offsets (dt, dp) for the statistics pass; 0: that pass recomputes
+// them. Measured on PoCL (AVX-512): docs/studies/em_kernels.md, "Steps of several cell vectors".
+#ifndef EM_NV
+#if VEC > 1 && CPW % 8 == 0 && K_MAX <= 64
+#define EM_NV 8
+#elif VEC > 1 && CPW % 2 == 0
+#define EM_NV 2
+#else
+#define EM_NV 1
+#endif
+#endif
+#ifndef EM_KEEP
+#define EM_KEEP (VEC > 1)
+#endif
+// Per component j, at a[EM_NA j + ..]: the six sums, then per cell vector v the E-step
+// value and (EM_KEEP) the offsets dt, dp. Interleaved: separate arrays of K_MAX vectors
+// would sit 4 KiB apart and alias in the L1 cache.
+#define EM_NE (1 + 2 * EM_KEEP)
+#define EM_NA (6 + EM_NE * EM_NV)
 
 __kernel void em_constants(const uint n_problems, __global const int* prob_k,
                            __global const real_t* state, __global float* cparams) {
@@ -42,55 +59,80 @@ void em_estep(EM_CELL_PARAMS) {
   __global const float* w = weights + (uint)prob_slice[p] * slice_stride;
   const slice_grid grid = make_grid(n_phi, inv_nphi, theta0, dtheta, phi0, dphi);
 
-  // Per component: the six accumulators and the E-step scratch value, interleaved
-  // (separate arrays of K_MAX vectors would sit 4 KiB apart and alias in the L1 cache).
-  floatv a[7 * K_MAX];
-#define A0(j) a[7 * (j) + 0]
-#define A1(j) a[7 * (j) + 1]
-#define A2(j) a[7 * (j) + 2]
-#define A3(j) a[7 * (j) + 3]
-#define A4(j) a[7 * (j) + 4]
-#define A5(j) a[7 * (j) + 5]
-#define E(j) a[7 * (j) + 6]
-  for (int j = 0; j < k; ++j) A0(j) = A1(j) = A2(j) = A3(j) = A4(j) = A5(j) = (floatv)0.f;
+  floatv a[EM_NA * K_MAX];
+#define EV(j, v, q) a[EM_NA * (j) + 6 + EM_NE * (v) + (q)]
+  for (int j = 0; j < k; ++j)
+    for (int q = 0; q < 6; ++q) a[EM_NA * j + q] = (floatv)0.f;
   floatv ll = (floatv)0.f;
 
-  for (uint it = 0; it < CPW; ++it) {
-    floatv t, ph;
-    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
-    const floatv wv = VLOADV(0, w + c);
-    floatv m = (floatv)(-INFINITY);
-    for (int j = 0; j < k; ++j) {
-      floatv dt, dp;
-      component_offsets(cp, j, t, ph, &dt, &dp);
-      const floatv ej = component_log2(cp, j, dt, dp);
-      E(j) = ej;
-      m = select(m, ej, ej > m);
+  for (uint it = 0; it < CPW; it += EM_NV) {
+    floatv t[EM_NV], ph[EM_NV], wv[EM_NV], m[EM_NV], s[EM_NV];
+    #pragma unroll
+    for (int v = 0; v < EM_NV; ++v) {
+      const uint c = grid_cell(&grid, g, it + v, lid, &t[v], &ph[v]);
+      wv[v] = VLOADV(0, w + c);
+      m[v] = (floatv)(-INFINITY);
+      s[v] = (floatv)0.f;
     }
-    floatv s = (floatv)0.f;
-    for (int j = 0; j < k; ++j) {
-      const floatv r = exp2_neg(E(j) - m);
-      E(j) = r;
-      s += r;
+    for (int j = 0; j < k; ++j)
+      #pragma unroll
+      for (int v = 0; v < EM_NV; ++v) {
+        floatv dt, dp;
+        component_offsets(cp, j, t[v], ph[v], &dt, &dp);
+        const floatv ej = component_log2(cp, j, dt, dp);
+        EV(j, v, 0) = ej;
+#if EM_KEEP
+        EV(j, v, 1) = dt;
+        EV(j, v, 2) = dp;
+#endif
+        m[v] = select(m[v], ej, ej > m[v]);
+      }
+    for (int j = 0; j < k; ++j)
+      #pragma unroll
+      for (int v = 0; v < EM_NV; ++v) {
+        const floatv r = exp2_neg(EV(j, v, 0) - m[v]);
+        EV(j, v, 0) = r;
+        s[v] += r;
+      }
+    floatv f[EM_NV];
+    #pragma unroll
+    for (int v = 0; v < EM_NV; ++v) {
+      f[v] = wv[v] / s[v];
+      ll = fma(wv[v], m[v] + log2_fast(s[v]), ll);
     }
-    const floatv f = wv / s;
-    ll = fma(wv, m + log2_fast(s), ll);
     for (int j = 0; j < k; ++j) {
-      floatv dt, dp;
-      component_offsets(cp, j, t, ph, &dt, &dp);
-      const floatv rw = f * E(j);
-      const floatv rwt = rw * dt, rwp = rw * dp;
-      A0(j) += rw;
-      A1(j) += rwt;
-      A2(j) += rwp;
-      A3(j) = fma(rwt, dt, A3(j));
-      A4(j) = fma(rwt, dp, A4(j));
-      A5(j) = fma(rwp, dp, A5(j));
+      floatv s0 = a[EM_NA * j], s1 = a[EM_NA * j + 1], s2 = a[EM_NA * j + 2];
+      floatv s3 = a[EM_NA * j + 3], s4 = a[EM_NA * j + 4], s5 = a[EM_NA * j + 5];
+      #pragma unroll
+      for (int v = 0; v < EM_NV; ++v) {
+        floatv dt, dp;
+#if EM_KEEP
+        dt = EV(j, v, 1);
+        dp = EV(j, v, 2);
+#else
+        component_offsets(cp, j, t[v], ph[v], &dt, &dp);
+#endif
+        const floatv rw = f[v] * EV(j, v, 0);
+        const floatv rwt = rw * dt, rwp = rw * dp;
+        s0 += rw;
+        s1 += rwt;
+        s2 += rwp;
+        s3 = fma(rwt, dt, s3);
+        s4 = fma(rwt, dp, s4);
+        s5 = fma(rwp, dp, s5);
+      }
+      a[EM_NA * j] = s0;
+      a[EM_NA * j + 1] = s1;
+      a[EM_NA * j + 2] = s2;
+      a[EM_NA * j + 3] = s3;
+      a[EM_NA * j + 4] = s4;
+      a[EM_NA * j + 5] = s5;
     }
   }
+#undef EV
 
   __local real_t scratch[WG];
-  write_partials(a, ll, k, partials + (p * G + g) * NSTAT, scratch);
+  write_sums(a, EM_NA, ll, k, 6, partials + (p * G + g) * NSTAT, scratch);
 }
 
 // Sum over the G chunks of one statistic: plain in double, compensated (Kahan) in float.

@@ -103,6 +103,12 @@ typedef float floatv;
 #define CAT(a, b) CAT_(a, b)
 #define AS_VINT CAT(as_, VINT)
 #define AS_VFLOAT CAT(as_float, VEC)
+// x rounded toward zero (two conversions; the floor builtin is a longer sequence on PoCL).
+#if VEC == 1
+#define TRUNC_V(x) ((float)(int)(x))
+#else
+#define TRUNC_V(x) CAT(convert_float, VEC)(CAT(convert_int, VEC)(x))
+#endif
 
 // Sum of the lanes of a vector, each lane converted to real_t first (kernels/common.cl's
 // tree of vector adds, not a loop over lanes).
@@ -121,7 +127,7 @@ inline real_t hsum(floatv v) {
 inline void cell_coords(uint c, float inv_nphi, float nphi, float theta0, float dtheta,
                         float phi0, float dphi, floatv* t, floatv* ph) {
   const floatv cf = (float)c + LANES;
-  const floatv row = floor((cf + 0.5f) * inv_nphi);
+  const floatv row = TRUNC_V((cf + 0.5f) * inv_nphi);  // floor: the argument is positive
   const floatv col = cf - row * nphi;
   *t = theta0 + row * dtheta;
   *ph = phi0 + col * dphi;
@@ -139,11 +145,12 @@ inline floatv wrap_diff(floatv d) {
 // 2^x for x <= 0, 0 below 2^-64: responsibilities that small (relative to the
 // largest of the cell) are dropped, so that their products with weights and
 // offsets never reach the denormal range (x86 CPUs slow down about 3x on
-// denormals where flush-to-zero is not in effect). kernels/common.cl bsdfmix_exp2.
+// denormals where flush-to-zero is not in effect). kernels/common.cl bsdfmix_exp2_in:
+// no clamp, since the select drops every x below -64 (whatever the polynomial gave there).
 #if VEC == 1
-#define EXP2_V bsdfmix_exp2
+#define EXP2_V bsdfmix_exp2_in
 #else
-#define EXP2_V CAT(bsdfmix_exp2, VEC)
+#define EXP2_V CAT(bsdfmix_exp2_in, VEC)
 #endif
 inline floatv exp2_neg(floatv x) {
   const floatv r = EXP2_V(x);
@@ -287,13 +294,12 @@ inline real_t group_sum(real_t v, __local real_t* scratch) {
 }
 #endif
 
-// Writes a work-group's sums to `out`: per component j the nq sums a[(nq + 1) j + q] (the
-// last slot of a component's stride is the caller's scratch) at q * K_MAX + j, then `last`
+// Writes a work-group's sums to `out`: per component j the nq sums a[stride j + q] (the
+// rest of a component's stride is the caller's scratch) at q * K_MAX + j, then `last`
 // at nq * K_MAX; with WG > 1 each summed over the work-group through `scratch` (WG values
 // of local memory).
-inline void write_sums(const floatv* a, const floatv last, const int k, const int nq, __global real_t* out,
-                       __local real_t* scratch) {
-  const int stride = nq + 1;
+inline void write_sums(const floatv* a, const int stride, const floatv last, const int k, const int nq,
+                       __global real_t* out, __local real_t* scratch) {
 #if WG == 1
   for (int j = 0; j < k; ++j)
     for (int q = 0; q < nq; ++q) out[q * K_MAX + j] = hsum(a[stride * j + q]);

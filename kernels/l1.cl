@@ -26,42 +26,65 @@
 #endif
 #define L1_NQ (6 + L1_CH)
 #define L1_NSTAT (L1_NQ * K_MAX + 1)
-#define L1_ST (L1_NQ + 1)
+// Cell vectors per step: 4 where the vectors are wide (the sums' loads and stores serve
+// 4 vectors; 1 past K_MAX 64, which would take too much private memory), else 1.
+#ifndef L1_NV
+#if VEC > 1 && CPW % 4 == 0 && K_MAX <= 64
+#define L1_NV 4
+#else
+#define L1_NV 1
+#endif
+#endif
+// Per component j, at a[L1_ST j + ..]: the L1_NQ sums, then per cell vector v the density
+// of the nearest image and the offsets dt, dp at L1_NQ + 3 v + (0, 1, 2).
+#define L1_ST (L1_NQ + 3 * L1_NV)
+
+// 2^x, 0 below 2^-125 (kernels/common.cl bsdfmix_exp2: no library call, 2.2e-7 relative).
+inline floatv l1_exp2(const floatv x) {
+#if VEC == 1
+  return x >= -125.0f ? bsdfmix_exp2(x) : 0.0f;
+#else
+  return select((floatv)0.0f, CAT(bsdfmix_exp2, VEC)(x), x >= -125.0f);
+#endif
+}
 
 // The density of every component at cells (t, ph) (cparams `cp`, images of prob_images):
-// the nearest image's, relative to the largest of them times 2^largest, to
-// a[L1_ST j + L1_NQ] (em_estep's scheme: one exp2 per cell, exp2_neg per component),
-// farther images (wide components only) directly. Returns the mixture's density summed
-// over every image; with L1_CH, mc[c] the channels' (amplitudes `ca`).
-inline floatv l1_densities(__global const float* cp, __global const int* images, __global const float* ca,
-                           const int k, const floatv t, const floatv ph, floatv* a, floatv* mc) {
+// the nearest image's, relative to the largest of them times 2^largest, to e[L1_ST j]
+// with its offsets dt, dp at e[L1_ST j + 1], e[L1_ST j + 2] (em_estep's scheme: one exp2
+// per cell, exp2_neg per component), farther images (wide components only) directly.
+// Returns the mixture's density summed over every image; with L1_CH, mc[c] the channels'
+// (amplitudes `ca`).
+inline __attribute__((always_inline)) floatv l1_densities(__global const float* cp, __global const int* images,
+                                                          __global const float* ca, const int k, const floatv t,
+                                                          const floatv ph, floatv* e, floatv* mc) {
   floatv top = (floatv)(-INFINITY);
   for (int j = 0; j < k; ++j) {
     floatv dt, dp;
     component_offsets(cp, j, t, ph, &dt, &dp);
     const floatv ej = component_log2(cp, j, dt, dp);
-    a[L1_ST * j + L1_NQ] = ej;
+    e[L1_ST * j] = ej;
+    e[L1_ST * j + 1] = dt;
+    e[L1_ST * j + 2] = dp;
     top = fmax(top, ej);
   }
-  const floatv unit = exp2(top);
+  const floatv unit = l1_exp2(top);
   floatv m = (floatv)0.f;
 #if L1_CH
   mc[0] = mc[1] = mc[2] = (floatv)0.f;
 #endif
   for (int j = 0; j < k; ++j) {
-    const floatv r = unit * exp2_neg(a[L1_ST * j + L1_NQ] - top);
-    a[L1_ST * j + L1_NQ] = r;
+    const floatv r = unit * exp2_neg(e[L1_ST * j] - top);
+    e[L1_ST * j] = r;
     m += r;
     floatv all = r;  // every image of component j, for the channels
     const int n = images[j];
     if (n > 0) {
-      floatv dt, d0;
-      component_offsets(cp, j, t, ph, &dt, &d0);
+      const floatv dt = e[L1_ST * j + 1], d0 = e[L1_ST * j + 2];
       for (int img = -n; img <= n; ++img) {
         if (img == 0) continue;
-        const floatv e = exp2(component_log2(cp, j, dt, image_offset(d0, img)));
-        m += e;
-        all += e;
+        const floatv x = l1_exp2(component_log2(cp, j, dt, image_offset(d0, img)));
+        m += x;
+        all += x;
       }
     }
 #if L1_CH
@@ -71,41 +94,62 @@ inline floatv l1_densities(__global const float* cp, __global const int* images,
   return m;
 }
 
-// Adds the gradient statistics of cells (t, ph) to a: per component and image, the density
-// (a[L1_ST j + L1_NQ] for the nearest image, as l1_densities left it) times s (with L1_CH
-// plus the channels' sc[c] by their amplitudes `ca`) times (1, dt, dp, dt^2, dt dp, dp^2);
-// with L1_CH the first sum is s's alone and sc[c] times the density follow.
-inline void l1_accumulate(__global const float* cp, __global const int* images, __global const float* ca,
-                          const int k, const floatv t, const floatv ph, const floatv s, const floatv* sc, floatv* a) {
+// Adds one image's terms to the sums q of one component: its density times seff times
+// (1, dt, dp, dt^2, dt dp, dp^2), the first with s instead of seff where L1_CH, and the
+// channels' sc[c] times the density after them.
+inline __attribute__((always_inline)) void l1_add(floatv* q, const floatv s, const floatv seff, const floatv* sc,
+                                                  const floatv dens, const floatv dt, const floatv dp) {
+  const floatv sn = seff * dens;
+  const floatv snt = sn * dt, snp = sn * dp;
+#if L1_CH
+  q[0] += s * dens;
+#else
+  q[0] += sn;
+#endif
+  q[1] += snt;
+  q[2] += snp;
+  q[3] = fma(snt, dt, q[3]);
+  q[4] = fma(snt, dp, q[4]);
+  q[5] = fma(snp, dp, q[5]);
+#if L1_CH
+  for (int c = 0; c < 3; ++c) q[6 + c] = fma(sc[c], dens, q[6 + c]);
+#endif
+}
+
+// Adds the gradient statistics of L1_NV cell vectors to a: per component and image, the
+// density (for the nearest image, as l1_densities left it) times s[v] (with L1_CH plus the
+// channels' sc[3 v + c] by their amplitudes `ca`) times (1, dt, dp, dt^2, dt dp, dp^2); with
+// L1_CH the first sum is s's alone and sc[3 v + c] times the density follow.
+inline __attribute__((always_inline)) void l1_accumulate(__global const float* cp, __global const int* images,
+                                                         __global const float* ca, const int k, const floatv* s,
+                                                         const floatv* sc, floatv* a) {
   for (int j = 0; j < k; ++j) {
-    floatv dt, d0;
-    component_offsets(cp, j, t, ph, &dt, &d0);
-#if L1_CH
-    const floatv seff = fma((floatv)ca[0 * K_MAX + j], sc[0],
-                            fma((floatv)ca[1 * K_MAX + j], sc[1], fma((floatv)ca[2 * K_MAX + j], sc[2], s)));
-#else
-    const floatv seff = s;
-#endif
+    floatv q[L1_NQ];
+#pragma unroll
+    for (int i = 0; i < L1_NQ; ++i) q[i] = a[L1_ST * j + i];
     const int n = images[j];
-    for (int img = -n; img <= n; ++img) {
-      const floatv dp = image_offset(d0, img);
-      const floatv dens = img == 0 ? a[L1_ST * j + L1_NQ] : exp2(component_log2(cp, j, dt, dp));
-      const floatv sn = seff * dens;
-      const floatv snt = sn * dt, snp = sn * dp;
+#pragma unroll
+    for (int v = 0; v < L1_NV; ++v) {
+      const floatv* e = a + L1_ST * j + L1_NQ + 3 * v;
+      const floatv dt = e[1], d0 = e[2];
 #if L1_CH
-      a[L1_ST * j + 0] += s * dens;
+      const floatv s2 = fma((floatv)ca[2 * K_MAX + j], sc[3 * v + 2], s[v]);
+      const floatv seff = fma((floatv)ca[0 * K_MAX + j], sc[3 * v], fma((floatv)ca[1 * K_MAX + j], sc[3 * v + 1], s2));
 #else
-      a[L1_ST * j + 0] += sn;
+      const floatv seff = s[v];
 #endif
-      a[L1_ST * j + 1] += snt;
-      a[L1_ST * j + 2] += snp;
-      a[L1_ST * j + 3] = fma(snt, dt, a[L1_ST * j + 3]);
-      a[L1_ST * j + 4] = fma(snt, dp, a[L1_ST * j + 4]);
-      a[L1_ST * j + 5] = fma(snp, dp, a[L1_ST * j + 5]);
-#if L1_CH
-      for (int c = 0; c < 3; ++c) a[L1_ST * j + 6 + c] = fma(sc[c], dens, a[L1_ST * j + 6 + c]);
-#endif
+      for (int img = -n; img < 0; ++img) {
+        const floatv dp = image_offset(d0, img);
+        l1_add(q, s[v], seff, sc + 3 * v, l1_exp2(component_log2(cp, j, dt, dp)), dt, dp);
+      }
+      l1_add(q, s[v], seff, sc + 3 * v, e[0], dt, d0);
+      for (int img = 1; img <= n; ++img) {
+        const floatv dp = image_offset(d0, img);
+        l1_add(q, s[v], seff, sc + 3 * v, l1_exp2(component_log2(cp, j, dt, dp)), dt, dp);
+      }
     }
+#pragma unroll
+    for (int i = 0; i < L1_NQ; ++i) a[L1_ST * j + i] = q[i];
   }
 }
 
@@ -131,39 +175,42 @@ void em_l1(const uint slice_stride, const uint n_phi, const float inv_nphi,
   const float eps2 = eps * eps;
   const float kl = prob_weights[2 * p];
 
-  // Per component: the sums, then the density of the nearest image at the current cell.
   floatv a[L1_ST * K_MAX];
-  for (int q = 0; q < L1_ST * k; ++q) a[q] = (floatv)0.f;
+  for (int j = 0; j < k; ++j)
+    for (int q = 0; q < L1_NQ; ++q) a[L1_ST * j + q] = (floatv)0.f;
   floatv obj = (floatv)0.f;
-  floatv mc[3], sc[3];
 
-  for (uint it = 0; it < CPW; ++it) {
-    floatv t, ph;
-    const uint c = grid_cell(&grid, g, it, lid, &t, &ph);
-    const floatv wv = VLOADV(0, w + c);
-    const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c + LANES < (float)n_cells);
-    const floatv jac = plane_jacobian(t, ph);  // the cell's area over `area` (1 on (theta, phi))
-    const floatv cell = area * jac;
-    const floatv m = l1_densities(cp, images, ca, k, t, ph, a, mc);
-    const floatv am = fmax(cell * m, (floatv)1e-30f);
-    const floatv d = wv - cell * m;
-    const floatv rho = sqrt(fma(d, d, (floatv)eps2));
-    const floatv kl_cell =
-        select((floatv)0.f, LN2_F * wv * (log2_fast(fmax(wv, (floatv)1e-30f)) - log2_fast(am)), wv > 0.f);
-    obj = fma(valid, fma((floatv)kl, kl_cell, rho), obj);
-    const floatv s = valid * jac * (d / rho + kl * wv / am);
+  for (uint it = 0; it < CPW; it += L1_NV) {
+    floatv s[L1_NV], sc[3 * L1_NV], mc[3];
+#pragma unroll
+    for (int v = 0; v < L1_NV; ++v) {
+      floatv t, ph;
+      const uint c = grid_cell(&grid, g, it + v, lid, &t, &ph);
+      const floatv wv = VLOADV(0, w + c);
+      const floatv valid = select((floatv)0.f, (floatv)1.f, (float)c + LANES < (float)n_cells);
+      const floatv jac = plane_jacobian(t, ph);  // the cell's area over `area` (1 on (theta, phi))
+      const floatv cell = area * jac;
+      const floatv m = l1_densities(cp, images, ca, k, t, ph, a + L1_NQ + 3 * v, mc);
+      const floatv am = fmax(cell * m, (floatv)1e-30f);
+      const floatv d = wv - cell * m;
+      const floatv rho = sqrt(fma(d, d, (floatv)eps2));
+      const floatv kl_cell =
+          select((floatv)0.f, LN2_F * wv * (log2_fast(fmax(wv, (floatv)1e-30f)) - log2_fast(am)), wv > 0.f);
+      obj = fma(valid, fma((floatv)kl, kl_cell, rho), obj);
+      s[v] = valid * jac * (d / rho + kl * wv / am);
 #if L1_CH
-    floatv rc[3];
-    for (int ch = 0; ch < 3; ++ch) {
-      const floatv dc = VLOADV(0, chw + ch * slice_stride + c) - cell * mc[ch];
-      rc[ch] = sqrt(fma(dc, dc, (floatv)eps2));
-      sc[ch] = valid * jac * rgb_weight * dc / rc[ch];
-    }
-    obj = fma(valid * rgb_weight, rc[0] + rc[1] + rc[2], obj);
+      floatv rc[3];
+      for (int ch = 0; ch < 3; ++ch) {
+        const floatv dc = VLOADV(0, chw + ch * slice_stride + c) - cell * mc[ch];
+        rc[ch] = sqrt(fma(dc, dc, (floatv)eps2));
+        sc[3 * v + ch] = valid * jac * rgb_weight * dc / rc[ch];
+      }
+      obj = fma(valid * rgb_weight, rc[0] + rc[1] + rc[2], obj);
 #endif
-    l1_accumulate(cp, images, ca, k, t, ph, s, sc, a);
+    }
+    l1_accumulate(cp, images, ca, k, s, sc, a);
   }
 
   __local real_t scratch[WG];
-  write_sums(a, obj, k, L1_NQ, partials + (p * G + g) * L1_NSTAT, scratch);
+  write_sums(a, L1_ST, obj, k, L1_NQ, partials + (p * G + g) * L1_NSTAT, scratch);
 }

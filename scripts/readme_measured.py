@@ -164,14 +164,23 @@ def cloth_rows():
     return [estimators, stand_in]
 
 
+def cpu_name(model):
+    """A CPU model as the rows write it: "Intel(R) Xeon(R) Processor" as "Intel Xeon"."""
+    return " ".join(w for w in model.replace("(R)", "").replace("(TM)", "").split() if w != "Processor")
+
+
 def devices():
     b = {r["impl"].split(" ")[0]: r for r in rows(em_file(50))}["bsdfmix"]
     mixed = {r["setup"]: r for r in rows("mixed_devices.csv")}.get("pocl+oclgrind")
-    return ("| Devices | EM: %.3g G updates/s on %s cores (%s%% of FMA peak); PoCL and oclgrind sharing a sweep: "
-            "K differs on %s of %s slices | %s |" % (
-                float(b["pc_per_s"]) / 1e9, b["threads"], "%.0f" % float(b["pct_of_fma_peak"]),
+    speed = [r for r in rows("em_speed.csv") if r["what"] == "em_seconds_per_iteration"]
+    ks = [int(r["k"]) for r in speed]
+    return ("| Devices | EM: %.3g G updates/s on %s %s cores (%s%% of FMA peak); the current kernels take %s the time "
+            "(%s, K %s); PoCL and oclgrind sharing a sweep: K differs on %s of %s slices | %s |" % (
+                float(b["pc_per_s"]) / 1e9, b["threads"], cpu_name(b["cpu_model"]),
+                "%.0f" % float(b["pct_of_fma_peak"]), span([float(r["new_over_old"]) for r in speed]),
+                cpu_name(speed[0]["cpu_model"]), "-".join(str(k) for k in sorted({min(ks), max(ks)})),
                 mixed["slices_k_differ"], mixed["slices"],
-                link("em.md", "Devices", "mixed_devices.csv", em_file(50))))
+                link("em.md", "Devices", "mixed_devices.csv", em_file(50), "em_speed.csv")))
 
 
 def markdown():
