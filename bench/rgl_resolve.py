@@ -14,7 +14,9 @@ to 64: what the worst (grazing) views are limited by.
 
     /usr/bin/python3 bench/rgl_resolve.py [--directions 20] [--samples 16384]
         [--materials satin_rosaline,...] [--probe satin_rosaline] [--max-mib 400]
-        [--csv bench/results/rgl_resolve.csv]
+        [--grids default,resolved,resolved_t2] [--csv bench/results/rgl_resolve.csv]
+
+--grids keeps only the rows named (the probes run with resolved_t2).
 
 A material whose resolved table would exceed --max-mib is reported with its grid and bytes
 and not imported.
@@ -47,8 +49,10 @@ def main():
     ap.add_argument("--materials", default="")
     ap.add_argument("--probe", default="satin_rosaline")
     ap.add_argument("--max-mib", type=float, default=400)
+    ap.add_argument("--grids", default="default,resolved,resolved_t2")
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "rgl_resolve.csv"))
     a = ap.parse_args()
+    grids = set(filter(None, a.grids.split(",")))
     os.makedirs(a.work, exist_ok=True)
     want = set(filter(None, a.materials.split(",")))
     probe_set = set(filter(None, a.probe.split(",")))
@@ -80,13 +84,13 @@ def main():
         # (kind, table, grid, k_max): the default grid, the resolved one, the resolved one fitted
         # to a relative L1 error of 2 % (fit.error_target) instead of the K penalty, and (--probe)
         # that fit with a finer grid along one axis or more components
-        tables = [("default", default_table, (90, 90, 180), 32)]
+        tables = [("default", default_table, (90, 90, 180), 32)] if "default" in grids else []
         if table_mib <= a.max_mib:
             resolved = base + "_resolved.h5"
             if not os.path.exists(resolved):
                 run("import", "rgl", "-q", rgl, "--resolve", "-o", resolved)
-            tables += [("resolved", resolved, grid, 32), ("resolved_t2", resolved, grid, 32)]
-            if name in probe_set:
+            tables += [(kind, resolved, grid, 32) for kind in ("resolved", "resolved_t2") if kind in grids]
+            if name in probe_set and "resolved_t2" in grids:
                 finer = {"resolved_t2_theta_o_x2": (2 * grid[0], grid[1], grid[2]),
                          "resolved_t2_theta_i_x4": (grid[0], 4 * grid[1], grid[2]),
                          "resolved_t2_phi_i_1440": (grid[0], grid[1], 1440)}
@@ -150,7 +154,7 @@ def main():
                         "views_over_3x": sum(x > 3 for x in ratio), "worst_view_deg": f"{float(views[worst]):.1f}",
                         "cdf_table_over_rgl_at_worst": f"{cdf[worst]:.4g}", "cpu": cpu_model()})
             print(", ".join(f"{k} {v}" for k, v in out[-1].items() if k != "cpu"), flush=True)
-        if not any(t[0] == "resolved" for t in tables):
+        if table_mib > a.max_mib:
             out.append({"material": name, "grid": "resolved", "theta_o": grid[0], "theta_i": grid[1], "phi_i": grid[2],
                         "error_target": "", "k_max": 32, "fit_l1_median": "", "fit_seconds": "",
                         "lobe_fwhm_theta_deg": fwhm_t, "lobe_fwhm_across_deg": fwhm_x, "lobe_at_theta_o_deg": at,

@@ -128,8 +128,8 @@ void Batch::final_fits() {
 
 // The refinement of a fit above the chosen K (the K above, or beyond a stalled walk) is
 // skipped when it cannot win: its score with its L1 error scaled by the chosen fit's
-// refinement gain stays this far above the chosen fit's refined score. On the shipped RGL
-// files the fits are the same as when every one is refined (docs/fitting.md).
+// refinement gain stays this far above the chosen fit's refined score. Measured on the RGL
+// files and silk: the same fits as refining every one (docs/fitting.md, "The L1 refinement").
 constexpr double kRefineMargin = 0.005;
 
 // The L1 refinement (fit/l1_refine.hpp) of every slice's kept fit and, with `with_neighbours`,
