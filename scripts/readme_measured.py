@@ -174,7 +174,16 @@ def devices():
                 link("em.md", "Devices", "mixed_devices.csv", em_file(50))))
 
 
+def large_tables():
+    r = [r for r in rows("cells_scale.csv") if r["build"] == "this"]
+    ns = [float(x["cpu_ns_per_cell"]) for x in r]
+    return ("| Large tables | Fits of %.0e to %.0e cells (K 8, 50 iterations): %.0f-%.0f ns of CPU per cell, "
+            "peak memory %s-%s MiB | %s |" % (min(int(x["cells"]) for x in r), max(int(x["cells"]) for x in r), min(ns), max(ns),
+                                 min(int(x["peak_rss_mib"]) for x in r), max(int(x["peak_rss_mib"]) for x in r),
+                                 link("studies/cells_scale.md", "", "cells_scale.csv")))
+
+
 def markdown():
     """The table, as lines."""
-    return (["| what | measured | details |", "|---|---|---|", fit(), rivals(), constant(), peers(), lighting()]
-            + cloth_rows() + [devices()])
+    return (["| what | measured | details |", "|---|---|---|", fit(), large_tables(), rivals(), constant(), peers(),
+             lighting()] + cloth_rows() + [devices()])
