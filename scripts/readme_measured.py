@@ -3,6 +3,7 @@
 measured, the figure, and links to the doc that details it and to its CSV."""
 import csv
 import functools
+import math
 import os
 import statistics
 import sys
@@ -177,8 +178,9 @@ def devices():
 def large_tables():
     r = [r for r in rows("cells_scale.csv") if r["build"] == "this"]
     ns = [float(x["cpu_ns_per_cell"]) for x in r]
-    return ("| Large tables | Fits of %.0e to %.0e cells (K 8, 50 iterations): %.0f-%.0f ns of CPU per cell, "
-            "peak memory %s-%s MiB | %s |" % (min(int(x["cells"]) for x in r), max(int(x["cells"]) for x in r), min(ns), max(ns),
+    exp = [round(math.log10(int(x["cells"]))) for x in r]
+    return ("| Large tables | Fits of 10^%d to 10^%d cells (K 8, 50 iterations): %.0f-%.0f ns of CPU per cell, "
+            "peak memory %s-%s MiB | %s |" % (min(exp), max(exp), min(ns), max(ns),
                                  min(int(x["peak_rss_mib"]) for x in r), max(int(x["peak_rss_mib"]) for x in r),
                                  link("studies/cells_scale.md", "", "cells_scale.csv")))
 
