@@ -66,6 +66,7 @@ studies=(
   "render_rays:1:no:primary rays per Embree curve type, one thread (render_rays_*.csv)"
   "fiber_quadrature:1:no:the fiber model's h quadrature against 2048 nodes (fiber_quadrature.csv)"
   "fiber_generate:1:no:the fiber table generator's time and peak memory, the default and the full 4D table (fiber_generate.csv)"
+  "cells_scale:120:no:fits of K 8 on wool tables of 10^7 to 10^9 cells: time per cell and peak memory against size, tables kept in out/cells_scale/ (cells_scale.csv, docs/images/cells_scale.png)"
   "rgl_negative:1:no:the RGL files' negative channels kept signed and clipped, the luminance compared (rgl_negative.csv)"
   "rgl_albedo:1:no:the RGL files' albedo on the grid, sampled and converged, and their reciprocity (rgl_albedo.csv)"
   "interpolation:6:no:blend against displace between slices, every other slice of the sampling_peers fits left out (interpolation.csv; runs sampling_peers first when out/sampling_peers/ lacks its fits)"
@@ -152,6 +153,7 @@ outputs() {
     render_material) echo "$results/render_material.csv" ;;
     render_4d) echo "$results/render_4d.csv" ;;
     fiber_generate) echo "$results/fiber_generate.csv" ;;
+    cells_scale) echo "$results/cells_scale.csv" ;;
   esac
 }
 record_all() {  # the study's files written since the marker
@@ -361,6 +363,7 @@ run_study() {
     theta_border) BSDFMIX_MEASURE_CSV=$results/theta_border.csv build/tests/search_test "[.measure]" ;;
     fiber_quadrature) BSDFMIX_MEASURE_CSV=$results/fiber_quadrature.csv build/tests/fiber_test "[.measure]" ;;
     fiber_generate) $py bench/fiber_generate.py ;;
+    cells_scale) $py bench/cells_scale.py ${BEFORE:+--before "$BEFORE"} ;;
     rgl_negative) $py bench/rgl_negative.py --csv $results/rgl_negative.csv ;;
     rgl_albedo) BSDFMIX_MEASURE_CSV=$results/rgl_albedo.csv build/tests/rgl_test "[.measure]" ;;
     sampling_peers)

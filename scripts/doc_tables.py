@@ -56,6 +56,7 @@ The tables (NAME: CSV):
   fiber_quadrature     bench/results/fiber_quadrature.csv (docs/studies/fiber_quadrature.md), by
                        scripts/input_tables.py
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
+  cells_scale          bench/results/cells_scale.csv (docs/studies/cells_scale.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
                        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
   sampling_peers, sampling_peers_sky, sampling_peers_fiber
@@ -672,7 +673,8 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k, "tails": tails,
           "parameterization": parameterization, "map_accuracy": map_accuracy, "renderer_chi2": renderer_chi2,
           "fiber_quadrature": input_tables.fiber_quadrature,
-          "fiber_generate": input_tables.fiber_generate, "rgl_albedo": input_tables.rgl_albedo,
+          "fiber_generate": input_tables.fiber_generate, "cells_scale": input_tables.cells_scale,
+          "rgl_albedo": input_tables.rgl_albedo,
           "rgl_grid_error": input_tables.rgl_grid_error, "rgl_reciprocity": input_tables.rgl_reciprocity,
           "compact_rivals": compact_tables.at_8k, "compact_rivals_budgets": compact_tables.budgets,
           "compact_rivals_cost": compact_tables.cost, "compact_rivals_image": compact_tables.image,

@@ -3,6 +3,8 @@
 
   fiber_quadrature  bench/results/fiber_quadrature.csv (docs/studies/fiber_quadrature.md)
   fiber_generate    bench/results/fiber_generate.csv (docs/fiber.md, the generator's time and memory)
+  cells_scale       bench/results/cells_scale.csv (docs/studies/cells_scale.md): fit time per cell and
+                    peak memory by table size
   rgl_albedo        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"): the albedo on the
                     default grid and sampled, their difference to the converged midpoint rule,
                     and the reciprocity
@@ -85,4 +87,27 @@ def fiber_generate():
                                                   "%.2f" % t if t < 10 else "%.0f" % t,
                                                   " (best of %s)" % r["runs"] if int(r["runs"]) > 1 else "",
                                                   r["peak_rss_mb"]))
+    return out
+
+
+CELLS_NAMES = {"full_4d": "90 x 180 x 90 x 180"}
+
+
+def cells_scale():
+    """Per table size: the fit's wall and CPU time per cell, cores kept busy, peak memory (the build
+    before's beside, where the CSV has it). A row fitted part way says how much."""
+    out = ["| table | cells | slices | wall time | ns per cell: wall / CPU | CPU use | peak memory | "
+           "before this change |", "|---|---|---|---|---|---|---|---|"]
+    before = {r["table"]: r for r in rows("cells_scale.csv") if r["build"] == "before"}
+    for r in rows("cells_scale.csv"):
+        if r["build"] != "this":
+            continue
+        part = "" if r["cells_fitted"] == r["cells"] else " (%.0f%% fitted)" % (
+            100.0 * int(r["cells_fitted"]) / int(r["cells"]))
+        runs = " (best of %s)" % r["runs"] if int(r["runs"]) > 1 else ""
+        b = before.get(r["table"])
+        out.append("| %s | %.2g | %s | %.0f s%s%s | %.0f / %.0f | %.0f%% | %s MiB | %s |" % (
+            CELLS_NAMES.get(r["table"], r["table"]), int(r["cells"]), r["slices"], float(r["wall_s"]), runs, part,
+            float(r["ns_per_cell"]), float(r["cpu_ns_per_cell"]), 100 * float(r["cpu_utilization"]),
+            r["peak_rss_mib"], "%s MiB" % b["peak_rss_mib"] if b else "-"))
     return out

@@ -3,6 +3,7 @@
 measured, the figure, and links to the doc that details it and to its CSV."""
 import csv
 import functools
+import math
 import os
 import statistics
 import sys
@@ -183,8 +184,18 @@ def devices():
                 link("em.md", "Devices", "mixed_devices.csv", em_file(50), "em_speed.csv")))
 
 
+def large_tables():
+    r = [r for r in rows("cells_scale.csv") if r["build"] == "this"]
+    ns = [float(x["cpu_ns_per_cell"]) for x in r]
+    exp = [round(math.log10(int(x["cells"]))) for x in r]
+    return ("| Large tables | Fits of 10^%d to 10^%d cells (K 8, 50 iterations): %.0f-%.0f ns of CPU per cell, "
+            "peak memory %s-%s MiB | %s |" % (min(exp), max(exp), min(ns), max(ns),
+                                 min(int(x["peak_rss_mib"]) for x in r), max(int(x["peak_rss_mib"]) for x in r),
+                                 link("studies/cells_scale.md", "", "cells_scale.csv")))
+
+
 def markdown():
     """The table, as lines."""
     import render_4d_tables  # it reads this module's helpers
-    return (["| what | measured | details |", "|---|---|---|", fit(), rivals(), constant(), peers(), lighting()]
-            + cloth_rows() + [render_4d_tables.readme_row(), devices()])
+    return (["| what | measured | details |", "|---|---|---|", fit(), large_tables(), rivals(), constant(), peers(),
+             lighting()] + cloth_rows() + [render_4d_tables.readme_row(), devices()])

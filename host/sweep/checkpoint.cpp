@@ -223,7 +223,7 @@ Checkpoint::Checkpoint(const std::string& output, const std::string& fingerprint
         done_[s] = true;
       }
       resumed += p.slice_index.size();
-      parts_.emplace(p.slice_index.front(), std::move(p));
+      parts_.emplace(p.slice_index.front(), PartIndex{e.path().string(), p.slice_index, p.slices_hash});
     } catch (const Error& err) {
       log_line("discarding unreadable part " + e.path().string() + ": " + err.what());
       fs::remove(e.path());
@@ -267,7 +267,15 @@ void Checkpoint::commit(const BatchPart& part) {
     if (s >= done_.size()) done_.resize(s + 1, false);
     done_[s] = true;
   }
-  parts_[part.slice_index.front()] = part;
+  parts_[part.slice_index.front()] = PartIndex{path, part.slice_index, part.slices_hash};
+}
+
+void Checkpoint::each_part(const std::function<void(BatchPart&&)>& use) const {
+  for (const auto& [first, index] : parts_) {
+    BatchPart part = read_part(index.path);
+    if (part.slice_index != index.slice_index) throw IoError(index.path + ": changed since it was committed");
+    use(std::move(part));
+  }
 }
 
 void Checkpoint::remove() {

@@ -1,7 +1,8 @@
 // Crash-safe progress of a sweep: each finished batch is committed as its own part file
 // (atomically) in `<output>.parts/`; a rerun with the same table and settings reuses them,
 // so an interrupted sweep resumes where it stopped. Parts made under other settings
-// (another fingerprint) are discarded.
+// (another fingerprint) are discarded. The parts stay on disk: the checkpoint holds their
+// slice indices and hashes only, so its memory does not grow with the mixtures fitted.
 #pragma once
 
 #include <cstddef>
@@ -25,6 +26,13 @@ struct BatchPart {
   std::string slices_hash;        // content hash of the integrand weights of the slices it was fitted to
 };
 
+// Where a committed part is and what it holds, without its mixtures and rows.
+struct PartIndex {
+  std::string path;
+  std::vector<std::size_t> slice_index;
+  std::string slices_hash;
+};
+
 class Checkpoint {
  public:
   // Opens (or starts) the parts directory of `output`; `fingerprint` identifies the
@@ -32,7 +40,10 @@ class Checkpoint {
   Checkpoint(const std::string& output, const std::string& fingerprint);
 
   // The committed parts, by the first slice index they hold.
-  const std::map<std::size_t, BatchPart>& parts() const { return parts_; }
+  const std::map<std::size_t, PartIndex>& parts() const { return parts_; }
+  // Reads the committed parts from their files in slice order and hands each to `use`:
+  // one part in memory at a time.
+  void each_part(const std::function<void(BatchPart&&)>& use) const;
   bool done(std::size_t slice_index) const;
 
   // Checks every committed part against the table as it is now: `hash_of` returns the
@@ -52,7 +63,7 @@ class Checkpoint {
   void discard(const std::string& why);
 
   std::string dir_, fingerprint_;
-  std::map<std::size_t, BatchPart> parts_;
+  std::map<std::size_t, PartIndex> parts_;
   std::vector<bool> done_;
 };
 

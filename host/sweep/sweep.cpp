@@ -88,8 +88,9 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
                                          ", " + std::to_string(fit.k_max) + "]"
                                    : "K = " + std::to_string(fit.k_min)) +
            ", on " + device_names);
-  Progress progress("fit " + table_path, plan.size(), "slices");
-  progress.advance(resumed);
+  // The slices left: a resumed fit's rate and ETA count only what it fits itself.
+  Progress progress("fit " + table_path + (resumed ? " (" + std::to_string(resumed) + " resumed)" : ""),
+                    plan.size() - resumed, "slices");
 
   BatchFitter fitter(source, fit, engine, device_names);
   std::size_t committed = resumed;
@@ -114,9 +115,9 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   }
   progress.finish();
 
-  // The outputs, assembled from the committed parts in slice order.
+  // The outputs, assembled from the committed parts in slice order, read back one at a time.
   SweepResult result = empty_result(meta, fit);
-  for (const auto& [first, part] : checkpoint.parts()) append_part(result, part);
+  checkpoint.each_part([&](BatchPart&& part) { append_part(result, part); });
   SweepSummary sum = write_outputs(result, table_path, meta, fit);
   checkpoint.remove();
   sum.resumed = resumed;
