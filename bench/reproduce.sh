@@ -54,7 +54,7 @@ studies=(
   "mis_heuristic:10:no:balance against power heuristic (mis_heuristic.csv)"
   "render:150:no:the cloth renders of the four fibers under the sky and the sky map (render/<fiber>_<scene>/)"
   "render_room:30:no:the cloth of the four fibers in the room, the guided estimators against the baseline (render/<fiber>_room/)"
-  "em:2:no:the EM benchmark against the peers (em_k16_*.csv, em_k50_*.csv)"
+  "em:8:no:the EM benchmark against the peers at K 8, 16 and 50, best of 5 (em_k8_*.csv, em_k16_*.csv, em_k50_*.csv)"
   "em_builds:3:no:EM throughput of this build beside BEFORE's at K 8, 16, 50, best of 5 (em_builds.csv)"
   "em_speed:12:no:the EM and L1 kernels of this build beside BEFORE's: bench em at K 8, 16, 50 and the L1 refinement's CPU time in a silk fit, alternating, best of 5 (em_speed.csv)"
   "house_speed:5:no:EM throughput and the render's ns per vertex of this build beside BEFORE's, alternating, best of 5 (house_speed.csv)"
@@ -247,7 +247,7 @@ run_study() {
       $py bench/house_speed.py --old "$BEFORE" --new build/bsdfmix --rounds 5 --csv $results/house_speed.csv ;;
     fit_speed)
       if [ -z "${BEFORE:-}" ]; then echo "reproduce: fit_speed skipped (set BEFORE to the other build's bsdfmix)"; return 0; fi
-      $py bench/fit_speed.py --old "$BEFORE" --new build/bsdfmix --rounds 3 --csv $results/fit_speed.csv ;;
+      $py bench/fit_speed.py --old "$BEFORE" --new build/bsdfmix --rounds ${FIT_SPEED_ROUNDS:-3} --csv $results/fit_speed.csv ;;
     mixed_devices) $py bench/mixed_devices.py --runs 3 --csv $results/mixed_devices.csv ;;
     pinned_k)
       [ -f out/bench_rgb/satin.h5 ] || { echo "reproduce: pinned_k needs the tables of rgb_stand_in (run it first)" >&2; return 1; }
@@ -355,7 +355,7 @@ run_study() {
     em)
       local b=build-bench/bsdfmix
       [ -x $b ] || b=$bin  # scripts/setup's build has the peers (BSDFMIX_BUILD_BENCH is on by default)
-      for k in 16 50; do $b bench em --k $k --repeat 10 --csv $results/em_k${k}_$machine.csv > $results/em_k${k}_$machine.txt 2>&1; done
+      for k in 8 16 50; do $b bench em --k $k --repeat 5 --csv $results/em_k${k}_$machine.csv > $results/em_k${k}_$machine.txt 2>&1; done
       mkdir -p out
       $py scripts/plot_bench.py $results/em_k16_$machine.csv $results/em_k50_$machine.csv -o out/em_throughput
       cp out/em_throughput.png docs/images/em_throughput.png ;;

@@ -16,7 +16,7 @@ The tables (NAME: CSV):
   rgb_refine           bench/results/rgb_refine.csv (docs/studies/colour.md, "The channels in the refinement")
   catalog              bench/results/catalog_summary.csv (docs/scale.md, "Catalogs")
   scale, scale_traffic bench/results/scale_amd-epyc-2c.csv (docs/studies/scale_measured.md, "Scaling measured")
-  stand_in_smallest    bench/results/stand_in_bytes.csv (docs/fitting.md, "How small a stand-in can be")
+  stand_in_smallest    bench/results/stand_in_bytes.csv (docs/studies/stand_in_bytes.md, "The smallest at 5 %")
   search_before_after  bench/results/search_before_after.csv (CHANGELOG.md, "A walk that does not give up")
   search_unseen        bench/results/search_unseen.csv (CHANGELOG.md, the same section)
   search_time          bench/results/search_time.csv (CHANGELOG.md, the same section)
@@ -42,6 +42,8 @@ The tables (NAME: CSV):
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (CHANGELOG.md,
                        "Before and after")
   em_precision         bench/results/em_precision.csv (docs/em.md, "Kernel vs reference")
+  em_performance, fit_speed  bench/results/em_k*_<machine>.csv, em_speed.csv, fit_speed.csv (docs/em.md,
+                       "Performance"), by scripts/em_tables.py
   mixed_devices        bench/results/mixed_devices.csv (docs/studies/em_kernels.md, "Devices of different speeds: the
                        mixed run")
   theta_border         bench/results/theta_border.csv (docs/studies/theta_border.md)
@@ -665,6 +667,8 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "readme_measured": readme_measured, "estimator_choice": estimator_choice, "failure_map": failure_map, "stability": stability,
           "search_compare": search_compare, "amplitude_objective": amplitude_objective,
           "em_results": em_results, "converge_refine": converge_refine,
+          "em_performance": lambda: __import__("em_tables").performance(),
+          "fit_speed": lambda: __import__("em_tables").fit_speed(),
           "theta_border": theta_border,
           "em_precision": em_precision, "mixed_devices": mixed_devices, "em_builds": em_builds,
           "rgl_negative": rgl_negative,

@@ -83,3 +83,33 @@ def results(machine):
                   "iterations %s s in %s batches, final log-likelihood and read-back %s s." % (
                       k50.replace(".csv", ".txt"), p[0], o50["iterations"], p[1], p[2], p[3])]
     return lines
+
+
+def performance():
+    """docs/em.md's "Performance" table: `bench em` at K 8, 16 and 50 (the newest CSVs), and the
+    seconds per iteration against the previous kernels (em_speed.csv)."""
+    import readme_measured
+    speed = {int(r["k"]): r for r in rows("em_speed.csv") if r["what"] == "em_seconds_per_iteration"}
+    out = ["| K | G updates/s | GFLOP/s | of the FMA peak | s per iteration, against the previous kernels | CSV |",
+           "|---|---|---|---|---|---|"]
+    for k in (8, 16, 50):
+        name = readme_measured.em_file(k)
+        o = next(r for r in rows(name) if r["impl"].startswith("bsdfmix"))
+        s = speed.get(k)
+        out.append("| %d | %.3g | %s | %s%% | %s | [%s](../bench/results/%s) |" % (
+            k, float(o["pc_per_s"]) / 1e9, o["gflops"], o["pct_of_fma_peak"],
+            "%.2fx" % float(s["new_over_old"]) if s else "", name, name))
+    return out
+
+
+def fit_speed():
+    """docs/em.md's default fits of the RGL files by two builds (fit_speed.csv)."""
+    out = ["| material | seconds, before / now | speed-up | CPU use, before / now | L1 median, before / now | "
+           "L1 p90, before / now |", "|---|---|---|---|---|---|"]
+    pct = lambda x: "%.2f%%" % (100 * float(x))
+    for r in rows("fit_speed.csv"):
+        out.append("| %s | %s / %s | %.2fx | %.0f%% / %.0f%% | %s / %s | %s / %s |" % (
+            r["material"], r["old_seconds"], r["new_seconds"], float(r["speedup"]), 100 * float(r["old_utilization"]),
+            100 * float(r["new_utilization"]), pct(r["old_l1_median"]), pct(r["new_l1_median"]),
+            pct(r["old_l1_p90"]), pct(r["new_l1_p90"])))
+    return out

@@ -81,9 +81,10 @@ def link(doc, section, *csvs):
 
 def fit():
     s = {r["table"].replace(".h5", ""): r for r in rows("fit_sweep.csv")}["silk"]
-    return ("| Fitting | Silk, %s slices of 90 x 180: %.0f s on %s cores, median L1 error %s; the file is %sx smaller "
-            "than the table | %s |" % (s["slices"], float(s["seconds_best"]), s["cores"], pct(s["l1_median"], 1),
-                                       s["ratio_files"], link("fitting.md", "", "fit_sweep.csv")))
+    return ("| Fitting | Silk, %s slices of 90 x 180: %.0f s on %s %s cores (an earlier build); median L1 error %s; the "
+            "file is %sx smaller than the table | %s |" % (
+                s["slices"], float(s["seconds_best"]), s["cores"], cpu_name(rows("fit_sweep.csv")[0].get("cpu_model", "") or provenance()["bench/results/fit_sweep.csv"]["cpu"]),
+                pct(s["l1_median"], 1), s["ratio_files"], link("fitting.md", "", "fit_sweep.csv")))
 
 
 def rivals():
@@ -175,13 +176,25 @@ def devices():
     mixed = {r["setup"]: r for r in rows("mixed_devices.csv")}.get("pocl+oclgrind")
     speed = [r for r in rows("em_speed.csv") if r["what"] == "em_seconds_per_iteration"]
     ks = [int(r["k"]) for r in speed]
-    return ("| Devices | EM: %.3g G updates/s on %s %s cores (%s%% of FMA peak); the current kernels take %s the time "
-            "(%s, K %s); PoCL and oclgrind sharing a sweep: K differs on %s of %s slices | %s |" % (
+    pcts = ["%.0f%%" % float(next(r for r in rows(em_file(k)) if r["impl"].startswith("bsdfmix"))["pct_of_fma_peak"])
+            for k in (8, 16, 50)]
+    return ("| Devices | EM: %.3g G updates/s on %s %s cores (%s of FMA peak at K 8, 16, 50); the current kernels "
+            "take %s the time (%s, K %s); PoCL and oclgrind sharing a sweep: K differs on %s of %s slices | %s |" % (
                 float(b["pc_per_s"]) / 1e9, b["threads"], cpu_name(b["cpu_model"]),
-                "%.0f" % float(b["pct_of_fma_peak"]), span([float(r["new_over_old"]) for r in speed]),
+                ", ".join(pcts), span([float(r["new_over_old"]) for r in speed]),
                 cpu_name(speed[0]["cpu_model"]), "-".join(str(k) for k in sorted({min(ks), max(ks)})),
                 mixed["slices_k_differ"], mixed["slices"],
                 link("em.md", "Devices", "mixed_devices.csv", em_file(50), "em_speed.csv")))
+
+
+def fit_speed():
+    r = rows("fit_speed.csv")
+    dl = [abs(float(x[f"new_l1_{q}"]) - float(x[f"old_l1_{q}"])) for x in r for q in ("median", "p90")]
+    return ("| Fit time | Default fits of the %d RGL files (90 x 90 x 180): %s s on 2 cores, %s faster than the "
+            "previous build, L1 median and p90 within %.2f points | %s |" % (
+                len(r), span([round(float(x["new_seconds"])) for x in r], ""),
+                span([float(x["speedup"]) for x in r]), 100 * max(dl),
+                link("em.md", "Performance", "fit_speed.csv")))
 
 
 def large_tables():
@@ -197,5 +210,5 @@ def large_tables():
 def markdown():
     """The table, as lines."""
     import render_4d_tables  # it reads this module's helpers
-    return (["| what | measured | details |", "|---|---|---|", fit(), large_tables(), rivals(), constant(), peers(),
-             lighting()] + cloth_rows() + [render_4d_tables.readme_row(), devices()])
+    return (["| what | measured | details |", "|---|---|---|", fit(), fit_speed(), large_tables(), rivals(),
+             constant(), peers(), lighting()] + cloth_rows() + [render_4d_tables.readme_row(), devices()])
