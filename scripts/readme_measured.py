@@ -81,7 +81,7 @@ def link(doc, section, *csvs):
 
 def fit():
     s = {r["table"].replace(".h5", ""): r for r in rows("fit_sweep.csv")}["silk"]
-    return ("| Fitting | Silk, %s slices of 90 x 180: %.0f s on %s %s cores (an earlier build); median L1 error %s; the "
+    return ("| Fitting | Silk, %s slices of 90 x 180: %.0f s on %s %s cores; median L1 error %s; the "
             "file is %sx smaller than the table | %s |" % (
                 s["slices"], float(s["seconds_best"]), s["cores"], cpu_name(rows("fit_sweep.csv")[0].get("cpu_model", "") or provenance()["bench/results/fit_sweep.csv"]["cpu"]),
                 pct(s["l1_median"], 1), s["ratio_files"], link("fitting.md", "", "fit_sweep.csv")))
