@@ -20,11 +20,9 @@ import argparse
 import json
 import os
 import shutil
-import subprocess
-import sys
-import time
 
 from machine import cpu_model, logical_cpus
+import study_io
 from study_io import BIN, ROOT, write_rows
 
 GRID = ["--theta-i", "90", "--phi-i", "180"]
@@ -46,14 +44,8 @@ fit:
 
 def measured(cmd):
     """Wall seconds, CPU seconds and peak resident MiB of one child process."""
-    t = time.perf_counter()
-    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    err = p.stderr.read()
-    _, status, ru = os.wait4(p.pid, 0)
-    wall = time.perf_counter() - t
-    if os.waitstatus_to_exitcode(status) != 0:
-        sys.exit("cells_scale: `%s` failed: %s" % (" ".join(cmd), (err.strip().splitlines() or ["?"])[-1]))
-    return wall, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0
+    wall, cpu, peak = study_io.measured("cells_scale", cmd)
+    return wall, cpu, peak / 2**20
 
 
 def table(work, name, n_theta, n_phi):

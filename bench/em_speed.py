@@ -17,8 +17,6 @@ new, new / old, the rounds and the machine.
 """
 import argparse
 import os
-import resource
-import subprocess
 import sys
 import tempfile
 
@@ -39,12 +37,7 @@ fit:
 
 def run(cmd, cwd=None):
     """Runs cmd; its CPU seconds (user + system). A failure ends the study naming the command."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    r = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if r.returncode != 0:
-        sys.exit(f"em_speed: `{' '.join(cmd)}` failed: {r.stderr.strip()[-2000:]}")
-    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return study_io.measured("em_speed", cmd, cwd=cwd)[1]
 
 
 def bench_em(exe, k, path):

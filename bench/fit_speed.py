@@ -14,28 +14,18 @@ per material: old and new seconds, speedup (old / new), both utilizations and er
 import argparse
 import glob
 import os
-import resource
 import shutil
 import subprocess
-import sys
-import time
 
 import h5py
 import numpy as np
 from machine import cpu_model  # noqa: E402  (bench/machine.py)
-from study_io import ROOT, rows, write_rows  # noqa: E402  (bench/study_io.py)
+from study_io import ROOT, measured, rows, write_rows  # noqa: E402  (bench/study_io.py)
 
 
 def timed_fit(binary, config):
     """Runs `binary fit -q config`: (wall seconds, CPU seconds of the child)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.monotonic()
-    r = subprocess.run([binary, "fit", "-q", config], capture_output=True, text=True)
-    wall = time.monotonic() - t0
-    if r.returncode != 0:
-        sys.exit(f"fit_speed: `{binary} fit {config}` failed: {r.stderr.strip()}")
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return measured("fit_speed", [binary, "fit", "-q", config])[:2]
 
 
 def errors(report):

@@ -16,34 +16,21 @@ bytes). The tables and the fit stay in WORK (4.2 GB); the fit is timed once.
 import argparse
 import json
 import os
-import subprocess
 import sys
-import tempfile
-import time
 
 import h5py
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 from machine import cpu_model, logical_cpus  # noqa: E402
-from study_io import BIN, rows, write_rows  # noqa: E402
+from study_io import BIN, measured, rows, write_rows  # noqa: E402
 
 GRID = ["--theta-o", "90", "--theta-i", "90", "--phi-i", "180", "--noise", "0.05"]
 
 
 def run(args, what):
-    """Runs `bsdfmix ARGS`: wall seconds, the child's CPU seconds and its peak RSS in bytes
-    (os.wait4's rusage of that child alone); a failure ends the study."""
-    with open(os.devnull, "w") as null, tempfile.TemporaryFile("w+") as err:
-        t = time.perf_counter()
-        p = subprocess.Popen([BIN, *[str(a) for a in args]], stdout=null, stderr=err, cwd=ROOT, text=True)
-        _, status, use = os.wait4(p.pid, 0)
-        p.returncode = os.waitstatus_to_exitcode(status)
-        wall = time.perf_counter() - t
-        if p.returncode != 0:
-            err.seek(0)
-            sys.exit("render_4d: %s failed: %s" % (what, (err.read().strip().splitlines() or ["?"])[-1]))
-    return wall, use.ru_utime + use.ru_stime, use.ru_maxrss * 1024
+    """Runs `bsdfmix ARGS` (study_io.measured): wall seconds, CPU seconds, peak RSS bytes."""
+    return measured("render_4d", [BIN, *args], cwd=ROOT, what=what)
 
 
 def config(src, work, dst, extra=""):

@@ -4,6 +4,8 @@ import csv
 import os
 import subprocess
 import sys
+import tempfile
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # BSDFMIX_BIN: another build of the CLI (a copy, so that rebuilding does not stop a long study)
@@ -16,6 +18,23 @@ def bsdfmix(study, *args):
     r = subprocess.run([BIN, *args], capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"{study}: `bsdfmix {' '.join(args)}` failed: {r.stderr.strip()}")
+
+
+def measured(study, cmd, cwd=None, what=None):
+    """Runs the command `cmd` (a list): its wall seconds, its CPU seconds (user + system) and
+    its peak resident bytes, from os.wait4's rusage of that child alone. A failure ends the
+    study with one line naming `what` (default: the command) and the last line of its stderr."""
+    cmd = [str(c) for c in cmd]
+    with open(os.devnull, "w") as null, tempfile.TemporaryFile("w+") as err:
+        t = time.perf_counter()
+        p = subprocess.Popen(cmd, stdout=null, stderr=err, cwd=cwd, text=True)
+        _, status, use = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - t
+        if os.waitstatus_to_exitcode(status) != 0:
+            err.seek(0)
+            last = (err.read().strip().splitlines() or ["?"])[-1]
+            sys.exit(f"{study}: {what or '`' + ' '.join(cmd) + '`'} failed: {last}")
+    return wall, use.ru_utime + use.ru_stime, use.ru_maxrss * 1024
 
 
 def grid(study, text):
