@@ -3,7 +3,6 @@
 
 #include <sys/stat.h>
 
-#include <cmath>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -22,13 +21,6 @@ std::string file_key(const std::string& path) {
   return path + " " + std::to_string(st.st_size) + " " + std::to_string(st.st_mtime);
 }
 
-bool same_axis(const std::vector<double>& a, const std::vector<double>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (std::abs(a[i] - b[i]) > 1e-9) return false;
-  return true;
-}
-
 }  // namespace
 
 std::unique_ptr<FullF> open_full(const std::string& table_path, const std::string& mixture_path) {
@@ -38,7 +30,8 @@ std::unique_ptr<FullF> open_full(const std::string& table_path, const std::strin
   const TableMeta& meta = out->table->meta();
   if (m.domain != Domain::Fiber || m.azimuthal)
     throw InputError(mixture_path + ": the full-4D stand-in must be a fiber mixture without symmetry");
-  if (!same_axis(m.table_theta_o, meta.theta_o) || !same_axis(m.table_phi_o, meta.phi_o))
+  // the axes the fit recorded from the table, as compare checks them (exactly)
+  if (m.table_theta_o != meta.theta_o || m.table_phi_o != meta.phi_o)
     throw InputError(mixture_path + ": its omega_o grid is not the one of " + table_path);
   out->set = to_mixture_set(m);
   out->mixture_bytes = m.payload_bytes();

@@ -21,11 +21,6 @@ namespace render {
 
 namespace {
 
-// The step of a uniform axis (1 for a single value).
-double step_of(const std::vector<double>& a) {
-  return a.size() > 1 ? (a.back() - a.front()) / double(a.size() - 1) : 1.0;
-}
-
 // A position u on an axis of n points: the lower index and the weight of the upper one; a
 // position within 1e-9 of a grid point is that point (exact values at the cells).
 void split(double u, std::size_t n, bool wrap, std::size_t& i0, std::size_t& i1, double& w) {
@@ -67,11 +62,12 @@ MappedTable::MappedTable(const std::string& path) {
       throw InputError(path + ": slice " + std::to_string(s) + " lies past the file's end");
   n_phi_i_ = meta_.phi_i.size();
   to0_ = meta_.theta_o.front();
-  dto_ = step_of(meta_.theta_o);
+  // the steps as TableBsdf's lookup takes them (core/domain.hpp axis_step)
+  dto_ = axis_step(meta_.theta_o);
   po0_ = meta_.phi_o.front();
-  dpo_ = step_of(meta_.phi_o);
-  dth_ = step_of(meta_.theta_i);
-  dph_ = step_of(meta_.phi_i);
+  dpo_ = axis_step(meta_.phi_o);
+  dth_ = axis_step(meta_.theta_i);
+  dph_ = axis_step(meta_.phi_i);
   th0_ = meta_.theta_i.front() - dth_ / 2;
   ph0_ = meta_.phi_i.front() - dph_ / 2;
 }

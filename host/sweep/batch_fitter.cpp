@@ -147,8 +147,10 @@ void Batch::refine(bool with_neighbours) {
   };
   std::vector<double> unrefined(size(), 0.0);
   for (std::size_t s = 0; s < size(); ++s) {
-    if (best[s].ok) add(s, best[s]);
-    if (best[s].ok) unrefined[s] = best[s].l1;
+    if (best[s].ok) {
+      add(s, best[s]);
+      unrefined[s] = best[s].l1;
+    }
     if (with_neighbours && s < below.size() && below[s].ok) add(s, below[s]);
   }
   if (queries.empty()) return;
