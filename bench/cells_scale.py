@@ -81,12 +81,14 @@ def chart(rows, png):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.4))
+    colour = {"this": "tab:blue", "before": "tab:orange"}  # one colour a build, in both panels
     for build in sorted({r["build"] for r in rows}, reverse=True):
         rs = [r for r in rows if r["build"] == build]
         x = [int(r["cells"]) for r in rs]
-        a.plot(x, [float(r["ns_per_cell"]) for r in rs], "o-", label=build + ": wall")
-        a.plot(x, [float(r["cpu_ns_per_cell"]) for r in rs], "s--", label=build + ": CPU")
-        b.plot(x, [float(r["peak_rss_mib"]) / 1024 for r in rs], "o-", label=build)
+        c = colour.get(build)
+        a.plot(x, [float(r["ns_per_cell"]) for r in rs], "o-", color=c, label=build + ": wall")
+        a.plot(x, [float(r["cpu_ns_per_cell"]) for r in rs], "s--", color=c, label=build + ": CPU")
+        b.plot(x, [float(r["peak_rss_mib"]) / 1024 for r in rs], "o-", color=c, label=build)
     a.set_ylabel("fit time per cell (ns)")
     a.set_title("wall and CPU time per cell", fontsize=9)
     b.set_ylabel("peak resident memory (GiB)")
@@ -95,8 +97,10 @@ def chart(rows, png):
         ax.set_xlabel("table cells")
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
-    b.axhline(3, color="grey", ls=":", lw=1)
+    b.axhline(3, color="grey", ls=":", lw=1, label="3 GiB")
+    b.set_ylim(top=3.3)
     a.legend(fontsize=8)
+    b.legend(fontsize=8)
     fig.suptitle("Fits of K 8, 50 EM iterations, by table size", fontsize=10)
     fig.tight_layout()
     fig.savefig(png, dpi=110)
