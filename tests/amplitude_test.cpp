@@ -1,5 +1,5 @@
 // Channel amplitudes of fixed Gaussians (host/fit/amplitudes.*, kernels/em.cl amp_basis and
-// amp_sums): the kernel against its CPU reference in every K bucket, layout and precision;
+// amp_sums): the kernel against its CPU reference in every K bucket and kernel shape;
 // the non-negative solve against brute force; known amplitudes recovered exactly; the
 // integral kept where a lobe leaks past the border; the header's eval_rgb against the
 // reference's stand-in.
@@ -22,6 +22,7 @@
 #include "fit/em.hpp"
 #include "fit/em_internal.hpp"
 #include "sweep/fit_error.hpp"
+#include "kernel_shapes.hpp"
 
 using namespace bsdfmix;
 
@@ -65,11 +66,9 @@ std::vector<double> header_channels(const SliceGrid& grid, const Gmm& g, const s
   return out;
 }
 
-EmEngine& device(EmPrecision p = EmPrecision::Auto, bool gpu = false) {
-  static EmEngine fp64(select_devices(""), 1, EmPrecision::Auto), fp32(select_devices(""), 1, EmPrecision::Fp32),
-      fp32_gpu(select_devices(""), 1, EmPrecision::Fp32);
-  fp32_gpu.set_gpu_layout(true);
-  return p == EmPrecision::Fp32 ? (gpu ? fp32_gpu : fp32) : fp64;
+EmEngine& device() {
+  static EmEngine e(select_devices(""), 1, EmPrecision::Auto);
+  return e;
 }
 
 AmplitudeEvaluator on_device(EmEngine& e, const ChannelSet& set) {
@@ -83,7 +82,7 @@ AmplitudeEvaluator on_reference(const ChannelSet& set) {
 
 }  // namespace
 
-TEST_CASE("the amplitude kernel matches its reference in every K bucket, layout and precision", "[amplitudes]") {
+TEST_CASE("the amplitude kernel matches its reference in every K bucket and kernel shape", "[amplitudes]") {
   const Map map = GENERATE(Map::ThetaPhi, Map::Cylinder, Map::Disk);  // the programs' MAP
   INFO("map " << map_name(map));
   ChannelSet set;
@@ -133,18 +132,12 @@ TEST_CASE("the amplitude kernel matches its reference in every K bucket, layout 
   CHECK(sub_cell(queries[0].gmm.cov[6], queries[0].gmm.cov[7], queries[0].gmm.cov[8], axis_step(grid.theta),
                  axis_step(grid.phi)));  // the 3 x 3 path is taken
   const std::vector<AmplitudeSums> ref = amplitude_sums_reference(set, queries);
-  struct Run {
-    EmPrecision precision;
-    bool gpu_layout;
-  };
-  for (const Run run : {Run{EmPrecision::Auto, false}, Run{EmPrecision::Fp32, false}, Run{EmPrecision::Fp32, true}}) {
-    EmEngine& eng = device(run.precision, run.gpu_layout);
-    const std::vector<AmplitudeSums> got = eng.amplitude_sums(EmEngine::amp_prepare(set), queries);
+  for (const test::ShapeRun& run : test::shape_runs()) {
+    const std::vector<AmplitudeSums> got = test::shape_engine(run)->amplitude_sums(EmEngine::amp_prepare(set), queries);
     REQUIRE(got.size() == ref.size());
     for (std::size_t i = 0; i < queries.size(); ++i) {
       const int k = queries[i].gmm.k();
-      INFO("precision " << precision_name(run.precision) << (run.gpu_layout ? ", GPU layout" : ", CPU layout")
-                        << ", K = " << k);
+      INFO(run.label() << ", K = " << k);
       for (int c = 0; c < 4; ++c) {
         INFO("channel " << c);
         CHECK(got[i].l1[c] == Approx(ref[i].l1[c]).epsilon(1e-4));

@@ -15,6 +15,7 @@
 #include "fit/em.hpp"
 #include "fit/em_internal.hpp"
 #include "fit/synthetic.hpp"
+#include "kernel_shapes.hpp"
 
 using namespace bsdfmix;
 
@@ -172,8 +173,8 @@ TEST_CASE("kernels match the reference on the equal-area maps, both precisions",
 }
 
 // Every K_MAX bucket the engine compiles (k_bucket: 4, 8, ..., 128 for kEmMaxK, the
-// largest K it and a config accept), each at a K inside it, K = 50 among them; the CPU layout in
-// both precisions and the GPU layout in fp32 (a GPU's usual precision). A slice of many
+// largest K it and a config accept), each at a K inside it, K = 50 among them, in every
+// kernel shape (tests/kernel_shapes.hpp). A slice of many
 // lobes, so that large K spreads over structure instead of re-seeding empty components.
 TEST_CASE("kernels match the reference in every K bucket the engine compiles", "[em][buckets]") {
   SliceSet set;
@@ -196,17 +197,10 @@ TEST_CASE("kernels match the reference in every K bucket the engine compiles", "
   CHECK(buckets == std::set<int>{4, 8, 16, 32, 64, 128});
   CHECK(em_detail::k_bucket(kEmMaxK) == 128);  // no K the engine accepts needs a larger bucket
   const auto ref = em_fit_reference(set, tasks);
-  struct Run {
-    EmPrecision precision;
-    bool gpu_layout;
-  };
-  for (const Run run : {Run{EmPrecision::Auto, false}, Run{EmPrecision::Fp32, false}, Run{EmPrecision::Fp32, true}}) {
-    EmEngine eng(select_devices(""), 1, run.precision);
-    eng.set_gpu_layout(run.gpu_layout);
-    const auto got = eng.fit(set, tasks);
+  for (const test::ShapeRun& run : test::shape_runs()) {
+    const auto got = test::shape_engine(run)->fit(set, tasks);
     for (std::size_t i = 0; i < tasks.size(); ++i) {
-      INFO("precision " << precision_name(run.precision) << (run.gpu_layout ? ", GPU layout" : ", CPU layout")
-                        << ", K = " << tasks[i].k << " (bucket " << em_detail::k_bucket(tasks[i].k) << ")");
+      INFO(run.label() << ", K = " << tasks[i].k << " (bucket " << em_detail::k_bucket(tasks[i].k) << ")");
       REQUIRE(ref[i].ok);
       REQUIRE(got[i].ok);
       check_matches(got[i], ref[i]);

@@ -1,5 +1,5 @@
 // The L1 refinement (host/fit/l1_refine.*, kernels/em.cl em_l1): the kernel against its
-// CPU reference in every K bucket and layout, the gradient against finite differences
+// CPU reference in every K bucket and kernel shape, the gradient against finite differences
 // of the objective, and refinements that lower the L1 error of EM's fits where the slice
 // is not a mixture of Gaussians and keep a mixture that already is one.
 // labels: fit
@@ -15,6 +15,7 @@
 #include "fit/em_internal.hpp"
 #include "fit/l1_refine.hpp"
 #include "fit/synthetic.hpp"
+#include "kernel_shapes.hpp"
 #include "sweep/fit_error.hpp"
 
 using namespace bsdfmix;
@@ -112,7 +113,7 @@ std::vector<double> amplitudes_for(const Gmm& g) {
   return b;
 }
 
-TEST_CASE("the L1 kernel matches its reference in every K bucket and layout", "[refine]") {
+TEST_CASE("the L1 kernel matches its reference in every K bucket and kernel shape", "[refine]") {
   const bool colour = GENERATE(false, true);
   const Map map = GENERATE(Map::ThetaPhi, Map::Cylinder, Map::Disk);  // the programs' MAP
   INFO((colour ? "with the R, G, B channels" : "the luminance alone") << ", map " << map_name(map));
@@ -146,19 +147,12 @@ TEST_CASE("the L1 kernel matches its reference in every K bucket and layout", "[
   CHECK(l1_images(queries[0].gmm.cov[5]) == 2);  // the wide component takes two images on each side
   const L1Objective objective = l1_objective(set.grid, 3.0, colour ? 0.6 : 0.0);
   const std::vector<L1Value> ref = l1_values_reference(set, queries, objective);
-  struct Run {
-    EmPrecision precision;
-    bool gpu_layout;
-  };
-  for (const Run run : {Run{EmPrecision::Auto, false}, Run{EmPrecision::Fp32, false}, Run{EmPrecision::Fp32, true}}) {
-    EmEngine eng(select_devices(""), 1, run.precision);
-    eng.set_gpu_layout(run.gpu_layout);
-    const std::vector<L1Value> got = eng.l1_values(set, queries, objective);
+  for (const test::ShapeRun& run : test::shape_runs()) {
+    const std::vector<L1Value> got = test::shape_engine(run)->l1_values(set, queries, objective);
     REQUIRE(got.size() == ref.size());
     for (std::size_t i = 0; i < queries.size(); ++i) {
       const int k = queries[i].gmm.k();
-      INFO("precision " << precision_name(run.precision) << (run.gpu_layout ? ", GPU layout" : ", CPU layout")
-                        << ", K = " << k);
+      INFO(run.label() << ", K = " << k);
       CHECK(got[i].objective == Approx(ref[i].objective).epsilon(1e-4));
       const int nq = queries[i].rgb_amp.empty() ? 6 : 9;
       REQUIRE(got[i].stats.size() == std::size_t(nq * k));

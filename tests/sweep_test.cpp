@@ -27,6 +27,7 @@
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
+#include "sweep/batch_fitter.hpp"
 #include "sweep/criterion.hpp"
 #include "sweep/fit_error.hpp"
 #include "sweep/fit_slices.hpp"
@@ -175,6 +176,17 @@ TEST_CASE("a sweep that fails on a bad cell leaves no output and no checkpoint",
   CHECK_FALSE(fs::exists(f.output));
   CHECK_FALSE(fs::exists(f.output + ".parts"));
   CHECK_FALSE(fs::exists(f.report));
+}
+
+TEST_CASE("a default batch holds 1/32 of the plan within [4, 64] slices and at most 2^20 cells", "[fit][batch]") {
+  FitSettings fit;
+  CHECK(batch_size(90, fit, 90 * 180) == 4);
+  CHECK(batch_size(600, fit, 90 * 180) == 18);
+  CHECK(batch_size(64800, fit, 90 * 180) == 64);
+  CHECK(batch_size(241, fit, 362 * 1440) == 2);   // cg_sunflower's resolved grid
+  CHECK(batch_size(241, fit, 3000 * 1440) == 1);  // a slice past the cap still fits
+  fit.batch = 10;
+  CHECK(batch_size(241, fit, 362 * 1440) == 10);  // as configured
 }
 
 TEST_CASE("candidate K values cover the range", "[fit][search]") {

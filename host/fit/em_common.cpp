@@ -337,13 +337,21 @@ Gmm task_start(const SliceGrid& grid, const std::vector<double>& w, const EmTask
 }
 
 double weighted_loglik(const SliceGrid& grid, const std::vector<double>& w, const Gmm& gmm) {
-  double l = 0;
+  // The cells of positive weight, their log densities at once (gmm_log_densities).
+  std::vector<double> x, y, ld;
+  std::vector<std::size_t> cells;
   for (std::size_t i = 0; i < w.size(); ++i) {
     if (!(w[i] > 0)) continue;
-    double x, y;
-    cell_point(grid, i, x, y);
-    l += w[i] * gmm_log_density(gmm, x, y);
+    double a, b;
+    cell_point(grid, i, a, b);
+    x.push_back(a);
+    y.push_back(b);
+    cells.push_back(i);
   }
+  ld.resize(cells.size());
+  gmm_log_densities(gmm, x.data(), y.data(), cells.size(), ld.data());
+  double l = 0;
+  for (std::size_t c = 0; c < cells.size(); ++c) l += w[cells[c]] * ld[c];
   return l;
 }
 

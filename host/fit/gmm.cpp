@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/domain.hpp"
+#include "core/vector_math.hpp"
 
 namespace bsdfmix {
 
@@ -49,6 +50,57 @@ double gmm_log_density(const Gmm& gmm, double theta, double phi) {
   double s = 0;
   for (std::size_t i = 0; i < n; ++i) s += std::exp(logs[i] - m);
   return m + std::log(s);
+}
+
+void gmm_log_densities(const Gmm& gmm, const double* theta, const double* phi, std::size_t n, double* out) {
+  // Per component kept (as component_logs): its log normalization and inverse covariance.
+  struct Comp {
+    double lognorm, a, b, c, det, mt, mp;
+  };
+  std::vector<Comp> comps;
+  for (int k = 0; k < gmm.k(); ++k) {
+    const double a = gmm.cov[3 * k], b = gmm.cov[3 * k + 1], c = gmm.cov[3 * k + 2];
+    const double det = a * c - b * b;
+    if (!(det > 0) || !(gmm.weight[k] > 0)) continue;
+    comps.push_back({std::log(gmm.weight[k]) - std::log(2 * kPi) - 0.5 * std::log(det), a, b, c, det, gmm.mean[2 * k],
+                     gmm.mean[2 * k + 1]});
+  }
+  const std::size_t terms = 3 * comps.size();
+  if (terms == 0) {
+    std::fill(out, out + n, -std::numeric_limits<double>::infinity());
+    return;
+  }
+  // Blocks of points: their terms (point-major, then component, then image m = -1, 0, 1).
+  constexpr std::size_t kBlock = 256;
+  std::vector<double> logs(kBlock * terms), top(kBlock);
+  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+    const std::size_t nb = std::min(kBlock, n - i0);
+    for (std::size_t i = 0; i < nb; ++i) {
+      double* l = logs.data() + i * terms;
+      for (std::size_t k = 0; k < comps.size(); ++k) {
+        const Comp& q = comps[k];
+        const double dt = theta[i0 + i] - q.mt;
+        const double d0 = wrap_phi(phi[i0 + i] - q.mp);
+        for (int m = -1; m <= 1; ++m) {
+          const double dp = d0 + 2 * kPi * m;
+          l[3 * k + std::size_t(m + 1)] = q.lognorm - 0.5 * ((q.c * dt * dt - 2 * q.b * dt * dp + q.a * dp * dp) / q.det);
+        }
+      }
+      top[i] = *std::max_element(l, l + terms);
+      if (std::isfinite(top[i]))
+        for (std::size_t j = 0; j < terms; ++j) l[j] -= top[i];
+    }
+    exp_in_place(logs.data(), nb * terms);
+    for (std::size_t i = 0; i < nb; ++i) {
+      if (!std::isfinite(top[i])) {
+        out[i0 + i] = top[i];
+        continue;
+      }
+      double s = 0;
+      for (std::size_t j = 0; j < terms; ++j) s += logs[i * terms + j];
+      out[i0 + i] = top[i] + std::log(s);
+    }
+  }
 }
 
 double gmm_density(const Gmm& gmm, double theta, double phi) {

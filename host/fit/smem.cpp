@@ -9,6 +9,7 @@
 #include <queue>
 
 #include "core/domain.hpp"
+#include "core/vector_math.hpp"
 #include "fit/em_internal.hpp"
 #include "fit/scheduler.hpp"
 
@@ -18,8 +19,9 @@ namespace {
 
 double wrap_diff(double d) { return d - 2 * kPi * std::nearbyint(d / (2 * kPi)); }
 
-// exp(x), 0 below the normal range: libm takes a slow path for results that underflow.
-double exp_or_zero(double x) { return x < -708 ? 0.0 : std::exp(x); }
+// Cells per block of the vectorized exps (exp_in_place: exp(x), 0 below -708, where libm
+// takes a slow path for results that underflow).
+constexpr std::size_t kBlock = 256;
 
 // Per cell i and component j, log N_j(x_i) (nearest image) at logn[i k + j]; per cell the
 // log of the mixture's density, logs[i]; per component its largest log N_j, zmax[j], and
@@ -40,23 +42,60 @@ struct LogDensities {
       lnorm[j] = -std::log(2 * kPi) - 0.5 * std::log(det);
       lw[j] = std::log(std::max(gmm.weight[j], std::numeric_limits<double>::min()));
     }
-    logn.resize(n * static_cast<std::size_t>(k));
+    const std::size_t K = static_cast<std::size_t>(k);
+    logn.resize(n * K);
     logs.resize(n);
     zmax.assign(k, -std::numeric_limits<double>::infinity());
-    for (std::size_t i = 0; i < n; ++i) {
-      double t, ph;
-      cell_point(grid, i, t, ph);
-      double m = -std::numeric_limits<double>::infinity();
-      for (int j = 0; j < k; ++j) {
-        const double dt = t - gmm.mean[2 * j], dp = wrap_diff(ph - gmm.mean[2 * j + 1]);
-        const double l = lnorm[j] - 0.5 * (ia[j] * dt * dt + 2 * ib[j] * dt * dp + ic[j] * dp * dp);
-        logn[i * k + j] = l;
-        zmax[j] = std::max(zmax[j], l);
-        m = std::max(m, lw[j] + l);
+    std::vector<double> e(kBlock * K);
+    for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+      const std::size_t nb = std::min(kBlock, n - i0);
+      for (std::size_t i = i0; i < i0 + nb; ++i) {
+        double t, ph;
+        cell_point(grid, i, t, ph);
+        double m = -std::numeric_limits<double>::infinity();
+        for (int j = 0; j < k; ++j) {
+          const double dt = t - gmm.mean[2 * j], dp = wrap_diff(ph - gmm.mean[2 * j + 1]);
+          const double l = lnorm[j] - 0.5 * (ia[j] * dt * dt + 2 * ib[j] * dt * dp + ic[j] * dp * dp);
+          logn[i * K + j] = l;
+          zmax[j] = std::max(zmax[j], l);
+          m = std::max(m, lw[j] + l);
+        }
+        logs[i] = m;
+        for (std::size_t j = 0; j < K; ++j) e[(i - i0) * K + j] = lw[j] + logn[i * K + j] - m;
       }
-      double s = 0;
-      for (int j = 0; j < k; ++j) s += exp_or_zero(lw[j] + logn[i * k + j] - m);
-      logs[i] = m + std::log(s);
+      exp_in_place(e.data(), nb * K);  // exp_or_zero
+      for (std::size_t i = i0; i < i0 + nb; ++i) {
+        double s = 0;
+        for (std::size_t j = 0; j < K; ++j) s += e[(i - i0) * K + j];
+        logs[i] += std::log(s);
+      }
+    }
+  }
+};
+
+// Per component j: Z_j = sum_i N_j(x_i) relative to its largest (zsum), the claimed mass
+// A_j = sum_i w_i r_ij (mass), and the responsibilities r_ij of the cells of positive
+// weight (resp[i K + j], 0 elsewhere), for score_components' second pass.
+struct Claims {
+  std::vector<double> zsum, mass, resp;
+  Claims(const LogDensities& d, const std::vector<double>& w, std::size_t K)
+      : zsum(K, 0.0), mass(K, 0.0), resp(w.size() * K, 0.0) {
+    const std::size_t n = w.size();
+    std::vector<double> z(kBlock * K), r(kBlock * K);
+    for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+      const std::size_t nb = std::min(kBlock, n - i0);
+      for (std::size_t i = i0; i < i0 + nb; ++i)
+        for (std::size_t j = 0; j < K; ++j) {
+          z[(i - i0) * K + j] = d.logn[i * K + j] - d.zmax[j];
+          r[(i - i0) * K + j] = d.lw[j] + d.logn[i * K + j] - d.logs[i];
+        }
+      exp_in_place(z.data(), nb * K);
+      exp_in_place(r.data(), nb * K);
+      for (std::size_t i = i0; i < i0 + nb; ++i)
+        for (std::size_t j = 0; j < K; ++j) {
+          zsum[j] += z[(i - i0) * K + j];
+          if (w[i] > 0) mass[j] += w[i] * (resp[i * K + j] = r[(i - i0) * K + j]);
+        }
     }
   }
 };
@@ -92,15 +131,11 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
   const std::vector<double>& logs = dens.logs;
   const std::vector<double>& zmax = dens.zmax;
   const std::vector<double>& lw = dens.lw;
-  std::vector<double> mass(k, 0.0);
-  // log Z_k = log sum_i N_k(x_i), and the claimed mass A_k = sum_i w_i r_ik.
-  // The responsibilities r_ij (cells of positive weight) are kept for the second pass.
-  std::vector<double> zsum(k, 0.0), resp(n * static_cast<std::size_t>(k), 0.0);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int j = 0; j < k; ++j) {
-      zsum[j] += exp_or_zero(logn[i * k + j] - zmax[j]);
-      if (w[i] > 0) mass[j] += w[i] * (resp[i * k + j] = exp_or_zero(lw[j] + logn[i * k + j] - logs[i]));
-    }
+  const std::size_t K = static_cast<std::size_t>(k);
+  const Claims claimed(dens, w, K);
+  const std::vector<double>& mass = claimed.mass;
+  const std::vector<double>& zsum = claimed.zsum;
+  const std::vector<double>& resp = claimed.resp;
   // The logs the second pass takes per component, once.
   std::vector<double> log_mass(k), log_zsum(k);
   for (int j = 0; j < k; ++j) {
@@ -119,37 +154,49 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
     }
   std::vector<int> active;
   std::vector<double> ract;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(w[i] > 0)) continue;
-    active.clear();
-    ract.clear();
-    const double log_w = std::log(w[i]);
-    for (int j = 0; j < k; ++j) {
-      const double lr = lw[j] + logn[i * k + j] - logs[i];
-      const double r = resp[i * k + j];
-      if (!(r > 0) || !(mass[j] > 0)) continue;
-      // f log(f / p), f = w r / A, p = N / Z.
-      // f log(f / p) in logs (w r can underflow where log f cannot).
-      const double logf = log_w + lr - log_mass[j];
-      const double logp = logn[i * k + j] - zmax[j] - log_zsum[j];
-      kl[j] += std::exp(logf) * (logf - logp);
-      self[j] += w[i] * r * r;
-      double x, y;
-      cell_point(grid, i, x, y);
-      const double dt = x - gmm.mean[2 * j], dp = wrap_diff(y - gmm.mean[2 * j + 1]);
-      for (int q = 0; q < 2; ++q) {
-        const double u = ax[2 * j + q] * dt + ay[2 * j + q] * dp, u2 = u * u;
-        m2[2 * j + q] += w[i] * r * u2;
-        m4[2 * j + q] += w[i] * r * u2 * u2;
-      }
-      if (r > 1e-6) {
-        active.push_back(j);
-        ract.push_back(r);
+  // Per block of cells, log f and f of each (cell, component) that counts (below).
+  std::vector<double> logf_of(kBlock * K), f_of(kBlock * K);
+  for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
+    const std::size_t nb = std::min(kBlock, n - i0);
+    for (std::size_t i = i0; i < i0 + nb; ++i) {
+      if (!(w[i] > 0)) continue;
+      const double log_w = std::log(w[i]);
+      for (std::size_t j = 0; j < K; ++j) {
+        const double lr = lw[j] + logn[i * K + j] - logs[i];
+        // f log(f / p), f = w r / A, p = N / Z.
+        // f log(f / p) in logs (w r can underflow where log f cannot).
+        f_of[(i - i0) * K + j] = logf_of[(i - i0) * K + j] = log_w + lr - log_mass[j];
       }
     }
-    for (std::size_t a = 0; a < active.size(); ++a)
-      for (std::size_t b = a + 1; b < active.size(); ++b)
-        cross[static_cast<std::size_t>(active[a]) * k + active[b]] += w[i] * ract[a] * ract[b];
+    exp_in_place(f_of.data(), nb * K);
+    for (std::size_t i = i0; i < i0 + nb; ++i) {
+      if (!(w[i] > 0)) continue;
+      active.clear();
+      ract.clear();
+      for (int j = 0; j < k; ++j) {
+        const double r = resp[i * k + j];
+        if (!(r > 0) || !(mass[j] > 0)) continue;
+        const double logf = logf_of[(i - i0) * K + std::size_t(j)];
+        const double logp = logn[i * k + j] - zmax[j] - log_zsum[j];
+        kl[j] += f_of[(i - i0) * K + std::size_t(j)] * (logf - logp);
+        self[j] += w[i] * r * r;
+        double x, y;
+        cell_point(grid, i, x, y);
+        const double dt = x - gmm.mean[2 * j], dp = wrap_diff(y - gmm.mean[2 * j + 1]);
+        for (int q = 0; q < 2; ++q) {
+          const double u = ax[2 * j + q] * dt + ay[2 * j + q] * dp, u2 = u * u;
+          m2[2 * j + q] += w[i] * r * u2;
+          m4[2 * j + q] += w[i] * r * u2 * u2;
+        }
+        if (r > 1e-6) {
+          active.push_back(j);
+          ract.push_back(r);
+        }
+      }
+      for (std::size_t a = 0; a < active.size(); ++a)
+        for (std::size_t b = a + 1; b < active.size(); ++b)
+          cross[static_cast<std::size_t>(active[a]) * k + active[b]] += w[i] * ract[a] * ract[b];
+    }
   }
   double total = 0;
   for (int j = 0; j < k; ++j) total += mass[j];
@@ -316,12 +363,11 @@ Gmm seed_at_residual(const SliceGrid& grid, const std::vector<double>& w, const 
   double total = 0;
   for (double x : w) total += std::max(x, 0.0);
   if (!(total > 0)) return gmm;
-  std::vector<double> r(w.size());
-  for (std::size_t i = 0; i < w.size(); ++i) {
-    double x, y;
-    cell_point(grid, i, x, y);
-    r[i] = w[i] - total * gmm_density(gmm, x, y) * dt * dp * cell_jacobian(grid, i);
-  }
+  std::vector<double> r(w.size()), px(w.size()), py(w.size());
+  for (std::size_t i = 0; i < w.size(); ++i) cell_point(grid, i, px[i], py[i]);
+  gmm_log_densities(gmm, px.data(), py.data(), w.size(), r.data());
+  exp_in_place(r.data(), r.size());  // gmm_density
+  for (std::size_t i = 0; i < w.size(); ++i) r[i] = w[i] - total * r[i] * dt * dp * cell_jacobian(grid, i);
   Gmm out = gmm;
   constexpr int kHalf = 2;  // the 5 x 5 window
   while (out.k() < k_new) {

@@ -367,8 +367,11 @@ void BatchFitter::finish(Batch& b, double seconds, BatchPart& part) const {
   }
 }
 
-std::size_t batch_size(std::size_t planned, const FitSettings& fit) {
-  return fit.batch > 0 ? std::size_t(fit.batch) : std::clamp<std::size_t>(planned / 32, 4, 64);
+std::size_t batch_size(std::size_t planned, const FitSettings& fit, std::size_t cells_per_slice) {
+  if (fit.batch > 0) return std::size_t(fit.batch);
+  const std::size_t by_plan = std::clamp<std::size_t>(planned / 32, 4, 64);
+  const std::size_t by_cells = cells_per_slice > 0 ? std::max<std::size_t>(kBatchCells / cells_per_slice, 1) : by_plan;
+  return std::min(by_plan, by_cells);
 }
 
 std::vector<std::vector<SliceRef>> split_batches(const std::vector<SliceRef>& plan, std::size_t batch) {

@@ -44,9 +44,14 @@ class BatchFitter {
 // The map a fit of a `d` table with these settings works and writes in (fit.map).
 Map fit_map(const FitSettings& fit, Domain d);
 
-// Slices per batch of a sweep of `planned` slices: fit.batch, or by default 1/32 of
-// the plan within [4, 64].
-std::size_t batch_size(std::size_t planned, const FitSettings& fit);
+// Cells a default batch holds at most: a batch's memory is about 230 bytes a cell (64
+// slices of 90 x 180 cells, about 230 MiB).
+constexpr std::size_t kBatchCells = std::size_t(1) << 20;
+
+// Slices per batch of a sweep of `planned` slices of `cells_per_slice` cells: fit.batch,
+// or by default 1/32 of the plan within [4, 64], and at most kBatchCells cells (at least
+// one slice).
+std::size_t batch_size(std::size_t planned, const FitSettings& fit, std::size_t cells_per_slice = 0);
 
 // The batches of a plan: fixed ranges of `batch` slices, so that a resumed sweep
 // rebuilds exactly the batches it did not commit.

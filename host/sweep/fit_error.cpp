@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/domain.hpp"
+#include "core/vector_math.hpp"
 #include "fit/gmm.hpp"
 
 namespace bsdfmix {
@@ -42,20 +43,92 @@ WeightedSlice pool_slice(const WeightedSlice& s, std::size_t f) {
 
 namespace {
 
-// A Gaussian's mean density over a dtheta x dphi cell centered at (theta, phi): its density
-// at the center, or, narrower than half a cell (sub_cell: the table cannot resolve it), its
-// mean over 3 x 3 points of the cell (offsets -1/3, 0, 1/3 of a step).
-double cell_density(const mix::Gaussian& g, bool narrow, Map map, double theta, double phi, double dt, double dp) {
-  auto at = [&](double t, double p) {
-    if (map != Map::ThetaPhi) mix::to_map(map, t, p, t, p);
-    return g.density(t, p);
-  };
-  if (!narrow) return at(theta, phi);
-  double sub = 0;
-  for (int a = -1; a <= 1; ++a)
-    for (int b = -1; b <= 1; ++b) sub += at(theta + a * dt / 3, wrap_phi(phi + b * dp / 3));
-  return sub / 9;
-}
+// The cells of one row of a slice as the mixture's map sees them, and each component's
+// mean density over them: its density at the cell's point, or, narrower than half a cell
+// (sub_cell: the table cannot resolve it), its mean over 3 x 3 points of the cell
+// (offsets -1/3, 0, 1/3 of a step). The header's Gaussian::density, a row at a time: its
+// exps through exp_in_place (vectorized, within 4 ulp of std::exp), its sums in the
+// header's order.
+class RowDensities {
+ public:
+  explicit RowDensities(const WeightedSlice& s) : s_(s), np_(s.phi.size()), dt_(axis_step(s.theta)), dp_(axis_step(s.phi)) {
+    x_.resize(np_);
+    y_.resize(np_);
+    arg_.resize(np_);
+    sum_.resize(np_);
+    for (int b = 0; b < 3; ++b) {
+      sub_phi_[b].resize(np_);
+      for (std::size_t p = 0; p < np_; ++p) sub_phi_[b][p] = wrap_phi(s.phi[p] + (b - 1) * dp_ / 3);
+    }
+  }
+
+  // Row t's cell points in the map (once per row, for every component).
+  void set_row(std::size_t t) {
+    t_ = t;
+    for (std::size_t p = 0; p < np_; ++p) mix::to_map(s_.map, s_.theta[t], s_.phi[p], x_[p], y_[p]);
+  }
+
+  // g's mean density over each cell of the row, into out[0 .. np).
+  void density(const mix::Gaussian& g, bool narrow, double* out) {
+    if (!narrow) {
+      at(g, out);
+      return;
+    }
+    // Only on the (theta, phi) map (as l1_rel_error decides): the sub-points are angles.
+    std::fill(out, out + np_, 0.0);
+    std::vector<double>& v = sub_;
+    v.resize(np_);
+    for (int a = -1; a <= 1; ++a) {
+      std::fill(x_.begin(), x_.end(), s_.theta[t_] + a * dt_ / 3);
+      for (int b = 0; b < 3; ++b) {
+        std::copy(sub_phi_[b].begin(), sub_phi_[b].end(), y_.begin());
+        at(g, v.data());
+        for (std::size_t p = 0; p < np_; ++p) out[p] += v[p];
+      }
+    }
+    for (std::size_t p = 0; p < np_; ++p) out[p] /= 9;
+    set_row(t_);  // the cell centers again
+  }
+
+ private:
+  // The header's density at the points (x_[p], y_[p]), summed over g's phi images.
+  void at(const mix::Gaussian& g, double* out) {
+    std::fill(sum_.begin(), sum_.end(), 0.0);
+    for (int m = -g.images; m <= g.images; ++m) {
+      if (!any_near(g, m)) continue;  // an image past the cut at every cell adds nothing
+      const double mt = g.mu_t, mp = g.mu_p, cut = g.cut, a = g.i_tt, b = g.i_tp, c = g.i_pp;
+      const double* x = x_.data();
+      const double* y = y_.data();
+      double* arg = arg_.data();
+      for (std::size_t p = 0; p < np_; ++p) {
+        const double dt = x[p] - mt;
+        const double dp = y[p] + 2 * kPi * m - mp;
+        const double q = a * dt * dt + 2 * b * dt * dp + c * dp * dp;
+        // as the header: images past the cut and exps below ~1e-326 add nothing
+        const bool far = (std::abs(dp) > cut) | !(q < 1500);
+        arg[p] = far ? -1e300 : -0.5 * q;
+      }
+      exp_in_place(arg_.data(), np_);
+      for (std::size_t p = 0; p < np_; ++p) sum_[p] += arg_[p];
+    }
+    for (std::size_t p = 0; p < np_; ++p) out[p] = g.norm * sum_[p];
+  }
+
+  // Whether image m of g is within its cut at some cell of the row.
+  bool any_near(const mix::Gaussian& g, int m) const {
+    const double off = 2 * kPi * m - g.mu_p, cut = g.cut;
+    const double* y = y_.data();
+    double n = 0;  // a double count: the loop vectorizes
+    for (std::size_t p = 0; p < np_; ++p) n += std::abs(y[p] + off) <= cut ? 1.0 : 0.0;
+    return n > 0;
+  }
+
+  const WeightedSlice& s_;
+  std::size_t np_, t_ = 0;
+  double dt_, dp_;
+  std::vector<double> x_, y_, arg_, sum_, sub_;
+  std::vector<double> sub_phi_[3];
+};
 
 // The Lambertian base's density at the cell centered at (theta, phi), at the cell's point
 // of the mixture's map (include/bsdfmix/mixture.hpp lambert_base); 0 without a base.
@@ -66,50 +139,65 @@ double base_density(const mix::SliceMixture& m, double theta, double phi) {
   return mix::lambert_base(x, y);
 }
 
+// Which components are compared by their mean over 3 x 3 points of a cell: narrower than
+// half a cell, on the (theta, phi) map only. On an equal-area map every component is
+// compared at the cell centers, as a renderer's quadrature (and bsdfmix compare) sees it:
+// the cells' sizes in the plane vary.
+std::vector<bool> narrow_components(const WeightedSlice& s, const std::vector<mix::Gaussian>& gs) {
+  const double dt = axis_step(s.theta), dp = axis_step(s.phi);
+  std::vector<bool> out;
+  for (const auto& g : gs) out.push_back(s.map == Map::ThetaPhi && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
+  return out;
+}
+
 }  // namespace
 
 double l1_rel_error(const WeightedSlice& s, const mix::SliceMixture& m) {
   const double total = s.total();
   if (!(total > 0)) return 0.0;
-  const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
+  const double area = axis_step(s.theta) * axis_step(s.phi);
   // A component narrower than half a cell (the table cannot resolve it: EM leaves it at
   // its covariance floor, a quarter cell) is integrated over each cell (3 x 3 points);
-  // a wider one is compared like the table, by its density at the cell centers.
-  std::vector<const mix::Gaussian*> broad, narrow;
-  // On an equal-area map every component is compared at the cell centers, as a renderer's
-  // quadrature (and bsdfmix compare) sees it: the cells' sizes in the plane vary.
-  const bool averaged = s.map == Map::ThetaPhi;
-  for (const auto& g : m.components)
-    (averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp) ? narrow : broad).push_back(&g);
+  // a wider one is compared like the table, by its density at the cell centers. The
+  // broad ones are summed first, then the narrow ones.
+  const std::vector<bool> narrow = narrow_components(s, m.components);
+  std::vector<std::size_t> order;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t k = 0; k < m.components.size(); ++k)
+      if (narrow[k] == (pass == 1)) order.push_back(k);
   const std::size_t np = s.phi.size();
+  RowDensities rows(s);
+  std::vector<double> density(np), d(np);
   double err = 0;
   for (std::size_t t = 0; t < s.theta.size(); ++t) {
     const double cell = area * mix::map_jacobian(s.map, s.theta[t]);  // in the mixture's plane
-    for (std::size_t p = 0; p < np; ++p) {
-      double density = 0;
-      for (const auto* g : broad) density += g->weight * cell_density(*g, false, s.map, s.theta[t], s.phi[p], dt, dp);
-      for (const auto* g : narrow) density += g->weight * cell_density(*g, true, s.map, s.theta[t], s.phi[p], dt, dp);
-      err += std::abs(s.w[t * np + p] - total * density * cell);
+    rows.set_row(t);
+    std::fill(density.begin(), density.end(), 0.0);
+    for (std::size_t k : order) {
+      const mix::Gaussian& g = m.components[k];
+      rows.density(g, narrow[k], d.data());
+      for (std::size_t p = 0; p < np; ++p) density[p] += g.weight * d[p];
     }
+    for (std::size_t p = 0; p < np; ++p) err += std::abs(s.w[t * np + p] - total * density[p] * cell);
   }
   return (err + s.extra_error) / (s.reference_total > 0 ? s.reference_total : total);
 }
 
 std::vector<double> cell_masses(const WeightedSlice& s, const mix::SliceMixture& m) {
   const std::size_t nt = s.theta.size(), np = s.phi.size();
-  const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
-  const bool averaged = s.map == Map::ThetaPhi;  // as l1_rel_error
-  std::vector<bool> narrow;
-  for (const auto& g : m.components) narrow.push_back(averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
-  std::vector<double> out(nt * np, 0.0);
+  const double area = axis_step(s.theta) * axis_step(s.phi);
+  const std::vector<bool> narrow = narrow_components(s, m.components);  // as l1_rel_error
+  std::vector<double> out(nt * np, 0.0), d(np);
+  RowDensities rows(s);
   for (std::size_t t = 0; t < nt; ++t) {
     const double cell = area * mix::map_jacobian(s.map, s.theta[t]);
-    for (std::size_t p = 0; p < np; ++p) {
-      out[t * np + p] += m.base * base_density(m, s.theta[t], s.phi[p]) * cell;
-      for (std::size_t k = 0; k < m.components.size(); ++k) {
-        const mix::Gaussian& g = m.components[k];
-        out[t * np + p] += g.weight * cell_density(g, narrow[k], s.map, s.theta[t], s.phi[p], dt, dp) * cell;
-      }
+    double* o = out.data() + t * np;
+    for (std::size_t p = 0; p < np; ++p) o[p] += m.base * base_density(m, s.theta[t], s.phi[p]) * cell;
+    rows.set_row(t);
+    for (std::size_t k = 0; k < m.components.size(); ++k) {
+      const mix::Gaussian& g = m.components[k];
+      rows.density(g, narrow[k], d.data());
+      for (std::size_t p = 0; p < np; ++p) o[p] += g.weight * d[p] * cell;
     }
   }
   return out;
@@ -118,40 +206,43 @@ std::vector<double> cell_masses(const WeightedSlice& s, const mix::SliceMixture&
 StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& rgb, const mix::SliceMixture& m) {
   StandInError e;
   const std::size_t nt = s.theta.size(), np = s.phi.size(), n = nt * np;
-  const double dt = axis_step(s.theta), dp = axis_step(s.phi), area = dt * dp;
+  const double area = axis_step(s.theta) * axis_step(s.phi);
   const bool colour = !rgb.empty();
-  // A Gaussian's mass in a cell: its mean density there, by the header, times the area.
-  auto mass = [&](const mix::Gaussian& g, bool narrow, double theta, double phi) {
-    return cell_density(g, narrow, s.map, theta, phi, dt, dp) * area * mix::map_jacobian(s.map, theta);
-  };
-  std::vector<bool> narrow, narrow_colour;
-  const bool averaged = s.map == Map::ThetaPhi;  // as l1_rel_error
-  for (const auto& g : m.components) narrow.push_back(averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
-  for (const auto& g : m.colour) narrow_colour.push_back(averaged && sub_cell(g.s_tt, g.s_tp, g.s_pp, dt, dp));
-  // Each component's mass in a cell (its density there, by the header, times the area),
-  // its luminance amplitude scale * weight and, with colour, its rgb amplitudes.
+  const std::vector<bool> narrow = narrow_components(s, m.components);  // as l1_rel_error
+  const std::vector<bool> narrow_colour = narrow_components(s, m.colour);
+  const std::size_t K = m.components.size(), C = colour ? m.colour.size() : 0;
+  // Per row: each component's and colour copy's mass in each cell (its density there, by
+  // the header's formula, times the area), mass[k np + p], colour copies after the components.
+  std::vector<double> mass((K + C) * np);
+  RowDensities rows(s);
   double lum = 0, lum_err = 0, abs_rgb = 0, rgb_err = 0, neg_err = 0;
-  for (std::size_t t = 0; t < nt; ++t)
+  for (std::size_t t = 0; t < nt; ++t) {
+    const double jac = mix::map_jacobian(s.map, s.theta[t]);
+    rows.set_row(t);
+    for (std::size_t k = 0; k < K + C; ++k) {
+      double* d = mass.data() + k * np;
+      rows.density(k < K ? m.components[k] : m.colour[k - K], k < K ? narrow[k] : narrow_colour[k - K], d);
+      for (std::size_t p = 0; p < np; ++p) d[p] = d[p] * area * jac;
+    }
     for (std::size_t p = 0; p < np; ++p) {
       const std::size_t i = t * np + p;
       double y = 0, c[3] = {0, 0, 0};
       if (m.base > 0) {  // the Lambertian base's mass in the cell
-        const double d = base_density(m, s.theta[t], s.phi[p]) * area * mix::map_jacobian(s.map, s.theta[t]);
+        const double d = base_density(m, s.theta[t], s.phi[p]) * area * jac;
         y += m.scale * m.base * d;
         for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? m.base_rgb[q] : m.scale * m.base) * d;
       }
-      for (std::size_t k = 0; k < m.components.size(); ++k) {
+      for (std::size_t k = 0; k < K; ++k) {
         const mix::Gaussian& g = m.components[k];
-        const double d = mass(g, narrow[k], s.theta[t], s.phi[p]);
+        const double d = mass[k * np + p];
         y += m.scale * g.weight * d;
         if (m.colour.empty())
           for (int q = 0; q < 3; ++q) c[q] += (m.has_rgb ? g.rgb[q] : m.scale * g.weight) * d;
       }
-      if (colour)
-        for (std::size_t k = 0; k < m.colour.size(); ++k) {
-          const double d = mass(m.colour[k], narrow_colour[k], s.theta[t], s.phi[p]);
-          for (int q = 0; q < 3; ++q) c[q] += m.colour[k].rgb[q] * d;
-        }
+      for (std::size_t k = 0; k < C; ++k) {
+        const double d = mass[(K + k) * np + p];
+        for (int q = 0; q < 3; ++q) c[q] += m.colour[k].rgb[q] * d;
+      }
       lum += s.w[i];
       lum_err += std::abs(s.w[i] - y);
       if (!colour) continue;
@@ -162,6 +253,7 @@ StandInError stand_in_error(const WeightedSlice& s, const std::vector<double>& r
         if (w < 0) neg_err += d;
       }
     }
+  }
   e.l1_rel = lum > 0 ? lum_err / lum : 0.0;
   if (!colour) {
     e.rgb_l1_rel = e.rgb_negative = std::numeric_limits<double>::quiet_NaN();

@@ -41,7 +41,7 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
   BatchFitter fitter(source, fit, engine, joined_names(devices));
   SweepResult result = empty_result(meta, fit);
   Progress progress(what, slices.size(), "slices");
-  for (const std::vector<SliceRef>& batch : split_batches(slices, batch_size(slices.size(), fit))) {
+  for (const std::vector<SliceRef>& batch : split_batches(slices, batch_size(slices.size(), fit, meta.cells_per_slice()))) {
     append_part(result, fitter.fit(batch));
     progress.advance(batch.size());
   }

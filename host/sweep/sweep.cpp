@@ -58,7 +58,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   const std::string device_names = joined_names(devices);
   EmEngine engine(devices, 1, options.engine);
 
-  const std::size_t batch = batch_size(plan.size(), fit);
+  const std::size_t batch = batch_size(plan.size(), fit, meta.cells_per_slice());
   Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices));
   // A table rewritten in place (same path, size and source) is caught by its content.
   std::unordered_map<std::size_t, const SliceRef*> planned;
