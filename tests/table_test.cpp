@@ -126,6 +126,39 @@ TEST_CASE("a non-symmetric hemisphere table with rgb round-trips", "[table]") {
   CHECK_FALSE(r.meta().azimuthal);
   CHECK(r.read_slice(1, 2)[5] == 6.0f);
   CHECK(r.read_slice_rgb(1, 2)[4] == 2.0f);
+  CHECK(r.meta().negative_rgb_cells == 0);
+}
+
+TEST_CASE("the writer counts the cells with a negative channel, and a rewritten slice once", "[table]") {
+  TableMeta m = make_grid(Domain::Hemisphere, 2, 1, 3, 8, true);
+  m.rgb = true;
+  const std::string p = temp_path("rgb_negative.h5");
+  const std::size_t n = m.cells_per_slice();
+  std::vector<float> v(n, 1.0f), rgb(3 * n, 0.5f), clean(3 * n, 0.5f);
+  rgb[0] = -1e-3f;          // cell 0: R
+  rgb[3 * 5 + 2] = -2.0f;  // cell 5: B
+  rgb[3 * 6 + 1] = -1.0f;  // cell 6: G and B
+  rgb[3 * 6 + 2] = -1.0f;
+  {
+    TableWriter w(p, m);
+    w.write_slice(0, 0, v.data(), rgb.data());
+    w.write_slice(1, 0, v.data(), rgb.data());
+    w.write_slice(1, 0, v.data(), clean.data());  // rewritten without its negative cells
+    w.commit();
+  }
+  CHECK(TableReader(p).meta().negative_rgb_cells == 3);
+  // Without colour nothing is counted; a table written without the attribute reads -1.
+  TableMeta grey = make_grid(Domain::Hemisphere, 2, 1, 3, 8, true);
+  write_table(temp_path("grey.h5"), grey, std::vector<float>(grey.n_slices() * grey.cells_per_slice(), 1.0f));
+  CHECK(TableReader(temp_path("grey.h5")).meta().negative_rgb_cells == -1);
+  {  // an attribute that is not a count is named
+    h5::Handle f(H5Fopen(p.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    h5::Handle g(H5Gopen2(f.get(), "table", H5P_DEFAULT));
+    H5Adelete(g.get(), "negative_rgb_cells");
+    h5::write_string_attr(g.get(), "negative_rgb_cells", "-4", p);
+  }
+  CHECK_THAT(error_of([&] { TableReader r(p); }),
+             Catch::Contains("attribute 'negative_rgb_cells' is '-4', not a count of cells"));
 }
 
 TEST_CASE("a compressed table with rgb round-trips, and inspect shows its colour", "[table]") {

@@ -9,7 +9,11 @@
 #include <fstream>
 #include <string>
 
+#include <hdf5.h>
+
+#include "core/format.hpp"
 #include "core/progress.hpp"
+#include "io/h5.hpp"
 #include "io/table.hpp"
 #include "sweep/slice_plan.hpp"
 #include "sweep/sweep_warnings.hpp"
@@ -107,8 +111,31 @@ TEST_CASE("fit: the table's negative channels are named in the fit's warnings", 
   REQUIRE(import("paper_white_rgb", grid).code == 0);
   const TableReader sunflower(temp_path("cg_sunflower_rgb.h5")), paper(temp_path("paper_white_rgb.h5"));
   const auto plan = plan_slices(sunflower.meta(), {}, {});
-  CHECK_THAT(negative_channel_warning(sunflower, plan), Contains("% of the fitted cells hold a negative R, G or B"));
+  // The count the import wrote, over the table's cells: the slices are not read again.
+  const std::int64_t counted = sunflower.meta().negative_rgb_cells;
+  std::int64_t scanned = 0;
+  for (const SliceRef& r : plan) {
+    const std::vector<float> rgb = sunflower.read_slice_rgb(r.t_o, r.p_o);
+    for (std::size_t c = 0; c < rgb.size(); c += 3) scanned += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
+  }
+  CHECK(counted == scanned);
+  CHECK(counted > 0);
+  CHECK_THAT(negative_channel_warning(sunflower, plan), Contains("% of the table's cells hold a negative R, G or B"));
+  CHECK(paper.meta().negative_rgb_cells == 0);
   CHECK(negative_channel_warning(paper, plan_slices(paper.meta(), {}, {})).empty());
+  // A table written without the count: the fitted slices are read and counted.
+  const std::string old = temp_path("cg_sunflower_rgb_uncounted.h5");
+  std::filesystem::copy_file(temp_path("cg_sunflower_rgb.h5"), old, std::filesystem::copy_options::overwrite_existing);
+  {
+    h5::Handle f(H5Fopen(old.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    h5::Handle g(H5Gopen2(f.get(), "table", H5P_DEFAULT));
+    REQUIRE(H5Adelete(g.get(), "negative_rgb_cells") >= 0);
+  }
+  const TableReader uncounted(old);
+  CHECK(uncounted.meta().negative_rgb_cells == -1);
+  const std::string w = negative_channel_warning(uncounted, plan);
+  CHECK_THAT(w, Contains("% of the fitted cells hold a negative R, G or B"));
+  CHECK_THAT(w, Contains(format_number(100.0 * double(scanned) / double(plan.size() * uncounted.meta().cells_per_slice()), "%.1f") + "%"));
 }
 
 TEST_CASE("fit: K at k_max on 10% of the slices or more is warned of", "[warnings]") {

@@ -130,6 +130,12 @@ void TableReader::Impl::open() {
   else if (sym == "none") m.azimuthal = false;
   else throw InputError(where + ": unknown symmetry '" + sym + "' (expected none or azimuthal)");
   m.source = h5::read_string_attr(g, "source", where);
+  if (h5::has_attr(g, "negative_rgb_cells")) {
+    const std::string n = h5::read_string_attr(g, "negative_rgb_cells", where);
+    if (n.empty() || n.find_first_not_of("0123456789") != std::string::npos || n.size() > 18)
+      throw InputError(where + ": attribute 'negative_rgb_cells' is '" + n + "', not a count of cells");
+    m.negative_rgb_cells = std::stoll(n);
+  }
   m.theta_o = h5::read_doubles(g, "theta_o", where);
   m.phi_o = h5::read_doubles(g, "phi_o", where);
   m.theta_i = h5::read_doubles(g, "theta_i", where);
@@ -233,6 +239,7 @@ struct TableWriter::Impl {
   std::unique_ptr<AtomicOutput> out;
   h5::Handle file, group, values, rgb;
   std::vector<bool> written;
+  std::vector<std::uint64_t> negative_rgb;  // per slice, its cells with a negative R, G or B
 };
 
 TableWriter::TableWriter(const std::string& path, const TableMeta& meta, int deflate)
@@ -278,6 +285,7 @@ TableWriter::TableWriter(const std::string& path, const TableMeta& meta, int def
     im.rgb = make("rgb", dims);
   }
   im.written.assign(meta.n_slices(), false);
+  im.negative_rgb.assign(meta.n_slices(), 0);
 }
 
 TableWriter::~TableWriter() = default;
@@ -305,6 +313,9 @@ void TableWriter::write_slice(std::size_t t_o, std::size_t p_o, const float* val
   if (m.rgb) {
     if (!rgb) throw IoError(im.path + ": " + slice_name(t_o, p_o) + " written without its rgb channel");
     put(im.rgb.get(), rgb, true);
+    std::uint64_t& n = im.negative_rgb[m.slice_index(t_o, p_o)];
+    n = 0;
+    for (std::size_t c = 0; c < 3 * m.cells_per_slice(); c += 3) n += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
   }
   im.written[m.slice_index(t_o, p_o)] = true;
 }
@@ -315,6 +326,11 @@ void TableWriter::commit() {
     if (!im.written[s])
       throw IoError(im.path + ": " + slice_name(s / im.meta.phi_o.size(), s % im.meta.phi_o.size()) +
                     " was never written");
+  if (im.meta.rgb) {
+    std::uint64_t negative = 0;
+    for (std::uint64_t n : im.negative_rgb) negative += n;
+    h5::write_string_attr(im.group.get(), "negative_rgb_cells", std::to_string(negative), im.path);
+  }
   im.values.reset();
   im.rgb.reset();
   im.group.reset();

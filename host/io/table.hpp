@@ -18,6 +18,9 @@ struct TableMeta {
   std::vector<double> theta_o, phi_o, theta_i, phi_i;
   std::string source = "{}";  // JSON text: generator or importer and its parameters
   bool rgb = false;           // an `rgb` channel [..., 3] beside `values`
+  // With rgb: the cells with a negative R, G or B, as the writer counted them (attribute
+  // `negative_rgb_cells`); -1 where the file does not record it.
+  std::int64_t negative_rgb_cells = -1;
 
   std::size_t n_slices() const { return theta_o.size() * phi_o.size(); }
   std::size_t cells_per_slice() const { return theta_i.size() * phi_i.size(); }

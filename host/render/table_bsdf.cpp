@@ -278,13 +278,13 @@ void TableBsdf::sample(BsdfSampler s, double theta_o, const double u[4], double&
     const float* row = &c.conditional[i * (np + 1)];
     const std::size_t j = cdf_find(row, np, u[2]);
     const double lo = theta_lo(meta_.domain);
-    const double a = std::max(th0_ + dth_ * double(i), lo), b = std::min(th0_ + dth_ * double(i + 1), kPi / 2);
+    const double t0 = std::max(th0_ + dth_ * double(i), lo), t1 = std::min(th0_ + dth_ * double(i + 1), kPi / 2);
     // u[3] places the point, uniformly in solid angle within the cell: its two halves for
     // theta (sin uniform for fibers, J = cos; cos uniform for the hemisphere, J = sin) and phi
     const double v = u[3] * 4096.0, vt = std::floor(v) / 4096.0, vp = v - std::floor(v);
     theta = meta_.domain == Domain::Fiber
-                ? std::asin(std::clamp(std::sin(a) + vt * (std::sin(b) - std::sin(a)), -1.0, 1.0))
-                : std::acos(std::clamp(std::cos(a) + vt * (std::cos(b) - std::cos(a)), 0.0, 1.0));
+                ? std::asin(std::clamp(std::sin(t0) + vt * (std::sin(t1) - std::sin(t0)), -1.0, 1.0))
+                : std::acos(std::clamp(std::cos(t0) + vt * (std::cos(t1) - std::cos(t0)), 0.0, 1.0));
     phi = wrap_phi(ph0_ + dph_ * (double(j) + vp));
   }
   pdf_out = pdf(s, theta_o, theta, phi);

@@ -33,16 +33,24 @@ std::string k_cap_warning(const std::vector<std::int32_t>& k, const std::vector<
 }
 
 std::string negative_channel_warning(const TableReader& table, const std::vector<SliceRef>& plan) {
-  if (!table.meta().rgb || plan.empty()) return "";
+  const TableMeta& meta = table.meta();
+  if (!meta.rgb || plan.empty()) return "";
   std::size_t negative = 0, cells = 0;
-  for (const SliceRef& r : plan) {
-    const std::vector<float> rgb = table.read_slice_rgb(r.t_o, r.p_o);
-    for (std::size_t c = 0; c + 2 < rgb.size(); c += 3) negative += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
-    cells += rgb.size() / 3;
+  std::string which = "the fitted cells";
+  if (meta.negative_rgb_cells >= 0) {  // counted when the table was written: nothing to read again
+    negative = std::size_t(meta.negative_rgb_cells);
+    cells = meta.n_slices() * meta.cells_per_slice();
+    which = "the table's cells";
+  } else {
+    for (const SliceRef& r : plan) {
+      const std::vector<float> rgb = table.read_slice_rgb(r.t_o, r.p_o);
+      for (std::size_t c = 0; c + 2 < rgb.size(); c += 3) negative += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
+      cells += rgb.size() / 3;
+    }
   }
   if (!negative) return "";
-  return table.path() + ": " + format_number(100.0 * double(negative) / double(cells), "%.1f") +
-         "% of the fitted cells hold a negative R, G or B (kept signed), and the mixture's colour fits them: Mitsuba and "
+  return table.path() + ": " + format_number(100.0 * double(negative) / double(cells), "%.1f") + "% of " + which +
+         " hold a negative R, G or B (kept signed), and the mixture's colour fits them: Mitsuba and "
          "pbrt clip them to 0 when they render the measured file; import it with --negative clip to match those "
          "renderers (docs/rgl.md)";
 }
