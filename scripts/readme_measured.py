@@ -191,7 +191,7 @@ def fit_speed():
     r = rows("fit_speed.csv")
     dl = [abs(float(x[f"new_l1_{q}"]) - float(x[f"old_l1_{q}"])) for x in r for q in ("median", "p90")]
     return ("| Fit time | Default fits of the %d RGL files (90 x 90 x 180): %s s on 2 cores, %s faster than the "
-            "previous build, L1 median and p90 within %.2f points | %s |" % (
+            "9277d9e build, L1 median and p90 within %.2f points | %s |" % (
                 len(r), span([round(float(x["new_seconds"])) for x in r], ""),
                 span([float(x["speedup"]) for x in r]), 100 * max(dl),
                 link("em.md", "Performance", "fit_speed.csv")))
