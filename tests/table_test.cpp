@@ -147,6 +147,7 @@ TEST_CASE("the writer counts the cells with a negative channel, and a rewritten 
     w.commit();
   }
   CHECK(TableReader(p).meta().negative_rgb_cells == 3);
+  CHECK_THAT(describe_file(p, false), Catch::Contains("; 3 cells (6.2%) hold a negative channel"));
   // Without colour nothing is counted; a table written without the attribute reads -1.
   TableMeta grey = make_grid(Domain::Hemisphere, 2, 1, 3, 8, true);
   write_table(temp_path("grey.h5"), grey, std::vector<float>(grey.n_slices() * grey.cells_per_slice(), 1.0f));

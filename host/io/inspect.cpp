@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/progress.hpp"
 #include "core/stats.hpp"
 #include "io/h5.hpp"
@@ -51,7 +52,13 @@ std::string describe_table(const std::string& path, bool check_cells) {
     << "\n";
   if (m.rgb)
     s << "  rgb        [" << m.theta_o.size() << ", " << m.phi_o.size() << ", " << m.theta_i.size() << ", "
-      << m.phi_i.size() << ", 3] float32: the table has colour (f in R, G, B, linear Rec. 709)\n";
+      << m.phi_i.size() << ", 3] float32: the table has colour (f in R, G, B, linear Rec. 709)"
+      << (m.negative_rgb_cells >= 0
+              ? "; " + std::to_string(m.negative_rgb_cells) + " cells (" +
+                    format_number(100.0 * double(m.negative_rgb_cells) / double(m.n_slices() * m.cells_per_slice()), "%.1f") +
+                    "%) hold a negative channel"
+              : std::string())
+      << "\n";
   s << "  theta_o    " << axis_text(m.theta_o) << "\n";
   s << "  phi_o      " << axis_text(m.phi_o) << "\n";
   s << "  theta_i    " << axis_text(m.theta_i) << "\n";
