@@ -148,6 +148,12 @@ TEST_CASE("fit: K at k_max on 10% of the slices or more is warned of", "[warning
   few[0] = 8;  // 1 of 11: under it
   CHECK(k_cap_warning(few, std::vector<double>(11, 0.05), 1, 8).empty());
   CHECK(k_cap_warning(std::vector<std::int32_t>(10, 4), l1, 4, 4).empty());  // a fixed K is not a cap
+  // The medians are the summaries' (core/stats): an even count's is the mean of the middle two.
+  std::vector<double> two = l1;
+  k[1] = 8;
+  two[0] = 0.02;
+  two[1] = 0.04;
+  CHECK_THAT(k_cap_warning(k, two, 1, 8), Contains("relative L1 median 3.00% on those slices, 5.00% on the others"));
 }
 
 TEST_CASE("fit: the CLI prints the K-cap warning once after its summary", "[warnings]") {

@@ -1,25 +1,12 @@
 // The fit's warnings (sweep/sweep_warnings.hpp).
 #include "sweep/sweep_warnings.hpp"
 
-#include <algorithm>
-
 #include "core/format.hpp"
+#include "core/stats.hpp"
 
 namespace bsdfmix {
 
-namespace {
-
-// The median as `fit` and `compare` report it: the upper middle value.
-double upper_median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-std::string percent(double v) { return format_number(100 * v, "%.2f") + "%"; }
-
-}  // namespace
-
+// Its medians are core/stats' quantile, as in every summary.
 std::string k_cap_warning(const std::vector<std::int32_t>& k, const std::vector<double>& l1_rel, int k_min, int k_max) {
   if (k_min >= k_max || k.empty()) return "";
   std::vector<double> capped, others;
@@ -27,8 +14,8 @@ std::string k_cap_warning(const std::vector<std::int32_t>& k, const std::vector<
   if (double(capped.size()) < kKCapShare * double(k.size())) return "";
   std::string text = "K reached k_max " + std::to_string(k_max) + " on " + std::to_string(capped.size()) + " of " +
                      std::to_string(k.size()) + " slices: raise fit.k_max (relative L1 median " +
-                     percent(upper_median(capped)) + " on those slices";
-  if (!others.empty()) text += ", " + percent(upper_median(others)) + " on the others";
+                     percent_text(quantile(capped, 0.5)) + " on those slices";
+  if (!others.empty()) text += ", " + percent_text(quantile(others, 0.5)) + " on the others";
   return text + ")";
 }
 
