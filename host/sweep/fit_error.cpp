@@ -114,12 +114,12 @@ class RowDensities {
     for (std::size_t p = 0; p < np_; ++p) out[p] = g.norm * sum_[p];
   }
 
-  // Whether image m of g is within its cut at some cell of the row.
+  // Whether image m of g is within its cut at some cell of the row (dp as at() takes it).
   bool any_near(const mix::Gaussian& g, int m) const {
-    const double off = 2 * kPi * m - g.mu_p, cut = g.cut;
+    const double mp = g.mu_p, cut = g.cut;
     const double* y = y_.data();
     double n = 0;  // a double count: the loop vectorizes
-    for (std::size_t p = 0; p < np_; ++p) n += std::abs(y[p] + off) <= cut ? 1.0 : 0.0;
+    for (std::size_t p = 0; p < np_; ++p) n += std::abs(y[p] + 2 * kPi * m - mp) <= cut ? 1.0 : 0.0;
     return n > 0;
   }
 
