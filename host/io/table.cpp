@@ -233,6 +233,12 @@ std::vector<float> TableReader::read_slice_rgb(std::size_t t_o, std::size_t p_o)
 
 // ---------------------------------------------------------------- writer
 
+std::size_t count_negative_rgb(const float* rgb, std::size_t cells) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < cells; ++i) n += rgb[3 * i] < 0 || rgb[3 * i + 1] < 0 || rgb[3 * i + 2] < 0;
+  return n;
+}
+
 struct TableWriter::Impl {
   std::string path;
   TableMeta meta;
@@ -313,9 +319,7 @@ void TableWriter::write_slice(std::size_t t_o, std::size_t p_o, const float* val
   if (m.rgb) {
     if (!rgb) throw IoError(im.path + ": " + slice_name(t_o, p_o) + " written without its rgb channel");
     put(im.rgb.get(), rgb, true);
-    std::uint64_t& n = im.negative_rgb[m.slice_index(t_o, p_o)];
-    n = 0;
-    for (std::size_t c = 0; c < 3 * m.cells_per_slice(); c += 3) n += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
+    im.negative_rgb[m.slice_index(t_o, p_o)] = count_negative_rgb(rgb, m.cells_per_slice());
   }
   im.written[m.slice_index(t_o, p_o)] = true;
 }

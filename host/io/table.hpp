@@ -36,6 +36,10 @@ void validate_meta(const TableMeta& meta, const std::string& where);
 TableMeta make_grid(Domain domain, std::size_t n_theta_o, std::size_t n_phi_o, std::size_t n_theta_i,
                     std::size_t n_phi_i, bool azimuthal);
 
+// How many of `cells` R, G, B triples (rgb[3 i .. 3 i + 2]) hold a negative channel: what
+// TableWriter records as `negative_rgb_cells`.
+std::size_t count_negative_rgb(const float* rgb, std::size_t cells);
+
 // Reads a table; the constructor checks structure, shapes, axes and attributes,
 // each slice read checks its cells (NaN, Inf, negative), naming slice and cell.
 class TableReader {

@@ -52,10 +52,7 @@ namespace {
 class RowDensities {
  public:
   explicit RowDensities(const WeightedSlice& s) : s_(s), np_(s.phi.size()), dt_(axis_step(s.theta)), dp_(axis_step(s.phi)) {
-    x_.resize(np_);
-    y_.resize(np_);
-    arg_.resize(np_);
-    sum_.resize(np_);
+    for (auto* v : {&x_, &y_, &arg_, &sum_, &sub_t_, &sub_}) v->resize(np_);
     for (int b = 0; b < 3; ++b) {
       sub_phi_[b].resize(np_);
       for (std::size_t p = 0; p < np_; ++p) sub_phi_[b][p] = wrap_phi(s.phi[p] + (b - 1) * dp_ / 3);
@@ -64,42 +61,36 @@ class RowDensities {
 
   // Row t's cell points in the map (once per row, for every component).
   void set_row(std::size_t t) {
-    t_ = t;
-    for (std::size_t p = 0; p < np_; ++p) mix::to_map(s_.map, s_.theta[t], s_.phi[p], x_[p], y_[p]);
+    theta_ = s_.theta[t];
+    for (std::size_t p = 0; p < np_; ++p) mix::to_map(s_.map, theta_, s_.phi[p], x_[p], y_[p]);
   }
 
   // g's mean density over each cell of the row, into out[0 .. np).
   void density(const mix::Gaussian& g, bool narrow, double* out) {
     if (!narrow) {
-      at(g, out);
+      at(g, x_.data(), y_.data(), out);
       return;
     }
     // Only on the (theta, phi) map (as l1_rel_error decides): the sub-points are angles.
     std::fill(out, out + np_, 0.0);
-    std::vector<double>& v = sub_;
-    v.resize(np_);
     for (int a = -1; a <= 1; ++a) {
-      std::fill(x_.begin(), x_.end(), s_.theta[t_] + a * dt_ / 3);
+      std::fill(sub_t_.begin(), sub_t_.end(), theta_ + a * dt_ / 3);
       for (int b = 0; b < 3; ++b) {
-        std::copy(sub_phi_[b].begin(), sub_phi_[b].end(), y_.begin());
-        at(g, v.data());
-        for (std::size_t p = 0; p < np_; ++p) out[p] += v[p];
+        at(g, sub_t_.data(), sub_phi_[b].data(), sub_.data());
+        for (std::size_t p = 0; p < np_; ++p) out[p] += sub_[p];
       }
     }
     for (std::size_t p = 0; p < np_; ++p) out[p] /= 9;
-    set_row(t_);  // the cell centers again
   }
 
  private:
-  // The header's density at the points (x_[p], y_[p]), summed over g's phi images.
-  void at(const mix::Gaussian& g, double* out) {
+  // The header's density at the points (x[p], y[p]), summed over g's phi images.
+  void at(const mix::Gaussian& g, const double* x, const double* y, double* out) {
     std::fill(sum_.begin(), sum_.end(), 0.0);
+    const double mt = g.mu_t, mp = g.mu_p, cut = g.cut, a = g.i_tt, b = g.i_tp, c = g.i_pp;
+    double* arg = arg_.data();
     for (int m = -g.images; m <= g.images; ++m) {
-      if (!any_near(g, m)) continue;  // an image past the cut at every cell adds nothing
-      const double mt = g.mu_t, mp = g.mu_p, cut = g.cut, a = g.i_tt, b = g.i_tp, c = g.i_pp;
-      const double* x = x_.data();
-      const double* y = y_.data();
-      double* arg = arg_.data();
+      if (!any_near(y, m, mp, cut)) continue;  // an image past the cut at every cell adds nothing
       for (std::size_t p = 0; p < np_; ++p) {
         const double dt = x[p] - mt;
         const double dp = y[p] + 2 * kPi * m - mp;
@@ -108,26 +99,25 @@ class RowDensities {
         const bool far = (std::abs(dp) > cut) | !(q < 1500);
         arg[p] = far ? -1e300 : -0.5 * q;
       }
-      exp_in_place(arg_.data(), np_);
-      for (std::size_t p = 0; p < np_; ++p) sum_[p] += arg_[p];
+      exp_in_place(arg, np_);
+      for (std::size_t p = 0; p < np_; ++p) sum_[p] += arg[p];
     }
     for (std::size_t p = 0; p < np_; ++p) out[p] = g.norm * sum_[p];
   }
 
-  // Whether image m of g is within its cut at some cell of the row (dp as at() takes it).
-  bool any_near(const mix::Gaussian& g, int m) const {
-    const double mp = g.mu_p, cut = g.cut;
-    const double* y = y_.data();
+  // Whether image m of a component at phi mp is within its cut at some point y[p] (dp as
+  // at() takes it).
+  bool any_near(const double* y, int m, double mp, double cut) const {
     double n = 0;  // a double count: the loop vectorizes
     for (std::size_t p = 0; p < np_; ++p) n += std::abs(y[p] + 2 * kPi * m - mp) <= cut ? 1.0 : 0.0;
     return n > 0;
   }
 
   const WeightedSlice& s_;
-  std::size_t np_, t_ = 0;
-  double dt_, dp_;
-  std::vector<double> x_, y_, arg_, sum_, sub_;
-  std::vector<double> sub_phi_[3];
+  std::size_t np_;
+  double dt_, dp_, theta_ = 0;
+  std::vector<double> x_, y_, arg_, sum_, sub_t_, sub_;  // the row's points; scratch
+  std::vector<double> sub_phi_[3];                      // the 3 sub-point phis of each cell
 };
 
 // The Lambertian base's density at the cell centered at (theta, phi), at the cell's point

@@ -31,7 +31,7 @@ std::string negative_channel_warning(const TableReader& table, const std::vector
   } else {
     for (const SliceRef& r : plan) {
       const std::vector<float> rgb = table.read_slice_rgb(r.t_o, r.p_o);
-      for (std::size_t c = 0; c + 2 < rgb.size(); c += 3) negative += rgb[c] < 0 || rgb[c + 1] < 0 || rgb[c + 2] < 0;
+      negative += count_negative_rgb(rgb.data(), rgb.size() / 3);
       cells += rgb.size() / 3;
     }
   }
