@@ -86,7 +86,7 @@ TEST_CASE("a bare section takes every default", "[config]") {
   CHECK(c.converge->samples_max == 65536);
   CHECK(c.converge->runs == 64);
   CHECK(c.converge->product_auto);
-  CHECK_FALSE(c.converge->earned_share);  // uniform_fraction: 0.1
+  CHECK(c.converge->earned_share);  // uniform_fraction: earned
   CHECK(parse_config("table: " + existing_table() + "\nconverge:\n  uniform_fraction: earned\n", "cfg.yaml")
             .converge->earned_share);
   CHECK_FALSE(parse_config("table: " + existing_table() + "\nconverge:\n  uniform_fraction: 0.05\n", "cfg.yaml")

@@ -38,7 +38,7 @@ void add_bench(CLI::App& app, Common& common) {
     bench::EmBenchOptions o;
     bench::SamplingPeersOptions s;
     bool list_views = false, no_peers = false, no_reference = false, peers = false, reference = false;
-    std::string share = "0.1";  // --uniform-fraction: a number or earned
+    std::string share = "earned";  // --uniform-fraction: a number or earned
   };
   const auto args = std::make_shared<Args>();
   em->add_option("--k", args->o.k, "Gaussian components")->capture_default_str();
