@@ -584,8 +584,8 @@ def sampling_peers():
     file's own sampler's, median and largest over the views; the largest weights; the bytes."""
     by = {m: v for m, v in _peers("constant").items() if all("rgl" in x for x in v.values())}
     out = ["| material | file's own sampler: variance per sample, median (largest) | mixture alone / file's, median "
-           "(largest) | mixture + 10% uniform / file's | table CDF / file's | uniform / file's | largest weight / I: "
-           "file's, mixture + 10% uniform | bytes: mixture, file, table |", "|---|---|---|---|---|---|---|---|"]
+           "(largest) | mixture + earned share / file's | table CDF / file's | uniform / file's | largest weight / I: "
+           "file's, mixture + earned share | bytes: mixture, file, table |", "|---|---|---|---|---|---|---|---|"]
     f = lambda x: "%.3g" % x
     for mat in sorted(by):
         views = list(by[mat].values())
@@ -604,11 +604,11 @@ _SKY_SAMPLERS = [("mis_light_rgl", "`mis_light_rgl`: light 50 % + the file's war
                  ("rgl", "`is_rgl`: the file's warps alone"),
                  ("light", "`light`: light sampling alone"),
                  ("mis_light_cdf", "`mis_light_cdf`: light 50 % + table CDF"),
-                 ("mis_light_gmm", "`mis_light_gmm`: light 50 % + mixture 45 % + uniform 5 %"),
+                 ("mis_light_gmm", "`mis_light_gmm`: light 50 % + mixture with earned share"),
                  ("product", "`product`: mixture x lighting mixture"),
                  ("mis_product", "`mis_product`: product + light + uniform"),
                  ("is_mixture", "`is_tab`: the mixture alone"),
-                 ("mis_mixture", "`mis_tab`: mixture + 10 % uniform"),
+                 ("mis_mixture", "`mis_tab`: mixture + earned share"),
                  ("cdf_table", "`cdf_tab`: the table CDF"),
                  ("uniform", "uniform")]
 

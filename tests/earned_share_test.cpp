@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "io/mixture_file.hpp"
@@ -54,10 +55,11 @@ WeightedSlice slice_of(const mix::SliceMixture& truth, double integral) {
   return s;
 }
 
-// The share is the smallest ladder value whose largest weight is no larger than 0.1's.
+// The share is the smallest ladder value whose largest weight is at most kWeightCap or no
+// larger than 0.1's.
 void check_smallest(const WeightedSlice& s, const mix::SliceMixture& m, const EarnedShare& e) {
   const std::vector<double> masses = cell_masses(s, m), uniform = uniform_masses(s, Domain::Hemisphere);
-  const double bound = max_weight(s, masses, uniform, 0.1);
+  const double bound = std::max(max_weight(s, masses, uniform, 0.1), kWeightCap);
   CHECK(e.max_weight == max_weight(s, masses, uniform, e.share));
   CHECK(e.max_weight <= bound);
   for (const double a : kShareLadder)
@@ -97,7 +99,7 @@ TEST_CASE("an exact mixture earns share 0; one missing a lobe earns more", "[fit
   check_smallest(s, one_lobe, missed);
 
   // A mixture a little too narrow (sigma 0.118 for f's 0.12): its tails fall faster than
-  // f's, a share between the ends suffices (0.01 here; 0.1 from sigma 0.114 down).
+  // f's, and leave the far cells unsampled; a share between the ends suffices.
   const mix::SliceMixture narrow = disk_mixture({{0.5, 0.3}, {1.1, -2.0}}, 0.118);
   const EarnedShare tails = earned_share(s, narrow, Domain::Hemisphere);
   INFO("narrow mixture: share " << tails.share << ", largest weight " << tails.max_weight);
@@ -160,4 +162,43 @@ TEST_CASE("Displace blends the shares with the same weights", "[fit]") {
   CHECK(set.defensive(0.3, 0.0) == Approx(0.0375));
   CHECK(set.at(0.3, 0.0).defensive == Approx(0.0375));
   CHECK(set.serving(0.3, 0.0).defensive(0.3, 0.0) == Approx(0.0375));
+}
+
+// Two lobes of width `sigma` over a broad floor (sigma 1) of weight `floor_weight`.
+mix::SliceMixture lobes_on_floor(double sigma, double floor_weight) {
+  std::vector<double> w, mean, cov;
+  const std::vector<std::tuple<double, double, double, double>> parts = {
+      {0.5, 0.3, sigma, 1.0}, {1.1, -2.0, sigma, 1.0}, {0.0, 0.0, 1.0, floor_weight}};
+  for (const auto& [theta, phi, width, weight] : parts) {
+    double x, y;
+    mix::to_map(mix::Map::Disk, theta, phi, x, y);
+    w.push_back(weight);
+    mean.insert(mean.end(), {x, y});
+    cov.insert(cov.end(), {width * width, 0.0, width * width});
+  }
+  mix::SliceMixture m = mix::make_slice_mixture(w, mean, cov);
+  m.map = mix::Map::Disk;
+  return m;
+}
+
+TEST_CASE("a largest weight under kWeightCap needs no share; one above it does", "[fit]") {
+  const WeightedSlice s = slice_of(lobes_on_floor(0.12, 0.2), 3.0);
+  const std::vector<double> uniform = uniform_masses(s, Domain::Hemisphere);
+  // Lobes a little narrow, half the floor: 0.1 would bound the weight lower, but it is
+  // under the cap without a share.
+  const mix::SliceMixture near = lobes_on_floor(0.114, 0.1);
+  const std::vector<double> near_masses = cell_masses(s, near);
+  const double w0 = max_weight(s, near_masses, uniform, 0.0);
+  CHECK(w0 > max_weight(s, near_masses, uniform, 0.1));
+  CHECK(w0 < kWeightCap);
+  const EarnedShare none = earned_share(s, near, Domain::Hemisphere);
+  CHECK(none.share == 0.0);
+  check_smallest(s, near, none);
+  // Lobes far too narrow: above the cap, the share bounds the weight.
+  const mix::SliceMixture narrow = lobes_on_floor(0.1, 0.1);
+  CHECK(max_weight(s, cell_masses(s, narrow), uniform, 0.0) > kWeightCap);
+  const EarnedShare some = earned_share(s, narrow, Domain::Hemisphere);
+  CHECK(some.share > 0.0);
+  CHECK(some.max_weight <= kWeightCap);
+  check_smallest(s, narrow, some);
 }

@@ -31,13 +31,14 @@ std::vector<double> uniform_masses(const WeightedSlice& s, Domain d) {
 
 EarnedShare earned_share(const WeightedSlice& s, const mix::SliceMixture& m, Domain d) {
   const std::vector<double> masses = cell_masses(s, m), uniform = uniform_masses(s, d);
-  const double bound = max_weight(s, masses, uniform, kShareLadder.back());
-  if (!std::isfinite(bound)) return {kShareLadder.back(), bound};  // even 0.1 leaves a cell unsampled
+  const double fixed = max_weight(s, masses, uniform, kShareLadder.back());
+  if (!std::isfinite(fixed)) return {kShareLadder.back(), fixed};  // even 0.1 leaves a cell unsampled
+  const double bound = std::max(fixed, kWeightCap);
   for (const double a : kShareLadder) {
     const double w = max_weight(s, masses, uniform, a);
     if (w <= bound) return {a, w};
   }
-  return {kShareLadder.back(), bound};
+  return {kShareLadder.back(), fixed};
 }
 
 }  // namespace bsdfmix

@@ -1,6 +1,6 @@
 // The uniform share each fitted slice earns (docs/sampling.md, "The earned share"): the
 // smallest share on a ladder whose largest importance weight on the table's own cells is
-// no larger than with the fixed share 0.1.
+// at most kWeightCap times the integral, or no larger than with the fixed share 0.1.
 #pragma once
 
 #include <array>
@@ -13,8 +13,12 @@ namespace bsdfmix {
 // The shares tried, smallest first; the last is the fixed share of files before it.
 constexpr std::array<double, 7> kShareLadder = {0.0, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1};
 
+// The largest weight over the integral a slice may take without the share's help: the
+// variance per sample is then below (kWeightCap - 1) I^2.
+constexpr double kWeightCap = 3.0;
+
 struct EarnedShare {
-  double share = 0.1;       // the smallest ladder share a with W(a) <= W(0.1)
+  double share = 0.1;       // the smallest ladder share a with W(a) <= max(kWeightCap, W(0.1))
   double max_weight = 0.0;  // W(share)
 };
 
