@@ -25,7 +25,7 @@ run: the rivals by a vectorised numpy evaluation, the mixture by the header's `e
 Python module, one point at a time, as a renderer calls it); the relative variance per sample of importance sampling
 the luminance integral under constant light (median and p90 over the slices) where the
 representation samples (and the largest share of the integral it never samples), and the same
-with 10% of the samples uniform in solid angle (the project's `mis_tab`); the
+with 10% of the samples uniform in solid angle (`mis_tab` at `uniform_fraction: 0.1`); the
 configuration; the table's largest mirror asymmetry in phi_i (the share of a slice's RGB L1
 between f(phi) and f(-phi), which the rivals take as 0); the machine and the command.
 
@@ -367,7 +367,7 @@ def main():
                     keep_rgb = rgb_full
                 if rep in ("mixture", "table", "sh"):
                     rv, missed = cm.sampling_variance(table, p)
-                    # with 10% uniform samples in solid angle, as the project's mis_tab draws them
+                    # with 10% uniform samples in solid angle, as mis_tab draws them at uniform_fraction 0.1
                     uni = table.solid_theta[:, None] * table.dph * np.ones(len(table.phi_i))[None]
                     rv10, _ = cm.sampling_variance(table, 0.9 * p + 0.1 * (uni / uni.sum())[None])
                     row.update(relvar_median=cm.quantile(rv, 0.5), relvar_p90=cm.quantile(rv, 0.9),

@@ -115,23 +115,27 @@ def constant():
 
 
 def peers():
-    """Per material: the mixture's variance per sample over the RGL file's own sampler's, median over the views."""
+    """Per material: the mixture's variance per sample over the RGL file's own sampler's, alone and with its
+    earned uniform share (mis_tab), median over the views."""
     by = {}
     for r in rows("sampling_peers.csv"):  # the RGL materials under constant light
         if r.get("lighting", "constant") == "constant":
             by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
     by = {m: v for m, v in by.items() if all("rgl" in x for x in v.values())}
-    ratio = {}
-    for mat, views in by.items():
-        x = sorted(float(v["is_mixture"]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
-        ratio[mat] = x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
+    def median_over_rgl(views, sampler):
+        x = sorted(float(v[sampler]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
+        return x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
+    ratio = {mat: median_over_rgl(views, "is_mixture") for mat, views in by.items()}
+    with_share = {mat: median_over_rgl(views, "mis_mixture") for mat, views in by.items()}
     short = lambda m: m.split("_")[1] if m.startswith("c") and m.count("_") >= 1 else m.split("_")[0]
     # the grids that resolve the lobe, fitted to 2 % L1 (bench/results/rgl_resolve.csv, a few views)
     fine = {r["material"]: r for r in rows("rgl_resolve.csv") if r["grid"] == "resolved_t2" and r["is_mixture_over_rgl_median"]}
     resolved = ("; resolved grids, 2%% L1 fits: %s" % ", ".join(
         "%s %sx" % (short(m), times(float(fine[m]["is_mixture_over_rgl_median"]))) for m in sorted(fine))) if fine else ""
-    return ("| Against an RGL file's own sampler | Mixture's variance over the file's sampler's: %s%s | %s |" % (
-                ", ".join("%s %sx" % (short(m), times(ratio[m])) for m in sorted(ratio, key=lambda m: ratio[m])),
+    return ("| Against an RGL file's own sampler | Variance over the file's sampler's, mixture alone / `mis_tab`: "
+            "%s%s | %s |" % (
+                ", ".join("%s %sx / %sx" % (short(m), times(ratio[m]), times(with_share[m]))
+                          for m in sorted(ratio, key=lambda m: ratio[m])),
                 resolved,
                 link("sampling.md", "Against the file's own sampler", "sampling_peers.csv") +
                 ", [CSV](bench/results/rgl_resolve.csv)"))
