@@ -297,7 +297,8 @@ struct SliceMixture {
   double scale = 0;  // the luminance stand-in's amplitude: scale * pdf_param is the integrand
   // The uniform share a sampler mixes in with this mixture (the file's `defensive`; 0.1 in
   // files without it): the smallest share whose largest importance weight on the table is
-  // no larger than with 0.1 (docs/sampling.md, "The earned share").
+  // at most 3 times the integral, or no larger than with 0.1 (docs/sampling.md, "The earned
+  // share").
   double defensive = 0.1;
   bool has_rgb = false;  // the components' rgb amplitudes are set (else the colour is grey: eval_f)
   Map map = Map::ThetaPhi;  // the plane of the components (MixtureSet::prepare sets the file's)
