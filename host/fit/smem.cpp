@@ -173,6 +173,8 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
       if (!(w[i] > 0)) continue;
       active.clear();
       ract.clear();
+      double x, y;  // the cell's point, for every component
+      cell_point(grid, i, x, y);
       for (int j = 0; j < k; ++j) {
         const double r = resp[i * k + j];
         if (!(r > 0) || !(mass[j] > 0)) continue;
@@ -180,8 +182,6 @@ ComponentScores score_components(const SliceGrid& grid, const std::vector<double
         const double logp = logn[i * k + j] - zmax[j] - log_zsum[j];
         kl[j] += f_of[(i - i0) * K + std::size_t(j)] * (logf - logp);
         self[j] += w[i] * r * r;
-        double x, y;
-        cell_point(grid, i, x, y);
         const double dt = x - gmm.mean[2 * j], dp = wrap_diff(y - gmm.mean[2 * j + 1]);
         for (int q = 0; q < 2; ++q) {
           const double u = ax[2 * j + q] * dt + ay[2 * j + q] * dp, u2 = u * u;

@@ -34,11 +34,11 @@ EarnedShare earned_share(const WeightedSlice& s, const mix::SliceMixture& m, Dom
   const double fixed = max_weight(s, masses, uniform, kShareLadder.back());
   if (!std::isfinite(fixed)) return {kShareLadder.back(), fixed};  // even 0.1 leaves a cell unsampled
   const double bound = std::max(fixed, kWeightCap);
-  for (const double a : kShareLadder) {
-    const double w = max_weight(s, masses, uniform, a);
-    if (w <= bound) return {a, w};
+  for (std::size_t i = 0; i + 1 < kShareLadder.size(); ++i) {
+    const double w = max_weight(s, masses, uniform, kShareLadder[i]);
+    if (w <= bound) return {kShareLadder[i], w};
   }
-  return {kShareLadder.back(), fixed};
+  return {kShareLadder.back(), fixed};  // 0.1 itself: W(0.1) <= bound, taken once above
 }
 
 }  // namespace bsdfmix
