@@ -37,6 +37,7 @@ fit:
   iterations: 8
   final_iterations: 8
   refine_evaluations: 4
+  batch: 1  # two batches: PoCL fits them side by side, oclgrind one at a time
 converge:
   theta_o: [0.5]
   samples_max: 64

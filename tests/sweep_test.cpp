@@ -435,6 +435,53 @@ TEST_CASE("an interrupted sweep resumes to the same file", "[fit][crash]") {
   }
 }
 
+TEST_CASE("batches fitted side by side give the file one lane gives; a lane's error stops the sweep", "[fit][crash]") {
+  Progress::set_enabled(false);
+  const std::string table = mixture_table("lanes.h5", 9, 30, 60, [](std::size_t t) -> std::vector<Lobe> {
+    return {{0.7, -0.3 + 0.05 * double(t), -0.5, 0.03, 0.0, 0.06}, {0.3, 0.6, 1.0 - 0.1 * double(t), 0.02, 0.005, 0.05}};
+  });
+  std::map<unsigned, MixtureFile> files;
+  std::map<unsigned, std::string> reports;
+  for (const unsigned lanes : {1u, 2u, 3u}) {
+    FitSettings f = fit_settings("lanes" + std::to_string(lanes));
+    f.batch = 2;  // 5 batches: every lane takes several, and they finish out of order
+    f.k_max = 4;
+    fs::remove_all(f.output + ".parts");
+    SweepOptions o;
+    o.lanes = lanes;
+    CHECK(run_sweep(table, f, "", o).slices == 9);
+    files.emplace(lanes, read_mixture_file(f.output));
+    reports.emplace(lanes, slurp(f.report));
+  }
+  for (const unsigned lanes : {2u, 3u}) {
+    INFO(lanes << " lanes");
+    const MixtureFile& a = files.at(1);
+    const MixtureFile& b = files.at(lanes);
+    CHECK(a.k == b.k);
+    CHECK(a.weights == b.weights);
+    CHECK(a.means == b.means);
+    CHECK(a.covariances == b.covariances);
+    CHECK(a.l1_rel == b.l1_rel);
+    CHECK(without_column(reports.at(1), 7) == without_column(reports.at(lanes), 7));
+  }
+
+  // A NaN in the last slice: its lane throws, the others stop, and the error reaches the
+  // caller with the cell named; no final file is written.
+  TableMeta meta = make_grid(Domain::Fiber, 6, 1, 10, 20, true);
+  std::vector<float> v(meta.n_slices() * meta.cells_per_slice(), 1.0f);
+  v[5 * 200 + 3] = std::numeric_limits<float>::quiet_NaN();
+  const std::string bad = (temp_dir() / "lanes_nan.h5").string();
+  write_table(bad, meta, v);
+  FitSettings f = fit_settings("lanes_nan");
+  f.batch = 1;
+  fs::remove_all(f.output + ".parts");
+  SweepOptions o;
+  o.lanes = 2;
+  CHECK_THROWS_WITH(run_sweep(bad, f, "", o), Catch::Contains("cell (theta_i 0, phi_i 3): NaN"));
+  CHECK_FALSE(fs::exists(f.output));
+  fs::remove_all(f.output + ".parts");
+}
+
 namespace {
 
 // Slices held in memory: the integrand weights of a table's slices, read once.

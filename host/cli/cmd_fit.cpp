@@ -15,6 +15,7 @@ void add_fit(CLI::App& app, Common& common) {
   struct Args {  // the options, kept alive by the callback
     std::string file;
     std::size_t max_batches = SIZE_MAX;
+    unsigned lanes = kDefaultLanes;
   };
   const auto args = std::make_shared<Args>();
   auto* sub = add_config_command(app, common, "fit",
@@ -24,6 +25,12 @@ void add_fit(CLI::App& app, Common& common) {
   sub->add_option("--max-batches", args->max_batches,
                   "commit at most this many batches, then stop (a later run resumes; default: no limit)")
       ->default_str("");
+  sub->add_option("--lanes", args->lanes,
+                  "batches fitted side by side, each with its own engine on the same devices: two keep "
+                  "the cores busy through a batch's host steps; 1 fits one batch at a time. The "
+                  "mixtures do not depend on it")
+      ->check(CLI::Range(1u, 16u))
+      ->capture_default_str();
   sub->callback([args, &common] {
     Progress::set_enabled(!common.quiet);
     const RunEnvironment env = run_environment();
@@ -36,7 +43,7 @@ void add_fit(CLI::App& app, Common& common) {
       return mpi.serve({{c.table, *c.fit, !remade && exists_quiet(c.table)}}, dev, env.engine);
     }
     stage_table(c, dev);
-    stage_fit(c, dev, SweepOptions{args->max_batches, mpi.batch_farm(), env.engine});
+    stage_fit(c, dev, SweepOptions{args->max_batches, mpi.batch_farm(), env.engine, args->lanes});
   });
 }
 

@@ -22,6 +22,9 @@ struct DeviceInfo {
   std::size_t max_work_group = 0;
   bool fp64 = false;
   bool is_cpu() const { return type == "cpu"; }
+  // Whether the implementation takes calls from several host threads at once, as OpenCL
+  // requires: oclgrind (21.10) crashes when two threads run kernels.
+  bool concurrent_host_threads() const { return platform.find("Oclgrind") == std::string::npos; }
   std::string label() const;  // "name [platform]"
 };
 

@@ -15,6 +15,7 @@
 #include "fit/em.hpp"
 #include "io/table.hpp"
 #include "sweep/batch_fitter.hpp"
+#include "sweep/batch_lanes.hpp"
 #include "sweep/checkpoint.hpp"
 #include "sweep/criterion.hpp"
 #include "sweep/slice_plan.hpp"
@@ -102,7 +103,10 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
     committed += part.slice_index.size();
     progress.advance(part.slice_index.size());
   };
+  const unsigned lanes = usable_lanes(options.lanes, devices);
   if (options.farm) options.farm->run(batches, fit_here, commit);
+  else if (lanes > 1 && batches.size() > 1)
+    BatchLanes(source, fit, devices, options.engine, device_names, lanes).run(batches, commit);
   else for (const auto& b : batches) commit(fit_here(b));
   if (stops) {
     SweepSummary partial;

@@ -59,6 +59,11 @@ class BatchFarm {
                    const std::function<void(BatchPart&&)>& commit) = 0;
 };
 
+// Batches in flight by default (sweep/batch_lanes.hpp): two keep the cores busy through
+// a batch's host steps; more add memory (one batch each) and no speed. One on a device
+// that takes one host thread at a time (DeviceInfo::concurrent_host_threads).
+constexpr unsigned kDefaultLanes = 2;
+
 // How run_sweep runs, beside the fit settings: where it stops, where its batches are
 // fitted, and how its engine runs (the fingerprint records the precision in force).
 struct SweepOptions {
@@ -67,6 +72,9 @@ struct SweepOptions {
   std::size_t max_batches = SIZE_MAX;
   BatchFarm* farm = nullptr;  // not owned; nullptr: every batch fitted here
   EngineOptions engine;       // the EM engine's precision and log
+  // Batches fitted side by side here (sweep/batch_lanes.hpp) when there is no farm: the
+  // result does not depend on it.
+  unsigned lanes = kDefaultLanes;
 };
 
 // Fits the slices `fit` asks for.
