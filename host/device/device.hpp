@@ -23,7 +23,7 @@ struct DeviceInfo {
   bool fp64 = false;
   bool is_cpu() const { return type == "cpu"; }
   // Whether the implementation takes calls from several host threads at once, as OpenCL
-  // requires: oclgrind (21.10) crashes when two threads run kernels.
+  // requires: oclgrind (21.10) crashes when two threads run kernels (jrprice/Oclgrind#28).
   bool concurrent_host_threads() const { return platform.find("Oclgrind") == std::string::npos; }
   std::string label() const;  // "name [platform]"
 };

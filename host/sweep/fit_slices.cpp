@@ -15,6 +15,7 @@
 #include "core/output_lock.hpp"
 #include "core/progress.hpp"
 #include "sweep/batch_fitter.hpp"
+#include "sweep/batch_lanes.hpp"
 #include "sweep/sweep.hpp"
 #include "sweep/sweep_outputs.hpp"
 
@@ -37,14 +38,27 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
     if (i > 0 && !(slices[i - 1].index < r.index))
       throw Error(what + ": the slices to fit must be sorted by index, without repeats");
   }
-  EmEngine engine(devices, 1, engine_options);
-  BatchFitter fitter(source, fit, engine, joined_names(devices));
+  const std::vector<std::vector<SliceRef>> batches =
+      split_batches(slices, batch_size(slices.size(), fit, meta.cells_per_slice()));
   SweepResult result = empty_result(meta, fit);
   Progress progress(what, slices.size(), "slices");
-  for (const std::vector<SliceRef>& batch : split_batches(slices, batch_size(slices.size(), fit, meta.cells_per_slice()))) {
-    append_part(result, fitter.fit(batch));
-    progress.advance(batch.size());
+  std::vector<BatchPart> parts;
+  const auto keep = [&](BatchPart&& part) {
+    progress.advance(part.slice_index.size());
+    parts.push_back(std::move(part));
+  };
+  const unsigned lanes = usable_lanes(kDefaultLanes, devices);
+  if (lanes > 1 && batches.size() > 1) {
+    BatchLanes(source, fit, devices, engine_options, joined_names(devices), lanes).run(batches, keep);
+  } else {
+    EmEngine engine(devices, 1, engine_options);
+    BatchFitter fitter(source, fit, engine, joined_names(devices));
+    for (const std::vector<SliceRef>& batch : batches) keep(fitter.fit(batch));
   }
+  // Parts come in the order they finish; the result is in slice order.
+  std::sort(parts.begin(), parts.end(),
+            [](const BatchPart& a, const BatchPart& b) { return a.slice_index.front() < b.slice_index.front(); });
+  for (const BatchPart& part : parts) append_part(result, part);
   progress.finish();
   return result;
 }
