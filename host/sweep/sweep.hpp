@@ -60,8 +60,9 @@ class BatchFarm {
 };
 
 // Batches in flight by default (sweep/batch_lanes.hpp): two keep the cores busy through
-// a batch's host steps; more add memory (one batch each) and no speed. One on a device
-// that takes one host thread at a time (DeviceInfo::concurrent_host_threads).
+// a batch's host steps; more add memory (one batch each) and little speed (three: 0.97x
+// two's wall time on a satin fit on 2 cores). One on a device that takes one host
+// thread at a time (DeviceInfo::concurrent_host_threads).
 constexpr unsigned kDefaultLanes = 2;
 
 // How run_sweep runs, beside the fit settings: where it stops, where its batches are
