@@ -123,8 +123,7 @@ def peers():
             by.setdefault(r["material"], {}).setdefault(r["theta_o_deg"], {})[r["sampler"]] = r
     by = {m: v for m, v in by.items() if all("rgl" in x for x in v.values())}
     def median_over_rgl(views, sampler):
-        x = sorted(float(v[sampler]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
-        return x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
+        return statistics.median(float(v[sampler]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
     ratio = {mat: median_over_rgl(views, "is_mixture") for mat, views in by.items()}
     with_share = {mat: median_over_rgl(views, "mis_mixture") for mat, views in by.items()}
     short = lambda m: m.split("_")[1] if m.startswith("c") and m.count("_") >= 1 else m.split("_")[0]

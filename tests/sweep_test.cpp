@@ -109,6 +109,17 @@ FitSettings fit_settings(const std::string& stem) {
   return f;
 }
 
+// A fiber table of `slices` slices of 10 x 20 cells, all 1 but for a NaN at cell `cell`
+// (theta_i 0, phi_i `cell`) of slice `slice`.
+std::string nan_table(const std::string& name, std::size_t slices, std::size_t slice, std::size_t cell) {
+  const TableMeta meta = make_grid(Domain::Fiber, slices, 1, 10, 20, true);
+  std::vector<float> v(meta.n_slices() * meta.cells_per_slice(), 1.0f);
+  v[slice * meta.cells_per_slice() + cell] = std::numeric_limits<float>::quiet_NaN();
+  const std::string path = (temp_dir() / name).string();
+  write_table(path, meta, v);
+  return path;
+}
+
 std::string slurp(const std::string& p) {
   std::ifstream f(p);
   return std::string((std::istreambuf_iterator<char>(f)), {});
@@ -164,11 +175,7 @@ TEST_CASE("the L1 error integrates narrow components over their cells", "[fit][e
 
 TEST_CASE("a sweep that fails on a bad cell leaves no output and no checkpoint", "[fit][crash]") {
   Progress::set_enabled(false);
-  TableMeta meta = make_grid(Domain::Fiber, 3, 1, 10, 20, true);
-  std::vector<float> v(meta.n_slices() * meta.cells_per_slice(), 1.0f);
-  v[2 * 200 + 7] = std::numeric_limits<float>::quiet_NaN();
-  const std::string table = (temp_dir() / "nan_cell.h5").string();
-  write_table(table, meta, v);
+  const std::string table = nan_table("nan_cell.h5", 3, 2, 7);
   FitSettings f = fit_settings("nan_cell");
   f.batch = 8;  // one batch: the failure comes before any commit
   fs::remove_all(f.output + ".parts");
@@ -467,11 +474,7 @@ TEST_CASE("batches fitted side by side give the file one lane gives; a lane's er
 
   // A NaN in the last slice: its lane throws, the others stop, and the error reaches the
   // caller with the cell named; no final file is written.
-  TableMeta meta = make_grid(Domain::Fiber, 6, 1, 10, 20, true);
-  std::vector<float> v(meta.n_slices() * meta.cells_per_slice(), 1.0f);
-  v[5 * 200 + 3] = std::numeric_limits<float>::quiet_NaN();
-  const std::string bad = (temp_dir() / "lanes_nan.h5").string();
-  write_table(bad, meta, v);
+  const std::string bad = nan_table("lanes_nan.h5", 6, 5, 3);
   FitSettings f = fit_settings("lanes_nan");
   f.batch = 1;
   fs::remove_all(f.output + ".parts");

@@ -1,7 +1,8 @@
-// Batches fitted side by side: one thread per lane, each with its engine and fitter;
-// the calling thread commits what they finish.
+// Batches fitted side by side: one thread per lane (one lane: the calling thread), each
+// with its engine and fitter; the calling thread commits what they finish.
 #include "sweep/batch_lanes.hpp"
 
+#include <algorithm>
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -42,12 +43,29 @@ struct Lane {
   BatchFitter fitter;
 };
 
+// The lanes a run can use of the `requested`: 1 where a device takes one host thread at
+// a time (said on the log), else `requested`.
+unsigned usable_lanes(unsigned requested, const std::vector<Device>& devices) {
+  if (requested <= 1) return 1;
+  for (const Device& d : devices)
+    if (!d.info().concurrent_host_threads()) {
+      log_line(d.info().label() + " takes one host thread at a time: fitting one batch at a time");
+      return 1;
+    }
+  return requested;
+}
+
 }  // namespace
 
 struct BatchLanes::Impl {
+  const FitSettings& fit;
+  const std::vector<Device>& devices;
+  const EngineOptions options;
+  const std::string names;
+  const unsigned usable;
+
   std::mutex file;  // the table's reads and the commits
   LockedSource source;
-  std::vector<std::unique_ptr<Lane>> lanes;
 
   std::mutex mutex;  // what follows
   std::condition_variable changed;
@@ -55,12 +73,12 @@ struct BatchLanes::Impl {
   std::deque<BatchPart> done;
   std::exception_ptr error;
 
-  Impl(const SliceSource& s, const FitSettings& fit, const std::vector<Device>& devices, const EngineOptions& options,
-       const std::string& names, unsigned n)
-      : source(s, file) {
-    for (unsigned i = 0; i < std::max(1u, n); ++i)
-      lanes.push_back(std::make_unique<Lane>(source, fit, devices, options, names));
-  }
+  Impl(const SliceSource& s, const FitSettings& fit_, const std::vector<Device>& devices_,
+       const EngineOptions& options_, const std::string& names_, unsigned requested)
+      : fit(fit_), devices(devices_), options(options_), names(names_), usable(usable_lanes(requested, devices_)),
+        source(s, file) {}
+
+  std::unique_ptr<Lane> lane() { return std::make_unique<Lane>(source, fit, devices, options, names); }
 
   void work(Lane& lane, const std::vector<std::vector<SliceRef>>& batches) {
     for (;;) {
@@ -86,16 +104,6 @@ struct BatchLanes::Impl {
   }
 };
 
-unsigned usable_lanes(unsigned requested, const std::vector<Device>& devices) {
-  if (requested <= 1) return 1;
-  for (const Device& d : devices)
-    if (!d.info().concurrent_host_threads()) {
-      log_line(d.info().label() + " takes one host thread at a time: fitting one batch at a time");
-      return 1;
-    }
-  return requested;
-}
-
 BatchLanes::BatchLanes(const SliceSource& source, const FitSettings& fit, const std::vector<Device>& devices,
                        const EngineOptions& engine, const std::string& device_names, unsigned lanes)
     : impl_(std::make_unique<Impl>(source, fit, devices, engine, device_names, lanes)) {}
@@ -105,11 +113,19 @@ BatchLanes::~BatchLanes() = default;
 void BatchLanes::run(const std::vector<std::vector<SliceRef>>& batches,
                      const std::function<void(BatchPart&&)>& commit) {
   Impl& m = *impl_;
+  const std::size_t n = std::min<std::size_t>(m.usable, batches.size());
+  if (n <= 1) {  // one lane: on this thread, in order
+    const std::unique_ptr<Lane> lane = m.lane();
+    for (const auto& b : batches) commit(lane->fitter.fit(b));
+    return;
+  }
+  std::vector<std::unique_ptr<Lane>> lanes;
+  for (std::size_t i = 0; i < n; ++i) lanes.push_back(m.lane());
   m.next = 0;
   m.error = nullptr;
-  m.running = m.lanes.size();
+  m.running = n;
   std::vector<std::thread> threads;
-  for (auto& lane : m.lanes) threads.emplace_back([&m, &lane, &batches] { m.work(*lane, batches); });
+  for (auto& lane : lanes) threads.emplace_back([&m, &lane, &batches] { m.work(*lane, batches); });
   std::unique_lock<std::mutex> lock(m.mutex);
   for (;;) {
     m.changed.wait(lock, [&] { return !m.done.empty() || m.running == 0; });

@@ -22,19 +22,18 @@
 
 namespace bsdfmix {
 
-// The lanes a sweep can run of the `requested`: 1 where a device takes one host thread
-// at a time (said once on the log), else `requested`.
-unsigned usable_lanes(unsigned requested, const std::vector<Device>& devices);
-
 class BatchLanes {
  public:
-  // `source`, `fit` and `devices` must outlive the lanes.
+  // `source`, `fit` and `devices` must outlive the lanes. `lanes` is lowered to 1 where a
+  // device takes one host thread at a time (DeviceInfo::concurrent_host_threads; said
+  // on the log).
   BatchLanes(const SliceSource& source, const FitSettings& fit, const std::vector<Device>& devices,
              const EngineOptions& engine, const std::string& device_names, unsigned lanes);
   ~BatchLanes();
 
   // Fits every batch, `lanes` at a time, and calls `commit` once per batch on the
-  // calling thread, in the order they finish. The table's reads and `commit` never run
+  // calling thread, in the order they finish. With one lane (or one batch) the batches
+  // are fitted on the calling thread, in order. The table's reads and `commit` never run
   // at the same time (HDF5 is not thread-safe). The first error stops the lanes and
   // is thrown here once they have stopped; what was committed stays committed.
   void run(const std::vector<std::vector<SliceRef>>& batches, const std::function<void(BatchPart&&)>& commit);

@@ -47,14 +47,7 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
     progress.advance(part.slice_index.size());
     parts.push_back(std::move(part));
   };
-  const unsigned lanes = usable_lanes(kDefaultLanes, devices);
-  if (lanes > 1 && batches.size() > 1) {
-    BatchLanes(source, fit, devices, engine_options, joined_names(devices), lanes).run(batches, keep);
-  } else {
-    EmEngine engine(devices, 1, engine_options);
-    BatchFitter fitter(source, fit, engine, joined_names(devices));
-    for (const std::vector<SliceRef>& batch : batches) keep(fitter.fit(batch));
-  }
+  BatchLanes(source, fit, devices, engine_options, joined_names(devices), kDefaultLanes).run(batches, keep);
   // Parts come in the order they finish; the result is in slice order.
   std::sort(parts.begin(), parts.end(),
             [](const BatchPart& a, const BatchPart& b) { return a.slice_index.front() < b.slice_index.front(); });

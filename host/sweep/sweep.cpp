@@ -93,21 +93,20 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   Progress progress("fit " + table_path + (resumed ? " (" + std::to_string(resumed) + " resumed)" : ""),
                     plan.size() - resumed, "slices");
 
-  BatchFitter fitter(source, fit, engine, device_names);
   std::size_t committed = resumed;
   const bool stops = options.max_batches < batches.size();
   if (stops) batches.resize(options.max_batches);
-  const auto fit_here = [&](const std::vector<SliceRef>& b) { return fitter.fit(b); };
   const auto commit = [&](BatchPart&& part) {
     checkpoint.commit(part);
     committed += part.slice_index.size();
     progress.advance(part.slice_index.size());
   };
-  const unsigned lanes = usable_lanes(options.lanes, devices);
-  if (options.farm) options.farm->run(batches, fit_here, commit);
-  else if (lanes > 1 && batches.size() > 1)
-    BatchLanes(source, fit, devices, options.engine, device_names, lanes).run(batches, commit);
-  else for (const auto& b : batches) commit(fit_here(b));
+  if (options.farm) {
+    BatchFitter fitter(source, fit, engine, device_names);
+    options.farm->run(batches, [&](const std::vector<SliceRef>& b) { return fitter.fit(b); }, commit);
+  } else {
+    BatchLanes(source, fit, devices, options.engine, device_names, options.lanes).run(batches, commit);
+  }
   if (stops) {
     SweepSummary partial;
     partial.complete = false;
