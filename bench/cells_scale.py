@@ -15,8 +15,10 @@ the cells fitted (`cells_fitted`), and its peak memory leaves out the final asse
     /usr/bin/python3 bench/cells_scale.py [--work out/cells_scale] [--runs 3] [--before /work/baseline/bsdfmix] \\
         [--before-sizes 1e7,1e8] [--sizes 1e7,1e8,full_4d,1e9] [--partial 1e9:40] \\
         [--csv bench/results/cells_scale.csv] [--png docs/images/cells_scale.png]
+    /usr/bin/python3 bench/cells_scale.py --chart-only   # redraw the PNG from the CSV
 """
 import argparse
+import csv
 import json
 import os
 import shutil
@@ -86,9 +88,11 @@ def chart(rows, png):
         rs = [r for r in rows if r["build"] == build]
         x = [int(r["cells"]) for r in rs]
         c = colour.get(build)
-        a.plot(x, [float(r["ns_per_cell"]) for r in rs], "o-", color=c, label=build + ": wall")
-        a.plot(x, [float(r["cpu_ns_per_cell"]) for r in rs], "s--", color=c, label=build + ": CPU")
-        b.plot(x, [float(r["peak_rss_mib"]) / 1024 for r in rs], "o-", color=c, label=build)
+        # the other build's points hollow and larger: they stay visible where they fall on this build's
+        style = dict(color=c) if build == "this" else dict(color=c, markerfacecolor="none", markersize=9, zorder=3)
+        a.plot(x, [float(r["ns_per_cell"]) for r in rs], "o-", label=build + ": wall", **style)
+        a.plot(x, [float(r["cpu_ns_per_cell"]) for r in rs], "s--", label=build + ": CPU", **style)
+        b.plot(x, [float(r["peak_rss_mib"]) / 1024 for r in rs], "o-", label=build, **style)
     a.set_ylabel("fit time per cell (ns)")
     a.set_title("wall and CPU time per cell", fontsize=9)
     b.set_ylabel("peak resident memory (GiB)")
@@ -97,6 +101,7 @@ def chart(rows, png):
         ax.set_xlabel("table cells")
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
+    a.set_ylim(top=1.12 * max(float(r[k]) for r in rows for k in ("ns_per_cell", "cpu_ns_per_cell")))  # no marker cut
     b.axhline(3, color="grey", ls=":", lw=1, label="3 GiB")
     b.set_ylim(top=3.3)
     a.legend(fontsize=8)
@@ -116,7 +121,13 @@ def main():
     ap.add_argument("--partial", default="", help="NAME:BATCHES,...: rows fitted part way")
     ap.add_argument("--csv", default=os.path.join(ROOT, "bench", "results", "cells_scale.csv"))
     ap.add_argument("--png", default=os.path.join(ROOT, "docs", "images", "cells_scale.png"))
+    ap.add_argument("--chart-only", action="store_true", help="redraw --png from the rows in --csv, fitting nothing")
     a = ap.parse_args()
+    if a.chart_only:
+        with open(a.csv) as f:
+            chart(list(csv.DictReader(f)), a.png)
+        print("wrote", a.png)
+        return
     os.makedirs(a.work, exist_ok=True)
     builds = [("this", BIN)] + ([("before", a.before)] if a.before else [])
     partial = {p.split(":")[0]: int(p.split(":")[1]) for p in a.partial.split(",") if p}
