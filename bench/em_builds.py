@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """EM throughput of this build beside another (BEFORE), on one device, in one run:
 `bsdfmix bench em` at each K, the two builds alternating round by round, each row the best
-(lowest) seconds per iteration of its runs.
+(lowest) marginal seconds per iteration of its runs (bench/em_row.py).
 
     /usr/bin/python3 bench/em_builds.py --before OTHER/bsdfmix [--k 8,16,50] [--runs 5]
                                         [--device 0] [--csv bench/results/em_builds.csv]
@@ -9,21 +9,15 @@
 import argparse
 import csv
 import os
-import subprocess
-import sys
 import tempfile
+
+import em_row
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def one(exe, k, device, path):
-    cmd = [exe, "bench", "em", "--k", str(k), "--repeat", "1", "--no-peers", "--no-reference", "--device", device,
-           "--csv", path, "-q"]
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit("failed: %s\n%s%s" % (" ".join(cmd), r.stdout, r.stderr))
-    row = next(x for x in csv.DictReader(open(path)) if x["impl"].startswith("bsdfmix"))
-    return row
+    return em_row.bench_em(exe, k, path, extra=("--device", device))
 
 
 def main():

@@ -6,7 +6,7 @@
                                        [--rounds 5] [--csv bench/results/em_speed.csv]
 
 EM: `bsdfmix bench em` at each K (64 slices of 90 x 180, 20 iterations, no peers, no
-reference): the seconds per iteration, and the percentage of the measured FMA peak: each
+reference): the marginal seconds per iteration (bench/em_row.py), and the percentage of the measured FMA peak: each
 build's best GFLOP/s (each counts the flops per update of its own kernel) over the best
 peak of its rounds. L1: `bsdfmix fit`
 of the 90 slices of data/silk_small.h5 (K up to 16, rgb) with `refine: l1` and with
@@ -20,6 +20,7 @@ import os
 import sys
 import tempfile
 
+import em_row
 import machine
 import study_io
 
@@ -41,8 +42,7 @@ def run(cmd, cwd=None):
 
 
 def bench_em(exe, k, path):
-    run([exe, "bench", "em", "--k", str(k), "--repeat", "1", "--no-peers", "--no-reference", "-q", "--csv", path])
-    row = next(r for r in study_io.rows(path) if r["impl"].startswith("bsdfmix"))
+    row = em_row.bench_em(exe, k, path)
     return (float(row["seconds_per_iteration"]), float(row["gflops"] or "nan"),
             float(row["fma_peak_gflops"] or "nan"))
 

@@ -5,7 +5,7 @@ path vertex, rounds alternating old and new, each row keeping its best run.
     bench/house_speed.py --old OLD/bsdfmix --new build/bsdfmix [--rounds 5] [--csv FILE]
 
 EM: `bsdfmix bench em` at K 8 and 16 (64 slices of 90 x 180, 20 iterations, no peers, no
-reference): updates per second. Render: a 96 x 96 silk cloth under the sky at 8 samples
+reference): updates per second at the marginal cost of an iteration (bench/em_row.py). Render: a 96 x 96 silk cloth under the sky at 8 samples
 per pixel on one thread, every estimator's equal-sample ns per vertex from render.csv
 (the fit and the converged image are made in the first round and reused after). The CSV has one row a
 measurement: what, old, new and new / old (above 1: the new build is faster for EM,
@@ -13,12 +13,13 @@ slower for ns per vertex), with the machine's CPU.
 """
 import argparse
 import csv
-import os
 import pathlib
 import platform
 import subprocess
 import sys
 import tempfile
+
+import em_row
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -56,14 +57,7 @@ def cpu_model():
 
 
 def em_rate(binary, k, where):
-    out = where / f"em_k{k}.csv"
-    subprocess.run([binary, "bench", "em", "--k", str(k), "--csv", str(out), "--repeat", "1", "--no-peers",
-                    "--no-reference", "--quiet"], check=True, capture_output=True)
-    with open(out) as f:
-        for row in csv.DictReader(f):
-            if row["impl"].startswith("bsdfmix"):
-                return float(row["pc_per_s"])
-    sys.exit(f"house_speed: no bsdfmix row in {out}")
+    return float(em_row.bench_em(str(binary), k, str(where / f"em_k{k}.csv"))["pc_per_s"])
 
 
 def render_ns(binary, where):

@@ -19,7 +19,10 @@ def profile(txt):
         return None
     m = re.search(r"host init ([\d.]+) s, iterations ([\d.]+) s over (\d+) batch\(es\), "
                   r"final log-likelihood and read-back ([\d.]+) s", text)
-    return m.groups() if m else None
+    if not m:
+        return None
+    setup = re.search(r"batch setup \(not in s/iteration\) ([\d.]+) s", text)
+    return m.groups() + ((setup.group(1),) if setup else (None,))
 
 
 # The ceiling of the percentage by the kernel's flops per update (bench/README.md): the flops over
@@ -53,7 +56,8 @@ def results(machine):
     named = [("the faster Armadillo build", arma), ("pomegranate", "pomegranate"),
              ("scikit-learn", "scikit-learn"), ("its own one-thread CPU reference", "cpu_reference")]
     named = [(w, i) for w, i in named if i in by]
-    lines = ["Machine (CSV columns): `%s`, %s logical CPUs, OpenCL device `%s`, %s slices, %s iterations, fp64 "
+    lines = ["Machine (CSV columns): `%s`, %s logical CPUs, OpenCL device `%s`, %s slices, %s iterations (s/iteration: "
+             "the difference of fits of that many and 1, over one less), fp64 "
              "accumulation (stdout profile line), best of %s rounds. 1-minute load average before the K = 50 run %s, "
              "before the K = 16 run %s." % (o50["cpu_model"], o50["logical_cpus"], o50["opencl_device"], o50["slices"],
                                             o50["iterations"], o50["reps"], o50["loadavg_before"],
@@ -80,8 +84,9 @@ def results(machine):
     p = profile(k50.replace(".csv", ".txt"))
     if p:
         lines += ["", "The profile line of the K = 50 run (stdout, `bench/results/%s`): host initialization %s s, %s "
-                  "iterations %s s in %s batches, final log-likelihood and read-back %s s." % (
-                      k50.replace(".csv", ".txt"), p[0], o50["iterations"], p[1], p[2], p[3])]
+                  "iterations %s s in %s batches, final log-likelihood and read-back %s s%s." % (
+                      k50.replace(".csv", ".txt"), p[0], o50["iterations"], p[1], p[2], p[3],
+                      "; the batches' setup, not in s/iteration, %s s" % p[4] if p[4] else "")]
     return lines
 
 
