@@ -34,7 +34,6 @@ import argparse
 import csv
 import math
 import os
-import platform
 import statistics
 import subprocess
 import sys

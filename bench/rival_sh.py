@@ -88,7 +88,7 @@ class Fit:
         self.cosine = cosine and table.domain == "hemisphere"
         self.cos = np.cos(table.theta_i) if cosine and table.domain == "hemisphere" else np.ones(len(table.theta_i))
         self.hemisphere = table.domain == "hemisphere"
-        nti, npi = len(table.theta_i), len(table.phi_i)
+        npi = len(table.phi_i)
         self.half = np.nonzero(table.phi_i >= 0)[0]  # phi in [0, pi): the mirror half
         if len(self.half) * 2 != npi:
             raise ValueError("phi_i is not symmetric about 0")

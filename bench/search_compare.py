@@ -19,7 +19,6 @@ and the broadest polyester slice.
 import argparse
 import csv
 import os
-import platform
 import statistics
 import subprocess
 import sys

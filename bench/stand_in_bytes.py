@@ -18,7 +18,6 @@ same mixtures and share the comparison (the CSV row says which file was compared
 """
 import argparse
 import csv
-import math
 import os
 import subprocess
 import sys

@@ -45,7 +45,7 @@ def main():
                 if r["impl"].split(" (")[0] == impl and int(r["k"]) == k:
                     xs.append(j + (i - (len(impls) - 1) / 2) * width)
                     ys.append(float(r["pc_per_s"]))
-        bars = ax.bar(xs, ys, width, label=impl)
+        ax.bar(xs, ys, width, label=impl)
         for x, y in zip(xs, ys):
             ax.text(x, y * 1.1, "%.3g G" % (y / 1e9) if y >= 1e8 else "%.3g M" % (y / 1e6), ha="center", fontsize=7)
     ax.set_yscale("log")

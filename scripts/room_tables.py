@@ -12,7 +12,6 @@ and fits included).
 """
 
 import argparse
-import os
 
 from render_tables import cell, read_render
 from tables_common import failer, markdown_lines, print_table
