@@ -10,11 +10,14 @@ p90 over the slices), its mean K, and whether the two mixture files hold the sam
 Each table is imported once at the default grid (90 x 90 x 180) under out/fit_speed/. A row
 per material: old and new seconds, speedup (old / new), both utilizations and errors,
 `same` (every dataset of /mixture equal, bit for bit), the datasets that differ and their
-largest difference relative to the dataset's largest value.
+largest difference relative to the dataset's largest value; and where the new build's best
+round spent its batches' time (its summary's "time by phase": the shares of the search, the
+final EM, the fits past a stalled walk, the L1 refinement and the rest, 0 to 1).
 """
 import argparse
 import glob
 import os
+import re
 import shutil
 import subprocess
 
@@ -24,9 +27,22 @@ from machine import cpu_model  # noqa: E402  (bench/machine.py)
 from study_io import ROOT, measured, rows, write_rows  # noqa: E402  (bench/study_io.py)
 
 
-def timed_fit(binary, config):
-    """Runs `binary fit -q config`: (wall seconds, CPU seconds of the child)."""
-    return measured("fit_speed", [binary, "fit", "-q", config])[:2]
+PHASES = ("search", "final_em", "beyond", "refine", "rest")
+PHASE_LINE = re.compile(r"time by phase +search (\d+)%, final EM (\d+)%, past a stalled walk (\d+)%, "
+                        r"L1 refinement (\d+)%, the rest (\d+)%")
+
+
+def timed_fit(binary, config, summary):
+    """Runs `binary fit -q config`, its summary to the file `summary`: (wall seconds, CPU
+    seconds of the child)."""
+    return measured("fit_speed", [binary, "fit", "-q", config], stdout=summary)[:2]
+
+
+def phase_columns(summary):
+    """new_<phase> shares from a fit summary's "time by phase" line ("" for a build without it)."""
+    with open(summary) as f:
+        m = PHASE_LINE.search(f.read())
+    return {"new_" + p: ("%.2f" % (int(m.group(i + 1)) / 100) if m else "") for i, p in enumerate(PHASES)}
 
 
 def errors(report):
@@ -97,11 +113,11 @@ def main():
                             f"  search_report: {stem}_search.csv\n")
                 for p in glob.glob(stem + "_mixture.h5*"):  # a fresh fit, not a resumed one
                     shutil.rmtree(p) if os.path.isdir(p) else os.remove(p)
-                wall, cpu = timed_fit(binary, cfg)
+                wall, cpu = timed_fit(binary, cfg, stem + "_summary.txt")
                 print(f"fit_speed: {name} round {rnd + 1} {build}: {wall:.1f} s wall, {cpu:.1f} s CPU", flush=True)
                 if build not in best or wall < best[build][0]:
-                    best[build] = (wall, cpu)
-        (wo, co), (wn, cn) = best["old"], best["new"]
+                    best[build] = (wall, cpu, phase_columns(stem + "_summary.txt"))
+        (wo, co, _), (wn, cn, phases) = best["old"], best["new"]
         eo, en = errors(os.path.join(a.work, f"{name}_old_fit.csv")), errors(os.path.join(a.work, f"{name}_new_fit.csv"))
         out.append({"material": name, "grid": "90x90x180", "rounds": a.rounds,
                     "old_seconds": f"{wo:.2f}", "new_seconds": f"{wn:.2f}", "speedup": f"{wo / wn:.3f}",
@@ -112,7 +128,7 @@ def main():
                     "old_mean_k": f"{eo[2]:.2f}", "new_mean_k": f"{en[2]:.2f}",
                     **difference_columns(os.path.join(a.work, f"{name}_old_mixture.h5"),
                                          os.path.join(a.work, f"{name}_new_mixture.h5")),
-                    "logical_cpus": cores, "cpu": cpu_model()})
+                    **phases, "logical_cpus": cores, "cpu": cpu_model()})
         print(", ".join(f"{k} {v}" for k, v in out[-1].items() if k != "cpu"), flush=True)
     write_rows(a.csv, out)
 

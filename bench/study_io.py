@@ -20,12 +20,13 @@ def bsdfmix(study, *args):
         sys.exit(f"{study}: `bsdfmix {' '.join(args)}` failed: {r.stderr.strip()}")
 
 
-def measured(study, cmd, cwd=None, what=None):
+def measured(study, cmd, cwd=None, what=None, stdout=None):
     """Runs the command `cmd` (a list): its wall seconds, its CPU seconds (user + system) and
-    its peak resident bytes, from os.wait4's rusage of that child alone. A failure ends the
-    study with one line naming `what` (default: the command) and the last line of its stderr."""
+    its peak resident bytes, from os.wait4's rusage of that child alone; its output goes to the
+    file `stdout` (default: nowhere). A failure ends the study with one line naming `what`
+    (default: the command) and the last line of its stderr."""
     cmd = [str(c) for c in cmd]
-    with open(os.devnull, "w") as null, tempfile.TemporaryFile("w+") as err:
+    with open(stdout or os.devnull, "w") as null, tempfile.TemporaryFile("w+") as err:
         t = time.perf_counter()
         p = subprocess.Popen(cmd, stdout=null, stderr=err, cwd=cwd, text=True)
         _, status, use = os.wait4(p.pid, 0)

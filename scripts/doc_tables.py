@@ -42,7 +42,7 @@ The tables (NAME: CSV):
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (CHANGELOG.md,
                        "Before and after")
   em_precision         bench/results/em_precision.csv (docs/em.md, "Kernel vs reference")
-  em_performance, fit_speed  bench/results/em_k*_<machine>.csv, em_speed.csv, fit_speed.csv (docs/em.md,
+  em_performance, fit_speed, fit_phases  bench/results/em_k*_<machine>.csv, em_speed.csv, fit_speed.csv (docs/em.md,
                        "Performance"), by scripts/em_tables.py
   mixed_devices        bench/results/mixed_devices.csv (docs/studies/em_kernels.md, "Devices of different speeds: the
                        mixed run")
@@ -669,6 +669,7 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "em_results": em_results, "converge_refine": converge_refine,
           "em_performance": lambda: __import__("em_tables").performance(),
           "fit_speed": lambda: __import__("em_tables").fit_speed(),
+          "fit_phases": lambda: __import__("em_tables").fit_phases(),
           "theta_border": theta_border,
           "em_precision": em_precision, "mixed_devices": mixed_devices, "em_builds": em_builds,
           "rgl_negative": rgl_negative,

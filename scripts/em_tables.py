@@ -118,3 +118,14 @@ def fit_speed():
             100 * float(r["new_utilization"]), pct(r["old_l1_median"]), pct(r["new_l1_median"]),
             pct(r["old_l1_p90"]), pct(r["new_l1_p90"])))
     return out
+
+
+def fit_phases():
+    """docs/em.md's shares of a default fit's batch time by phase, the new build's (fit_speed.csv)."""
+    out = ["| material | search | final EM | past a stalled walk | L1 refinement | the rest |",
+           "|---|---|---|---|---|---|"]
+    for r in rows("fit_speed.csv"):
+        if r.get("new_search"):
+            out.append("| %s | %s |" % (r["material"], " | ".join(
+                "%.0f%%" % (100 * float(r["new_" + p])) for p in ("search", "final_em", "beyond", "refine", "rest"))))
+    return out

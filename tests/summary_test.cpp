@@ -91,6 +91,16 @@ TEST_CASE("fit and inspect print the same median of the file's l1_rel", "[summar
                              percent_text(quantile(m.l1_rel, 0.9)) + ", max " + percent_text(quantile(m.l1_rel, 1));
   CHECK_THAT(fit, Catch::Contains("relative L1      " + median));
   CHECK_THAT(output_of("inspect -q " + mixture), Catch::Contains("l1_rel     " + median));
+  // where the time went: every phase named, the shares summing to 100% up to rounding
+  const std::size_t at = fit.find("time by phase    search ");
+  REQUIRE(at != std::string::npos);
+  std::istringstream line(fit.substr(at, fit.find('\n', at) - at));
+  double sum = 0;
+  for (std::string word; line >> word;)
+    if (word.size() > 1 && word[word.size() - 2] == '%') sum += std::stod(word);  // "38%,"
+    else if (word.back() == '%') sum += std::stod(word);                          // "7%" before "of"
+  CHECK(sum >= 97);
+  CHECK(sum <= 103);
 }
 
 TEST_CASE("the fit summary gives the CPU time and the share of the cores it kept busy", "[summary]") {
@@ -102,4 +112,21 @@ TEST_CASE("the fit summary gives the CPU time and the share of the cores it kept
   CHECK_THAT(s.text(), Catch::Matchers::Contains("cpu time         15.0 s: 75% of 2 cores over the wall time"));
   s.seconds = 0;  // a run that took no measurable time: no division by zero
   CHECK(s.cpu_utilization() == 0.0);
+}
+
+TEST_CASE("the fit summary says where the batches' time went", "[summary]") {
+  SweepSummary s;
+  CHECK_THAT(s.text(), !Catch::Matchers::Contains("time by phase"));  // nothing fitted here: no line
+  s.phases.search = 4;
+  s.phases.final_em = 2;
+  s.phases.beyond = 0.5;
+  s.phases.refine = 3;
+  s.phases.rest = 0.5;
+  CHECK(s.phases.total() == Approx(10));
+  CHECK_THAT(s.text(), Catch::Matchers::Contains("time by phase    search 40%, final EM 20%, past a stalled walk 5%, "
+                                                 "L1 refinement 30%, the rest 5% of 10.0 s in batches"));
+  FitPhases twice = s.phases;
+  twice += s.phases;
+  CHECK(twice.total() == Approx(20));
+  CHECK(twice.refine == Approx(6));
 }

@@ -14,6 +14,7 @@
 #include "fit/em.hpp"
 #include "sweep/base_lobe.hpp"
 #include "sweep/fit_error.hpp"
+#include "sweep/fit_phases.hpp"
 #include "sweep/fit_slices.hpp"
 #include "sweep/slice_plan.hpp"
 
@@ -69,6 +70,7 @@ struct Batch {
   std::vector<Fitted> beyond;
   std::vector<std::string> failure;
   std::vector<std::vector<SearchRow>> search_rows;
+  FitPhases phases;  // the wall seconds of its phases so far
 
   std::size_t size() const { return work.size(); }
   bool zero(std::size_t s) const { return !(work[s].total > 0); }

@@ -231,17 +231,35 @@ BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {
   const bool search = fit_.k_min != fit_.k_max;
   switch (fit_.search) {
     case SearchStrategy::Restarts:
-      if (search) search_restarts(b);
-      b.final_fits();
-      b.refine(false);
+      if (search) {
+        const PhaseTimer t(b.phases.search);
+        search_restarts(b);
+      }
+      {
+        const PhaseTimer t(b.phases.final_em);
+        b.final_fits();
+      }
+      {
+        const PhaseTimer t(b.phases.refine);
+        b.refine(false);
+      }
       break;
     case SearchStrategy::Smem:
-      if (search) search_smem(b);
+      if (search) {
+        const PhaseTimer t(b.phases.search);
+        search_smem(b);
+      }
       final_smem(b);
       break;
   }
-  b.reduce_k();
+  {
+    const PhaseTimer t(b.phases.final_em);
+    b.reduce_k();
+  }
   finish(b, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), part);
+  part.phases = b.phases;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  part.phases.rest = std::max(0.0, seconds - b.phases.total());
   return part;
 }
 

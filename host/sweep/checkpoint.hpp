@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "io/mixture_file.hpp"
+#include "sweep/fit_phases.hpp"
 #include "sweep/fit_slices.hpp"
 
 namespace bsdfmix {
@@ -24,6 +25,7 @@ struct BatchPart {
   std::vector<ReportRow> report;  // one per slice, in slice_index order
   std::vector<SearchRow> search;  // in slice order, each slice's rows in the order searched
   std::string slices_hash;        // content hash of the integrand weights of the slices it was fitted to
+  FitPhases phases;               // where its fit's time went; not in the part file or a farm's message
 };
 
 // Where a committed part is and what it holds, without its mixtures and rows.

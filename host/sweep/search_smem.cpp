@@ -290,6 +290,28 @@ void choose_final(Batch& b, std::size_t s) {
   b.mark_chosen(s);
 }
 
+// The final fits of `tasks` (role as final_tasks made them) and, with K pinned, of
+// `first` followed by split-and-merge rounds: each offered to its slice or kept as the
+// slice's fit below or above when better.
+void run_final(Batch& b, const std::vector<EmTask>& tasks, const std::vector<EmTask>& first,
+               const std::vector<int>& role) {
+  if (!first.empty()) {  // pinned K
+    const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, first, SmemSettings{});
+    for (std::size_t i = 0; i < res.size(); ++i) b.offer(first[i].slice, evaluate(res[i], b.work[first[i].slice].full));
+  }
+  if (tasks.empty()) return;
+  const std::vector<EmResult> results = b.engine.fit(b.full_set, tasks);
+  std::vector<Fitted> fitted(results.size());
+  run_on_workers(results.size(), std::min<std::size_t>(results.size(), host_threads()),
+                 [&](std::size_t, std::size_t i) { fitted[i] = evaluate(results[i], b.work[tasks[i].slice].full); });
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const std::size_t s = tasks[i].slice;
+    Fitted& side = role[i] == 1 ? b.below[s] : b.above[s];
+    if (role[i] == 0) b.offer(s, fitted[i]);
+    else if (fitted[i].ok && fitted[i].l1 < side.l1) side = fitted[i];
+  }
+}
+
 }  // namespace
 
 // The final fits of the walk: as Batch::final_fits, but restart 0 starts from the
@@ -303,25 +325,22 @@ void choose_final(Batch& b, std::size_t s) {
 void final_smem(Batch& b) {
   std::vector<EmTask> tasks, first;
   std::vector<int> role;  // per task: 0 a restart of the chosen K, 1 the K below, 2 the K above
-  final_tasks(b, tasks, first, role);
-  fit_beyond(b);
-  if (!first.empty()) {  // pinned K
-    const std::vector<EmResult> res = split_merge_fit(engine_fitter(b.engine), b.full_set, first, SmemSettings{});
-    for (std::size_t i = 0; i < res.size(); ++i) b.offer(first[i].slice, evaluate(res[i], b.work[first[i].slice].full));
+  {
+    const PhaseTimer t(b.phases.final_em);
+    final_tasks(b, tasks, first, role);
   }
-  if (!tasks.empty()) {
-    const std::vector<EmResult> results = b.engine.fit(b.full_set, tasks);
-    std::vector<Fitted> fitted(results.size());
-    run_on_workers(results.size(), std::min<std::size_t>(results.size(), host_threads()),
-                   [&](std::size_t, std::size_t i) { fitted[i] = evaluate(results[i], b.work[tasks[i].slice].full); });
-    for (std::size_t i = 0; i < results.size(); ++i) {
-      const std::size_t s = tasks[i].slice;
-      Fitted& side = role[i] == 1 ? b.below[s] : b.above[s];
-      if (role[i] == 0) b.offer(s, fitted[i]);
-      else if (fitted[i].ok && fitted[i].l1 < side.l1) side = fitted[i];
-    }
+  {
+    const PhaseTimer t(b.phases.beyond);
+    fit_beyond(b);
   }
-  b.refine(true);
+  {
+    const PhaseTimer t(b.phases.final_em);
+    run_final(b, tasks, first, role);
+  }
+  {
+    const PhaseTimer t(b.phases.refine);
+    b.refine(true);
+  }
   for (std::size_t s = 0; s < b.size(); ++s) choose_final(b, s);
 }
 

@@ -94,10 +94,12 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
                     plan.size() - resumed, "slices");
 
   std::size_t committed = resumed;
+  FitPhases phases;  // of the batches fitted in this process
   const bool stops = options.max_batches < batches.size();
   if (stops) batches.resize(options.max_batches);
   const auto commit = [&](BatchPart&& part) {
     checkpoint.commit(part);
+    phases += part.phases;
     committed += part.slice_index.size();
     progress.advance(part.slice_index.size());
   };
@@ -113,6 +115,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
     partial.resumed = resumed;
     partial.slices = committed;
     partial.devices = device_names;
+    partial.phases = phases;
     log_line("fit " + table_path + ": stopped after " + std::to_string(options.max_batches) + " batch(es); rerun to resume");
     return partial;
   }
@@ -128,6 +131,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   sum.devices = device_names;
   sum.cpu_seconds = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   sum.cores = std::max(1u, std::thread::hardware_concurrency());
+  sum.phases = phases;
   for (const std::string& w : {k_cap_warning(result.mixture.k, result.mixture.l1_rel, fit.k_min, fit.k_max),
                                negative_channel_warning(reader, plan)})
     if (!w.empty()) sum.warnings.push_back(w);

@@ -15,6 +15,7 @@
 #include "sweep/fit_settings.hpp"
 #include "fit/em.hpp"
 #include "sweep/checkpoint.hpp"
+#include "sweep/fit_phases.hpp"
 #include "sweep/slice_plan.hpp"
 
 namespace bsdfmix {
@@ -35,6 +36,7 @@ struct SweepSummary {
   double seconds = 0;
   double cpu_seconds = 0;  // this process's CPU time over the run (MPI workers' not counted)
   unsigned cores = 1;      // the machine's logical CPUs
+  FitPhases phases;        // where the time of the batches fitted in this process went
   std::string devices;
   // Warnings on the result (sweep_warnings), printed after the summary on stderr.
   std::vector<std::string> warnings;

@@ -167,6 +167,7 @@ std::string SweepSummary::text() const {
   std::snprintf(buf, sizeof buf, "  cpu time         %.1f s: %.0f%% of %u cores over the wall time\n", cpu_seconds,
                 100.0 * cpu_utilization(), cores);
   s << buf;
+  if (!phases.text().empty()) s << "  time by phase    " << phases.text() << "\n";
   return s.str();
 }
 
