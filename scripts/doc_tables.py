@@ -42,8 +42,10 @@ The tables (NAME: CSV):
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (CHANGELOG.md,
                        "Before and after")
   em_precision         bench/results/em_precision.csv (docs/em.md, "Kernel vs reference")
-  em_performance, fit_speed, fit_phases  bench/results/em_k*_<machine>.csv, em_speed.csv, fit_speed.csv (docs/em.md,
+  em_performance, fit_speed  bench/results/em_k*_<machine>.csv, em_speed.csv, fit_speed.csv (docs/em.md,
                        "Performance"), by scripts/em_tables.py
+  fit_phases           bench/results/fit_speed.csv (docs/studies/em_kernels.md, "Where a fit's time goes"),
+                       by scripts/em_tables.py
   mixed_devices        bench/results/mixed_devices.csv (docs/studies/em_kernels.md, "Devices of different speeds: the
                        mixed run")
   theta_border         bench/results/theta_border.csv (docs/studies/theta_border.md)
