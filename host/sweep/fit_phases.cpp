@@ -1,8 +1,8 @@
 // The phases of a fit, summed and printed (sweep/fit_phases.hpp).
 #include "sweep/fit_phases.hpp"
 
-#include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace bsdfmix {
 

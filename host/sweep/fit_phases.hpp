@@ -1,5 +1,5 @@
 // Where a fit's time goes: the wall seconds of each phase of a batch's fit, summed over
-// the batches this process fitted (docs/fitting.md, "Where the time goes").
+// the batches this process fitted (docs/studies/em_kernels.md, "Where a fit's time goes").
 #pragma once
 
 #include <chrono>
