@@ -121,7 +121,7 @@ def fit_speed():
 
 
 def fit_phases():
-    """docs/em.md's shares of a default fit's batch time by phase, the new build's (fit_speed.csv)."""
+    """docs/studies/em_kernels.md's shares of a default fit's batch time by phase, the new build's (fit_speed.csv)."""
     out = ["| material | search | final EM | past a stalled walk | L1 refinement | the rest |",
            "|---|---|---|---|---|---|"]
     for r in rows("fit_speed.csv"):
