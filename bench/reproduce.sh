@@ -41,6 +41,7 @@ studies=(
   "search_unseen:3:no:the walk of this build against BEFORE's on RGL materials not shipped, from RGL_DIR (search_unseen.csv)"
   "pinned_k:2:no:satin's grazing slices fitted by the default search and at pinned K 8, 16, 32 (pinned_k.csv)"
   "tails:4:no:satin's grazing slices by plain EM with Gaussians and with Student-t components of 3 and 10 degrees of freedom (tails.csv)"
+  "map_choice:30:no:fit.map auto against theta_phi and equal_area: default fits of the four RGL files at 90 x 90 x 180, the map auto chose, its probe's cost, L1 and K (map_choice.csv)"
   "map_accuracy:12:no:the equal-area map with its base against (theta, phi) on the RGL files and the fiber presets (map_accuracy.csv)"
   "renderer_chi2:15:no:Mitsuba 3's chi-square test on equal-area and (theta, phi) fits of the RGL files and the presets (renderer_chi2.csv, renderer_chi2_theta_phi.csv)"
   "parameterization:15:no:the pole and the border: plain EM in three parameterizations of the hemisphere against the project's fits (parameterization.csv)"
@@ -126,6 +127,7 @@ outputs() {
     pinned_k) echo "$results/pinned_k.csv" ;;
     parameterization) echo "$results/parameterization.csv" ;;
     map_accuracy) echo "$results/map_accuracy.csv" ;;
+    map_choice) echo "$results/map_choice.csv" ;;
     renderer_chi2) echo "$results/renderer_chi2.csv $results/renderer_chi2_theta_phi.csv" ;;
     tails) echo "$results/tails.csv" ;;
     search_compare) echo "$results/search_compare*.csv $results/search_chi_square.csv docs/images/search_l1_vs_k.png" ;;
@@ -275,6 +277,7 @@ run_study() {
       $py bench/parameterization.py --table out/parameterization/satin.h5 --name satin_rosaline --rows 70,75,80,85,89 \
         --maps native_t --nu 10 --csv out/parameterization/tails.csv --append > /dev/null
       cp out/parameterization/tails.csv $results/tails.csv ;;
+    map_choice) $py bench/map_choice.py --bsdfmix $bin --work out/map_choice --csv $results/map_choice.csv ;;
     map_accuracy) $py bench/map_accuracy.py --bsdfmix $bin --work out/map_accuracy --csv $results/map_accuracy.csv ;;
     renderer_chi2)
       $py bench/renderer_chi2.py --bsdfmix $bin --work out/renderer_chi2 --csv $results/renderer_chi2.csv

@@ -24,6 +24,7 @@ The tables (NAME: CSV):
   tails                bench/results/tails.csv (docs/studies/satin_grazing.md, "Heavier tails")
   parameterization     bench/results/parameterization.csv (docs/studies/parameterization.md)
   map_accuracy         bench/results/map_accuracy.csv (docs/fitting.md, "The map and the base")
+  map_choice           bench/results/map_choice.csv (docs/fitting.md, "The map and the base")
   renderer_chi2        bench/results/renderer_chi2{,_theta_phi}.csv (docs/sampling.md, "A renderer's sampling test")
   render_measured      bench/results/render/*/render.json (docs/render.md, "Measured materials")
   render_rgl           bench/results/render/<material>_skymap/render.csv (docs/studies/render_materials.md,
@@ -253,6 +254,23 @@ def map_accuracy():
                        "%.1f%%" % (100 * max(abs(float(r["energy"])) for r in rr)))
         out.append("| %s | %s | %s | %s / %s |" % (table, cell["theta_phi"][0], cell["equal_area"][0],
                                                    cell["theta_phi"][1], cell["equal_area"][1]))
+    return out
+
+
+def map_choice():
+    """Per RGL file: median / p90 L1 (mean K) and seconds of each map setting; auto's choice and probe."""
+    out = ["| table | auto chose | auto | (theta, phi) | disk | seconds, auto / (theta, phi) / disk |",
+           "|---|---|---|---|---|---|"]
+    by = {}
+    for r in rows("map_choice.csv"):
+        by.setdefault(r["table"], {})[r["map"]] = r
+    for table, m in by.items():
+        def cell(r):
+            return "%s / %s (%.1f)" % (pct(r["l1_median"]), pct(r["l1_p90"]), float(r["mean_k"]))
+        a = m["auto"]
+        out.append("| %s | %s | %s | %s | %s | %s / %s / %s |" % (
+            table, "disk" if a["fitted"] == "disk" else "(theta, phi)", cell(a), cell(m["theta_phi"]),
+            cell(m["equal_area"]), a["fit_seconds"], m["theta_phi"]["fit_seconds"], m["equal_area"]["fit_seconds"]))
     return out
 
 
@@ -678,7 +696,7 @@ TABLES = {"sampling_peers": sampling_peers, "sampling_peers_sky": sampling_peers
           "render_reading": render_reading,
           "search_unseen": lambda: search_before_after("search_unseen.csv"),
           "search_time": lambda: search_before_after("search_time.csv"), "pinned_k": pinned_k, "tails": tails,
-          "parameterization": parameterization, "map_accuracy": map_accuracy, "renderer_chi2": renderer_chi2,
+          "parameterization": parameterization, "map_accuracy": map_accuracy, "map_choice": map_choice, "renderer_chi2": renderer_chi2,
           "fiber_quadrature": input_tables.fiber_quadrature,
           "fiber_generate": input_tables.fiber_generate, "cells_scale": input_tables.cells_scale,
           "rgl_albedo": input_tables.rgl_albedo,

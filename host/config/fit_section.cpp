@@ -39,8 +39,8 @@ FitSection parse_fit(const ConfigNode& n) {
   f.rgb_copies.reset();
   if (n.has("rgb_copies")) f.rgb_copies = n.number("rgb_copies", 0.0, 100.0);
   f.map = n.str("map");
-  if (f.map != "equal_area" && f.map != "theta_phi")
-    n.fail("map", "'" + f.map + "' is not a map (expected equal_area or theta_phi)");
+  if (f.map != "auto" && f.map != "equal_area" && f.map != "theta_phi")
+    n.fail("map", "'" + f.map + "' is not a map (expected auto, equal_area or theta_phi)");
   if (n.has("theta_o")) {
     f.theta_o = n.numbers("theta_o");
     for (double t : f.theta_o)

@@ -1,7 +1,8 @@
 // The MPI task farm: rank 0 hands out batches and commits the parts; workers fit.
 //
 // Messages (MPI_COMM_WORLD, MPI_BYTE):
-//   rank 0 -> worker  kTask  u64 job, u64 n, n x (u64 index, u64 t_o, u64 p_o)
+//   rank 0 -> worker  kTask  u64 job, u64 map (0 theta_phi, 1 equal_area: fit.map with auto
+//                            chosen), u64 n, n x (u64 index, u64 t_o, u64 p_o)
 //                     kStop  empty: no more work; answer kBye and end
 //   worker -> rank 0  kPart  f64 seconds of fitting, then the part (scale/part_codec.hpp)
 //                     kError the error text of a failed fit
@@ -22,7 +23,9 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/progress.hpp"
+#include "io/table.hpp"
 #include "scale/part_codec.hpp"
+#include "sweep/map_choice.hpp"
 #include "sweep/sweep.hpp"
 
 namespace bsdfmix::scale {
@@ -84,7 +87,7 @@ struct MpiFarm::Root : BatchFarm {
   FarmStats stats;
   FarmOptions options;
 
-  void run(const std::vector<std::vector<SliceRef>>& batches,
+  void run(const std::vector<std::vector<SliceRef>>& batches, const std::string& map,
            const std::function<BatchPart(const std::vector<SliceRef>&)>& fit_here,
            const std::function<void(BatchPart&&)>& commit) override {
     std::deque<std::size_t> queue;
@@ -97,6 +100,7 @@ struct MpiFarm::Root : BatchFarm {
         queue.pop_front();
         std::vector<std::uint8_t> msg;
         put<std::uint64_t>(msg, job);
+        put<std::uint64_t>(msg, map == "equal_area" ? 1 : 0);
         put<std::uint64_t>(msg, batches[b].size());
         for (const SliceRef& r : batches[b]) {
           put<std::uint64_t>(msg, r.index);
@@ -250,12 +254,14 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
   if (!worker()) return;
   std::unique_ptr<BatchWorker> fitter;
   std::size_t fitter_job = SIZE_MAX;
+  std::string fitter_map;  // the map the fitter fits in
   std::vector<std::uint8_t> out;  // the part in flight (kept alive until its send completes)
   MPI_Request pending = MPI_REQUEST_NULL;
   std::string failure;
   // Set up the first job's devices and kernels while rank 0 sets up its own.
   if (!jobs.empty() && jobs[0].table_ready) try {
-      fitter = std::make_unique<BatchWorker>(jobs[0].table, jobs[0].fit, device_selector, engine);
+      fitter_map = map_without_probe(jobs[0].fit, TableReader(jobs[0].table).meta().domain);
+      fitter = std::make_unique<BatchWorker>(jobs[0].table, with_map(jobs[0].fit, fitter_map), device_selector, engine);
       fitter_job = 0;
     } catch (const std::exception&) {
       fitter.reset();  // tried again, and reported, at the first batch
@@ -272,6 +278,7 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
     try {
       std::size_t at = 0;
       const auto job = std::size_t(get<std::uint64_t>(msg, at));
+      const std::string map = get<std::uint64_t>(msg, at) == 1 ? "equal_area" : "theta_phi";
       const auto n = std::size_t(get<std::uint64_t>(msg, at));
       if (job >= jobs.size()) throw Error("MPI farm: job " + std::to_string(job) + " unknown to this rank");
       std::vector<SliceRef> batch(n);
@@ -280,10 +287,11 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
         r.t_o = std::size_t(get<std::uint64_t>(msg, at));
         r.p_o = std::size_t(get<std::uint64_t>(msg, at));
       }
-      if (job != fitter_job) {
+      if (job != fitter_job || map != fitter_map) {
         fitter.reset();
-        fitter = std::make_unique<BatchWorker>(jobs[job].table, jobs[job].fit, device_selector, engine);
+        fitter = std::make_unique<BatchWorker>(jobs[job].table, with_map(jobs[job].fit, map), device_selector, engine);
         fitter_job = job;
+        fitter_map = map;
       }
       const auto t0 = std::chrono::steady_clock::now();
       const BatchPart part = fitter->fit(batch);

@@ -15,6 +15,7 @@
 #include "sweep/batch.hpp"
 #include "sweep/criterion.hpp"
 #include "sweep/earned_share.hpp"
+#include "sweep/map_choice.hpp"
 #include "sweep/stand_in.hpp"
 #include "sweep/sweep.hpp"
 
@@ -220,7 +221,8 @@ BatchFitter::BatchFitter(const SliceSource& source, const FitSettings& fit, EmEn
     : source_(source), fit_(fit), engine_(engine), devices_(std::move(device_names)) {}
 
 Map fit_map(const FitSettings& fit, Domain d) {
-  return fit.map == "theta_phi" ? Map::ThetaPhi : mix::equal_area_map(d);
+  if (map_probed(fit, d)) throw std::logic_error("fit_map: fit.map auto is chosen by a probe first (sweep/map_choice.hpp)");
+  return fit.map == "theta_phi" || fit.map == "auto" ? Map::ThetaPhi : mix::equal_area_map(d);
 }
 
 BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {

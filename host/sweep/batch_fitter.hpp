@@ -41,7 +41,8 @@ class BatchFitter {
   const std::string devices_;
 };
 
-// The map a fit of a `d` table with these settings works and writes in (fit.map).
+// The map a fit of a `d` table with these settings works and writes in (fit.map); fit.map
+// auto on the hemisphere must be chosen first (sweep/map_choice.hpp): std::logic_error.
 Map fit_map(const FitSettings& fit, Domain d);
 
 // Cells a default batch holds at most: a batch's memory is about 230 bytes a cell (64

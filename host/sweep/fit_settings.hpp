@@ -41,9 +41,10 @@ struct FitSettings {
   // with colour: a slice whose RGB error exceeds this times its luminance error gets colour
   // copies (docs/fitting.md, "Colour copies"); empty: none
   std::optional<double> rgb_copies = 1.2;
-  // The plane the Gaussians live in (docs/fitting.md, "The map"): equal_area (the disk on
-  // the hemisphere, the cylinder on the fiber sphere) or theta_phi (files before maps).
-  std::string map = "theta_phi";
+  // The plane the Gaussians live in (docs/fitting.md, "The map"): auto (chosen by a probe,
+  // sweep/map_choice.hpp), equal_area (the disk on the hemisphere, the cylinder on the
+  // fiber sphere) or theta_phi (files before maps).
+  std::string map = "auto";
   std::vector<double> theta_o, phi_o;  // scene-driven slices; empty = all
   // Rows without radians (sweep/slice_plan.hpp plan_fit_slices), each adding its rows:
   // every Nth table row with the first and last (0: none), row indices, and degrees

@@ -16,6 +16,7 @@
 #include "core/progress.hpp"
 #include "sweep/batch_fitter.hpp"
 #include "sweep/batch_lanes.hpp"
+#include "sweep/map_choice.hpp"
 #include "sweep/sweep.hpp"
 #include "sweep/sweep_outputs.hpp"
 
@@ -38,16 +39,25 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
     if (i > 0 && !(slices[i - 1].index < r.index))
       throw Error(what + ": the slices to fit must be sorted by index, without repeats");
   }
+  // fit.map auto on the hemisphere: the probe's map (sweep/map_choice.hpp); the record
+  // keeps the settings as given.
+  MapChoice choice = choose_map(source, slices, fit, devices, engine_options, what);
+  if (choice.whole) {
+    choice.whole->mixture.fit_settings = fit_settings_json(fit);
+    return std::move(*choice.whole);
+  }
+  const FitSettings used = with_map(fit, choice.map);
   const std::vector<std::vector<SliceRef>> batches =
-      split_batches(slices, batch_size(slices.size(), fit, meta.cells_per_slice()));
-  SweepResult result = empty_result(meta, fit);
+      split_batches(slices, batch_size(slices.size(), used, meta.cells_per_slice()));
+  SweepResult result = empty_result(meta, used);
+  result.mixture.fit_settings = fit_settings_json(fit);
   Progress progress(what, slices.size(), "slices");
   std::vector<BatchPart> parts;
   const auto keep = [&](BatchPart&& part) {
     progress.advance(part.slice_index.size());
     parts.push_back(std::move(part));
   };
-  BatchLanes(source, fit, devices, engine_options, joined_names(devices), kDefaultLanes).run(batches, keep);
+  BatchLanes(source, used, devices, engine_options, joined_names(devices), kDefaultLanes).run(batches, keep);
   // Parts come in the order they finish; the result is in slice order.
   std::sort(parts.begin(), parts.end(),
             [](const BatchPart& a, const BatchPart& b) { return a.slice_index.front() < b.slice_index.front(); });

@@ -11,6 +11,7 @@
 #include "io/table.hpp"
 #include "sweep/criterion.hpp"
 #include "sweep/fit_slices.hpp"
+#include "sweep/map_choice.hpp"
 #include "sweep/slice_source.hpp"
 
 namespace bsdfmix {
@@ -39,6 +40,7 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSettings&
       warmed = bucket;
       FitSettings pinned = fit;
       pinned.k_min = pinned.k_max = k;
+      pinned.map = map_without_probe(fit, meta.domain);  // a timing: no probe
       fit_slices(source, {SliceRef{s, s / meta.phi_o.size(), s % meta.phi_o.size()}}, pinned, devices, "warm K", engine);
     }
     Progress::set_enabled(!quiet);
@@ -52,6 +54,7 @@ std::vector<KTimingRow> time_k(const std::string& table_path, const FitSettings&
       // refinement when `refine: l1`).
       FitSettings pinned = fit;
       pinned.k_min = pinned.k_max = k;
+      pinned.map = map_without_probe(fit, meta.domain);  // a timing: no probe
       Progress::set_enabled(false);
       const auto t0 = std::chrono::steady_clock::now();
       const SweepResult r = fit_slices(source, {SliceRef{s, t_o, p_o}}, pinned, devices, "time K", engine);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 #include <thread>
 #include <unordered_map>
 
@@ -18,6 +19,7 @@
 #include "sweep/batch_lanes.hpp"
 #include "sweep/checkpoint.hpp"
 #include "sweep/criterion.hpp"
+#include "sweep/map_choice.hpp"
 #include "sweep/slice_plan.hpp"
 #include "sweep/slice_source.hpp"
 #include "sweep/sweep_outputs.hpp"
@@ -44,6 +46,27 @@ BatchWorker::BatchWorker(const std::string& table_path, const FitSettings& fit, 
 BatchWorker::~BatchWorker() = default;
 BatchPart BatchWorker::fit(const std::vector<SliceRef>& batch) { return impl_->fitter.fit(batch); }
 
+namespace {
+
+// The map of a file sweep (choose_map), or the choice kept at `path` under `key` by an
+// earlier run of the same sweep; a new choice is kept there unless its probe fitted every
+// slice.
+MapChoice settled_map(const SliceSource& source, const std::string& table_path, const std::vector<SliceRef>& plan,
+                      const FitSettings& fit, const std::vector<Device>& devices,
+                      const EngineOptions& engine_options, const std::string& path, const std::string& key) {
+  if (map_probed(fit, source.meta().domain))
+    if (const std::optional<std::string> kept = read_text(path))
+      if (std::optional<MapChoice> c = read_map_choice(*kept, key)) {
+        log_line("fit " + table_path + ": map " + c->text() + " (kept from the interrupted run)");
+        return std::move(*c);
+      }
+  MapChoice c = choose_map(source, plan, fit, devices, engine_options, "fit " + table_path);
+  if (c.probed > 0 && !c.whole) write_text_atomic(path, map_choice_record(c, key));
+  return c;
+}
+
+}  // namespace
+
 SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
                        const SweepOptions& options) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -60,7 +83,15 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   EmEngine engine(devices, 1, options.engine);
 
   const std::size_t batch = batch_size(plan.size(), fit, meta.cells_per_slice());
-  Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices));
+  // fit.map auto: the probe's map (sweep/map_choice.hpp), kept beside the output until the
+  // file is written, so that a resumed fit takes it again; the fits use it, the file
+  // records the settings as given.
+  const std::string choice_path = fit.output + ".map";
+  const std::string as_given = sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices);
+  MapChoice choice = settled_map(source, table_path, plan, fit, devices, options.engine, choice_path,
+                                 Hash64().update(as_given.data(), as_given.size()).hex());
+  const FitSettings used = with_map(fit, choice.map);
+  Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, used, batch, engine, devices));
   // A table rewritten in place (same path, size and source) is caught by its content.
   std::unordered_map<std::size_t, const SliceRef*> planned;
   for (const SliceRef& r : plan) planned.emplace(r.index, &r);
@@ -79,6 +110,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   std::vector<std::vector<SliceRef>> batches;
   std::size_t resumed = 0;
   for (std::vector<SliceRef>& b : split_batches(plan, batch)) {
+    if (choice.whole) break;  // the probe fitted every slice
     const bool done = std::all_of(b.begin(), b.end(), [&](const SliceRef& r) { return checkpoint.done(r.index); });
     if (done) resumed += b.size();
     else batches.push_back(std::move(b));
@@ -104,10 +136,10 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
     progress.advance(part.slice_index.size());
   };
   if (options.farm) {
-    BatchFitter fitter(source, fit, engine, device_names);
-    options.farm->run(batches, [&](const std::vector<SliceRef>& b) { return fitter.fit(b); }, commit);
+    BatchFitter fitter(source, used, engine, device_names);
+    options.farm->run(batches, used.map, [&](const std::vector<SliceRef>& b) { return fitter.fit(b); }, commit);
   } else {
-    BatchLanes(source, fit, devices, options.engine, device_names, options.lanes).run(batches, commit);
+    BatchLanes(source, used, devices, options.engine, device_names, options.lanes).run(batches, commit);
   }
   if (stops) {
     SweepSummary partial;
@@ -122,10 +154,13 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   progress.finish();
 
   // The outputs, assembled from the committed parts in slice order, read back one at a time.
-  SweepResult result = empty_result(meta, fit);
-  checkpoint.each_part([&](BatchPart&& part) { append_part(result, part); });
+  SweepResult result = choice.whole ? std::move(*choice.whole) : empty_result(meta, used);
+  if (!choice.whole) checkpoint.each_part([&](BatchPart&& part) { append_part(result, part); });
+  result.mixture.fit_settings = fit_settings_json(fit);
   SweepSummary sum = write_outputs(result, table_path, meta, fit);
   checkpoint.remove();
+  std::filesystem::remove(choice_path);
+  sum.map = choice.text();
   sum.resumed = resumed;
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   sum.devices = device_names;

@@ -37,6 +37,7 @@ struct SweepSummary {
   double cpu_seconds = 0;  // this process's CPU time over the run (MPI workers' not counted)
   unsigned cores = 1;      // the machine's logical CPUs
   FitPhases phases;        // where the time of the batches fitted in this process went
+  std::string map;         // fit.map auto: the probe's choice (MapChoice::text); "" otherwise
   std::string devices;
   // Warnings on the result (sweep_warnings), printed after the summary on stderr.
   std::vector<std::string> warnings;
@@ -56,7 +57,8 @@ std::string fit_settings_json(const FitSettings& fit);
 class BatchFarm {
  public:
   virtual ~BatchFarm() = default;
-  virtual void run(const std::vector<std::vector<SliceRef>>& batches,
+  // `map`: the map the batches are fitted in (fit.map with auto chosen).
+  virtual void run(const std::vector<std::vector<SliceRef>>& batches, const std::string& map,
                    const std::function<BatchPart(const std::vector<SliceRef>&)>& fit_here,
                    const std::function<void(BatchPart&&)>& commit) = 0;
 };

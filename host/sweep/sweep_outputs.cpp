@@ -148,6 +148,7 @@ std::string SweepSummary::text() const {
   char buf[256];
   std::snprintf(buf, sizeof buf, " (mean %.1f)\n", slices ? double(total_k) / double(slices) : 0.0);
   s << buf;
+  if (!map.empty()) s << "  map              " << map << "\n";
   s << "  relative L1      median " << percent_text(l1_median) << ", p90 " << percent_text(l1_p90) << ", max "
     << percent_text(l1_max) << "\n";
   auto ratio = [](std::uint64_t a, std::uint64_t b) { return num(double(a) / double(std::max<std::uint64_t>(b, 1)), "%.0f") + "x"; };
