@@ -63,7 +63,7 @@ The tables (NAME: CSV):
   fiber_generate       bench/results/fiber_generate.csv (docs/fiber.md), by scripts/input_tables.py
   cells_scale          bench/results/cells_scale.csv (docs/studies/cells_scale.md), by scripts/input_tables.py
   rgl_albedo, rgl_grid_error, rgl_reciprocity
-                       bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"), by scripts/input_tables.py
+                       bench/results/rgl_albedo.csv (docs/studies/rgl_albedo.md), by scripts/input_tables.py
   sampling_peers, sampling_peers_sky, sampling_peers_fiber
                        bench/results/sampling_peers.csv (sampling_peers in docs/sampling.md, "Against the
                        file's own sampler"; the others in docs/studies/sampling_peers.md)

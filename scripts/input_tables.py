@@ -5,7 +5,7 @@
   fiber_generate    bench/results/fiber_generate.csv (docs/fiber.md, the generator's time and memory)
   cells_scale       bench/results/cells_scale.csv (docs/studies/cells_scale.md): fit time per cell and
                     peak memory by table size
-  rgl_albedo        bench/results/rgl_albedo.csv (docs/rgl.md, "Measurements"): the albedo on the
+  rgl_albedo        bench/results/rgl_albedo.csv (docs/studies/rgl_albedo.md): the albedo on the
                     default grid and sampled, their difference to the converged midpoint rule,
                     and the reciprocity
 """

@@ -318,6 +318,46 @@ TEST_CASE("BSDFMIX_MPI_ROOT_FITS=0 keeps rank 0 to handing out; BSDFMIX_MPI_STAT
   require_same_mixture(one, (temp_dir() / "root_idle_mixture.h5").string());
 }
 
+// fit.map auto on a hemisphere table: rank 0 probes, and the workers (rank 0 fits none
+// here) fit in the map it chose, which only the task message tells them.
+TEST_CASE("fit.map auto: the workers fit in the map rank 0's probe chose", "[scale]") {
+  const fs::path d = temp_dir();
+  const std::string table = (d / "auto_table.h5").string();
+  if (!fs::exists(table)) {
+    TableMeta m = make_grid(Domain::Hemisphere, 14, 1, 16, 32, true);
+    m.source = R"({"model": "mpi auto test"})";
+    std::vector<float> v;
+    for (std::size_t t = 0; t < 14; ++t)  // a diffuse floor under a lobe: the disk wins
+      for (double a : m.theta_i)
+        for (double b : m.phi_i) {
+          const double dt = a - 0.05 * double(t);
+          v.push_back(float(0.3 + 3.0 * std::exp(-(dt * dt + b * b) / (2 * 0.15 * 0.15))));
+        }
+    write_table(table, m, v);
+  }
+  auto config = [&](const std::string& stem) {
+    const std::string path = (d / (stem + ".yaml")).string();
+    std::ofstream f(path);
+    f << "table: " << table << "\nfit:\n  output: " << (d / (stem + "_mixture.h5")).string()
+      << "\n  report: " << (d / (stem + "_fit.csv")).string() << "\n  search_report: " << (d / (stem + "_search.csv")).string()
+      << "\n  k_min: 1\n  k_max: 3\n  restarts: 1\n  final_restarts: 2\n  iterations: 30\n  final_iterations: 60\n"
+      << "  refine_evaluations: 30\n  batch: 2\n";
+    return path;
+  };
+  Run r = run("", "fit " + config("auto_one") + " -q");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::string one = (d / "auto_one_mixture.h5").string();
+  REQUIRE(read_mixture_file(one).map == mix::Map::Disk);
+  r = run("BSDFMIX_MPI_ROOT_FITS=0 " + mpirun(2), "fit " + config("auto_two"));
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("the equal-area disk, by a probe of 10 slice(s)"));
+  CHECK(farm_batches(r.err).second == 0);
+  require_same_mixture(one, (d / "auto_two_mixture.h5").string());
+  CHECK(read_mixture_file((d / "auto_two_mixture.h5").string()).map == mix::Map::Disk);
+}
+
 TEST_CASE("a stopped 2-rank fit resumes to the 1-process file", "[scale]") {
   const std::string one = reference_mixture();
   const std::string cfg = fit_config("resumed");

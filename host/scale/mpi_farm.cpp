@@ -23,9 +23,7 @@
 #include "core/error.hpp"
 #include "core/hash.hpp"
 #include "core/progress.hpp"
-#include "io/table.hpp"
 #include "scale/part_codec.hpp"
-#include "sweep/map_choice.hpp"
 #include "sweep/sweep.hpp"
 
 namespace bsdfmix::scale {
@@ -254,14 +252,12 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
   if (!worker()) return;
   std::unique_ptr<BatchWorker> fitter;
   std::size_t fitter_job = SIZE_MAX;
-  std::string fitter_map;  // the map the fitter fits in
   std::vector<std::uint8_t> out;  // the part in flight (kept alive until its send completes)
   MPI_Request pending = MPI_REQUEST_NULL;
   std::string failure;
   // Set up the first job's devices and kernels while rank 0 sets up its own.
   if (!jobs.empty() && jobs[0].table_ready) try {
-      fitter_map = map_without_probe(jobs[0].fit, TableReader(jobs[0].table).meta().domain);
-      fitter = std::make_unique<BatchWorker>(jobs[0].table, with_map(jobs[0].fit, fitter_map), device_selector, engine);
+      fitter = std::make_unique<BatchWorker>(jobs[0].table, jobs[0].fit, device_selector, engine);
       fitter_job = 0;
     } catch (const std::exception&) {
       fitter.reset();  // tried again, and reported, at the first batch
@@ -287,14 +283,13 @@ void MpiFarm::serve(const std::vector<FarmJob>& jobs, const std::string& device_
         r.t_o = std::size_t(get<std::uint64_t>(msg, at));
         r.p_o = std::size_t(get<std::uint64_t>(msg, at));
       }
-      if (job != fitter_job || map != fitter_map) {
+      if (job != fitter_job) {
         fitter.reset();
-        fitter = std::make_unique<BatchWorker>(jobs[job].table, with_map(jobs[job].fit, map), device_selector, engine);
+        fitter = std::make_unique<BatchWorker>(jobs[job].table, jobs[job].fit, device_selector, engine);
         fitter_job = job;
-        fitter_map = map;
       }
       const auto t0 = std::chrono::steady_clock::now();
-      const BatchPart part = fitter->fit(batch);
+      const BatchPart part = fitter->fit(batch, map);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       check(MPI_Wait(&pending, MPI_STATUS_IGNORE), "MPI_Wait");
       out.clear();

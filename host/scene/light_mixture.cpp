@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
 #include "core/atomic_file.hpp"
 #include "core/error.hpp"
@@ -74,6 +75,8 @@ class LightingSlices final : public SliceSource {
 LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, const FitSettings& fit,
                               const std::string& cache_dir, const std::string& device_selector,
                               const EngineOptions& engine) {
+  if (fit.map == "auto")  // a product multiplies two mixtures of one plane: the BSDF mixture's
+    throw std::logic_error("lighting_mixture: fit.map must be the BSDF mixture's map, not auto");
   // The cache key: everything the fit depends on.
   Hash64 h;
   const std::vector<float> packed = light.pack();

@@ -55,6 +55,7 @@ SweepResult fit_slices(const SliceSource& source, const std::vector<SliceRef>& s
   std::vector<BatchPart> parts;
   const auto keep = [&](BatchPart&& part) {
     progress.advance(part.slice_index.size());
+    result.phases += part.phases;
     parts.push_back(std::move(part));
   };
   BatchLanes(source, used, devices, engine_options, joined_names(devices), kDefaultLanes).run(batches, keep);

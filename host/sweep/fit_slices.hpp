@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sweep/fit_settings.hpp"
+#include "sweep/fit_phases.hpp"
 #include "device/device.hpp"
 #include "fit/em.hpp"
 #include "io/mixture_file.hpp"
@@ -48,6 +49,7 @@ struct SweepResult {
   std::vector<std::size_t> slice_index;  // table slice index of each mixture slice
   std::vector<ReportRow> report;         // one per slice, same order
   std::vector<SearchRow> search;
+  FitPhases phases;  // where the fits' time went (fit_slices: summed over its batches)
   std::size_t failed() const;
 };
 

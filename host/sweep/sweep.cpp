@@ -32,7 +32,7 @@ struct BatchWorker::Impl {
        const EngineOptions& engine_options)
       : fit_settings(fit), reader(table_path), slices(reader), devices(select_devices(device_selector)),
         engine(devices, 1, engine_options), fitter(slices, fit_settings, engine, joined_names(devices)) {}
-  const FitSettings fit_settings;
+  FitSettings fit_settings;  // the fitter reads its map at each batch
   TableReader reader;
   TableSlices slices;
   const std::vector<Device> devices;
@@ -44,7 +44,10 @@ BatchWorker::BatchWorker(const std::string& table_path, const FitSettings& fit, 
                          const EngineOptions& engine)
     : impl_(std::make_unique<Impl>(table_path, fit, device_selector, engine)) {}
 BatchWorker::~BatchWorker() = default;
-BatchPart BatchWorker::fit(const std::vector<SliceRef>& batch) { return impl_->fitter.fit(batch); }
+BatchPart BatchWorker::fit(const std::vector<SliceRef>& batch, const std::string& map) {
+  impl_->fit_settings.map = map;
+  return impl_->fitter.fit(batch);
+}
 
 namespace {
 
@@ -63,6 +66,31 @@ MapChoice settled_map(const SliceSource& source, const std::string& table_path, 
   MapChoice c = choose_map(source, plan, fit, devices, engine_options, "fit " + table_path);
   if (c.probed > 0 && !c.whole) write_text_atomic(path, map_choice_record(c, key));
   return c;
+}
+
+// Checks the committed parts against the table: one rewritten in place (same path, size
+// and source) is caught by its content.
+void verify_parts(Checkpoint& checkpoint, const SliceSource& source, const std::vector<SliceRef>& plan) {
+  std::unordered_map<std::size_t, const SliceRef*> planned;
+  for (const SliceRef& r : plan) planned.emplace(r.index, &r);
+  checkpoint.verify([&](const std::vector<std::size_t>& indices) {
+    std::vector<const SliceRef*> refs;
+    for (std::size_t index : indices) {
+      const auto at = planned.find(index);
+      if (at == planned.end()) return std::string("not planned");
+      refs.push_back(at->second);
+    }
+    return slices_hash(source, refs);
+  });
+}
+
+void log_plan(const std::string& table_path, std::size_t slices, const FitSettings& fit, const std::string& devices) {
+  const std::vector<int> ks = candidate_ks(fit.k_min, fit.k_max);
+  log_line("fit " + table_path + ": " + std::to_string(slices) + " slice(s), " +
+           (fit.k_min != fit.k_max ? std::to_string(ks.size()) + " candidate K in [" + std::to_string(fit.k_min) +
+                                         ", " + std::to_string(fit.k_max) + "]"
+                                   : "K = " + std::to_string(fit.k_min)) +
+           ", on " + devices);
 }
 
 }  // namespace
@@ -92,18 +120,7 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
                                  Hash64().update(as_given.data(), as_given.size()).hex());
   const FitSettings used = with_map(fit, choice.map);
   Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, used, batch, engine, devices));
-  // A table rewritten in place (same path, size and source) is caught by its content.
-  std::unordered_map<std::size_t, const SliceRef*> planned;
-  for (const SliceRef& r : plan) planned.emplace(r.index, &r);
-  checkpoint.verify([&](const std::vector<std::size_t>& indices) {
-    std::vector<const SliceRef*> refs;
-    for (std::size_t index : indices) {
-      const auto at = planned.find(index);
-      if (at == planned.end()) return std::string("not planned");
-      refs.push_back(at->second);
-    }
-    return slices_hash(source, refs);
-  });
+  verify_parts(checkpoint, source, plan);
 
   // Batches are fixed ranges of the plan, so a resumed sweep rebuilds exactly the
   // batches it did not commit: the same problems, the same results.
@@ -115,18 +132,13 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
     if (done) resumed += b.size();
     else batches.push_back(std::move(b));
   }
-  const std::vector<int> ks = candidate_ks(fit.k_min, fit.k_max);
-  log_line("fit " + table_path + ": " + std::to_string(plan.size()) + " slice(s), " +
-           (fit.k_min != fit.k_max ? std::to_string(ks.size()) + " candidate K in [" + std::to_string(fit.k_min) +
-                                         ", " + std::to_string(fit.k_max) + "]"
-                                   : "K = " + std::to_string(fit.k_min)) +
-           ", on " + device_names);
+  log_plan(table_path, plan.size(), fit, device_names);
   // The slices left: a resumed fit's rate and ETA count only what it fits itself.
   Progress progress("fit " + table_path + (resumed ? " (" + std::to_string(resumed) + " resumed)" : ""),
                     plan.size() - resumed, "slices");
 
   std::size_t committed = resumed;
-  FitPhases phases;  // of the batches fitted in this process
+  FitPhases phases = choice.whole ? choice.whole->phases : FitPhases{};  // of the fits in this process
   const bool stops = options.max_batches < batches.size();
   if (stops) batches.resize(options.max_batches);
   const auto commit = [&](BatchPart&& part) {

@@ -93,7 +93,8 @@ class BatchWorker {
   BatchWorker(const std::string& table_path, const FitSettings& fit, const std::string& device_selector,
               const EngineOptions& engine = {});
   ~BatchWorker();
-  BatchPart fit(const std::vector<SliceRef>& batch);
+  // Fits one batch in `map` (fit.map with auto chosen: the farm's task says which).
+  BatchPart fit(const std::vector<SliceRef>& batch, const std::string& map);
 
  private:
   struct Impl;
