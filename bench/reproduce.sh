@@ -98,13 +98,26 @@ cores=$(nproc)
 # 2 logical CPUs -> amd-epyc-2c (the first two words of the model, lower case, no (R)/(TM)).
 machine=$(echo "${cpu:-unknown}" | sed 's/([RrTtMm]*)//g' | awk '{print tolower($1) (NF > 1 ? "-" tolower($2) : "")}')-${cores}c
 
-# Records that `file` was written by `study` now.
+# Records that `file` was written by `study` now, and takes it off stale.csv (its globs).
 record() {
   local file=$1 study=$2
   [ -f "$provenance" ] || echo "file,study,commit,cpu,logical_cpus,utc" > "$provenance"
   grep -v "^$file," "$provenance" > "$provenance.tmp" || true
   echo "$file,$study,$commit,${cpu:-unknown},$cores,$(date -u +%Y-%m-%dT%H:%M:%SZ)" >> "$provenance.tmp"
   mv "$provenance.tmp" "$provenance"
+  [ -f "$results/stale.csv" ] && $py - "$results/stale.csv" "${file#$results/}" <<'PY'
+import csv, fnmatch, os, sys
+path, done = sys.argv[1], sys.argv[2]
+with open(path, newline="") as f:
+    rows = list(csv.DictReader(f))
+keep = [r for r in rows if not fnmatch.fnmatch(done, r["file"])]
+if len(keep) != len(rows):
+    with open(path + ".tmp", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["file", "why"])
+        w.writeheader()
+        w.writerows(keep)
+    os.replace(path + ".tmp", path)
+PY
 }
 # The files a study writes (globs under the repository root).
 outputs() {

@@ -2,6 +2,7 @@
 (scripts/doc_tables.py writes it between its markers). Each row is short: what was
 measured, the figure, and links to the doc that details it and to its CSV."""
 import csv
+import fnmatch
 import functools
 import math
 import os
@@ -72,11 +73,26 @@ def em_file(k):
     return max(files, key=lambda n: when.get("bench/results/" + n, ""))
 
 
-def link(doc, section, *csvs):
-    """The details cell: the doc (and section), then each CSV."""
+@functools.lru_cache(maxsize=None)
+def stale_files():
+    """bench/results/stale.csv's globs (under bench/results/): files made before a change that moves them."""
+    with open(os.path.join(RESULTS, "stale.csv"), newline="") as f:
+        return tuple(r["file"] for r in csv.DictReader(f))
+
+
+def stale(*files):
+    """Whether one of the files (paths under bench/results/) is listed as stale."""
+    return any(fnmatch.fnmatch(f, g) for f in files for g in stale_files())
+
+
+def link(doc, section, *csvs, used=None):
+    """The details cell: the doc (and section), then each CSV; marked when a file the row's
+    figures come from (`used`, default the CSVs) is stale."""
     anchor = "#" + section.lower().replace(" ", "-").replace("'", "").replace(",", "").replace(":", "") if section else ""
-    return "[%s](docs/%s%s); %s" % (doc.replace(".md", ""), doc, anchor,
-                                    ", ".join("[CSV](bench/results/%s)" % c for c in csvs))
+    return "[%s](docs/%s%s); %s%s" % (doc.replace(".md", ""), doc, anchor,
+                                      ", ".join("[CSV](bench/results/%s)" % c for c in csvs),
+                                      " (stale: [made before `fit.map: auto`](bench/results/README.md#made-before-fitmap-auto))"
+                                      if stale(*(used or csvs)) else "")
 
 
 def fit():
@@ -111,7 +127,8 @@ def constant():
     r = [x for x in converge_tables.measures(csvs, converge_tables.tails_of(csvs), 1024) if x["scene"] == "constant"]
     return ("| BSDF sampling, one point | `mis_tab` matches uniform sampling's error with %s fewer samples "
             "(polyester, cotton; constant light) | %s |" % (
-                span([x["mis_fewer"] for x in r]), link("sampling.md", "", "converge/")))
+                span([x["mis_fewer"] for x in r]),
+                link("sampling.md", "", "converge/", used=["converge/%s_convergence.csv" % m for m in ("polyester", "cotton")])))
 
 
 def peers():
@@ -136,8 +153,7 @@ def peers():
                 ", ".join("%s %sx / %sx" % (short(m), times(ratio[m]), times(with_share[m]))
                           for m in sorted(ratio, key=lambda m: ratio[m])),
                 resolved,
-                link("sampling.md", "Against the file's own sampler", "sampling_peers.csv") +
-                ", [CSV](bench/results/rgl_resolve.csv)"))
+                link("sampling.md", "Against the file's own sampler", "sampling_peers.csv", "rgl_resolve.csv")))
 
 
 def lighting():
@@ -146,7 +162,9 @@ def lighting():
                                for m in ("polyester", "cotton", "satin", "paper")], 1024)
     return ("| Sampling with lights, one point | `mis_product` needs %s fewer samples than `mis_light_cdf` "
             "(light + table CDF), sky and sky map | %s |" % (
-                span([x["mp_vs_base"] for x in r]), link("sampling.md", "Sampling with the lighting", "converge_light/")))
+                span([x["mp_vs_base"] for x in r]), link("sampling.md", "Sampling with the lighting", "converge_light/",
+                                                          used=["converge_light/%s_convergence.csv" % m
+                                                                for m in ("polyester", "cotton", "satin", "paper")])))
 
 
 def cloth_rows():
@@ -160,12 +178,12 @@ def cloth_rows():
     estimators = ("| Rendered cloth, equal time | `mis_light_cdf` is best on %d of %d renders; the best mixture "
                   "estimator has %s its error, `mis_product` %s, guided %s | %s |" % (
                       len(r) - wins, len(r), span(best), span(prod), span(guided),
-                      link("render.md", "Measured", "render/")))
+                      link("render.md", "Measured", "render/", used=["render/"])))
     quiet = all(x["stand_in_4x4"] <= 2 or x["stand_in_4x4"] < x["noise_4x4"] for x in r)
     stand_in = ("| Stand-in in the image | %s of the table image (4 x 4 blocks)%s, from mixtures %s smaller "
                 "than the table | %s |" % (
                     span([x["stand_in_4x4"] for x in r], "%"), ", within its own noise" if quiet else "",
-                    span([x["memory"] for x in r]), link("render.md", "Measured", "render/")))
+                    span([x["memory"] for x in r]), link("render.md", "Measured", "render/", used=["render/"])))
     return [estimators, stand_in]
 
 

@@ -28,6 +28,7 @@
 #include "io/table.hpp"
 #include "sampling/sampling.hpp"
 #include "sweep/earned_share.hpp"
+#include "sweep/map_choice.hpp"
 #include "tables/rgl_brdf.hpp"
 #include "tables/rgl_import.hpp"
 
@@ -590,4 +591,35 @@ TEST_CASE("bsdfmix converge writes the rows of is_rgl and mis_light_rgl", "[conv
   std::getline(e2, line);
   CHECK_THAT(line, Catch::Contains("paper_white_rgb.bsdf: sha256") && Catch::Contains(fx.table));
   CHECK_FALSE(std::getline(e2, line));
+}
+
+// The lighting's mixture follows L per unit of its plane: over (theta, phi) in
+// (theta, phi), per steradian on the disk, so that its product with a BSDF mixture in the
+// same plane follows the integrand there. A constant L is flat in either plane; a
+// mixture of L per unit of (theta, phi) placed on the disk would grow like 1 / sin theta.
+TEST_CASE("the lighting's mixture follows L per unit of its plane: (theta, phi) or the disk", "[converge][light]") {
+  Progress::set_enabled(false);
+  const TableMeta grid = make_grid(Domain::Hemisphere, 1, 1, 24, 48, true);
+  Lighting l = default_lighting(Domain::Hemisphere, 1.0);
+  l.name = "flat";
+  FitSettings fit;
+  fit.k_max = 6;
+  for (const std::string& map : {std::string("theta_phi"), std::string("equal_area")}) {
+    CAPTURE(map);
+    fit.map = map;
+    const mix::SliceMixture m = lighting_mixture(l, grid, fit, (temp_dir() / "flat_light_cache").string(), "").mixture;
+    const bool disk = map == "equal_area";
+    // the integral of L = 1: over (theta, phi) pi^2, over the hemisphere's solid angle 2 pi
+    // (the scale is the amplitude fit's, within a few percent of it)
+    CHECK(m.scale == Approx(disk ? 2 * kPi : kPi * kPi).epsilon(0.1));
+    for (const double theta : {0.25, 0.7, 1.2}) {
+      const double flat = disk ? 1 / (2 * kPi) : 1 / (kPi * kPi);
+      double x = theta, y = 0.4;
+      if (disk) mix::to_map(mix::Map::Disk, theta, 0.4, x, y);
+      CAPTURE(theta);
+      CHECK(m.pdf_map(x, y) == Approx(flat).epsilon(0.2));
+    }
+  }
+  CHECK_THROWS_AS(lighting_mixture(l, grid, with_map(fit, "auto"), (temp_dir() / "flat_light_cache").string(), ""),
+                  std::logic_error);
 }

@@ -47,15 +47,24 @@ namespace {
 // The sweep's weights are f c J x cell area; a table holds f as float32, and so do these
 // cells: f = float(L cell integral / (c J x cell area)), so that the lighting is fitted at
 // a table's precision and its mixtures are those a table of the same cells gives.
+// The weights are L dtheta dphi for a fit in (theta, phi), whose mixture then follows L
+// per unit of (theta, phi), and L J dtheta dphi (L over the cell's solid angle) on an
+// equal-area map, whose mixture then follows L per steradian: either way its product with
+// the BSDF mixture in the same plane follows the integrand in that plane.
 class LightingSlices final : public SliceSource {
  public:
-  LightingSlices(const Lighting& light, const TableMeta& grid, const std::string& name) : meta_(grid) {
+  LightingSlices(const Lighting& light, const TableMeta& grid, const std::string& name, bool per_steradian)
+      : meta_(grid) {
     meta_.azimuthal = true;
     meta_.theta_o = {grid.theta_o.empty() ? 0.0 : grid.theta_o.front()};
     meta_.phi_o = {0.0};
     meta_.rgb = false;
-    meta_.source = "{\"lighting\": \"" + name + "\", \"weights\": \"L_i dtheta dphi / (c J dtheta dphi)\"}";
-    const std::vector<double> w = lighting_cell_weights(light, meta_);
+    meta_.source = "{\"lighting\": \"" + name + "\", \"weights\": \"L_i " + (per_steradian ? "J " : "") +
+                   "dtheta dphi / (c J dtheta dphi)\"}";
+    std::vector<double> w = lighting_cell_weights(light, meta_);
+    const std::size_t np = meta_.phi_i.size();
+    if (per_steradian)
+      for (std::size_t c = 0; c < w.size(); ++c) w[c] *= jacobian(meta_.domain, meta_.theta_i[c / np]);
     const std::vector<float> ones(w.size(), 1.f);
     const std::vector<double> g = integrand_weights(meta_.domain, meta_.theta_i, meta_.phi_i, ones.data());
     std::vector<float> f(w.size());
@@ -85,7 +94,9 @@ LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, cons
   h.update(std::uint64_t(light.domain == Domain::Fiber ? 1 : 2));
   h.update(grid.theta_i.data(), grid.theta_i.size() * sizeof(double));
   h.update(grid.phi_i.data(), grid.phi_i.size() * sizeof(double));
-  const std::string settings = fit_settings_json(fit) + "," + BSDFMIX_VERSION;
+  const bool per_steradian = fit.map == "equal_area";
+  const std::string settings =
+      fit_settings_json(fit) + "," + BSDFMIX_VERSION + (per_steradian ? ",L per steradian" : "");
   h.update(settings.data(), settings.size());
   std::string name = light.name;
   for (char& c : name)
@@ -98,7 +109,7 @@ LightMixture lighting_mixture(const Lighting& light, const TableMeta& grid, cons
     std::filesystem::create_directories(cache_dir);
     log_line("converge: fitting the lighting of scene '" + light.name + "' (" + out.path + ")");
     const auto t0 = std::chrono::steady_clock::now();
-    const LightingSlices cells(light, grid, name);
+    const LightingSlices cells(light, grid, name, per_steradian);
     SweepResult fitted = fit_slices(cells, {SliceRef{0, 0, 0}}, fit, select_devices(device_selector),
                                     "fit the lighting '" + name + "'", engine);
     out.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -18,7 +18,7 @@
 namespace bsdfmix {
 
 struct LightMixture {
-  mix::SliceMixture mixture;  // phi in the lighting's frame; scale = the integral of L over (theta, phi)
+  mix::SliceMixture mixture;  // phi in the lighting's frame; scale = the integral of L over (theta, phi), over solid angle on an equal-area map
   std::string path;           // the cached mixture file
   int k = 0;
   double l1_rel = 0;          // the fit's relative L1 error over the grid
