@@ -36,8 +36,8 @@ The tables (NAME: CSV):
   render_room          bench/results/render/<fiber>_room/ (docs/studies/render_guided.md, "In the room"), by
                        scripts/room_tables.py
   render_room_reading  the room renders' reading under that table, by scripts/room_tables.py
-  failure_map, stability  bench/results/failure_map.csv (docs/studies/failure_map.md, docs/stability.md
-                       "Measured"), by scripts/failure_tables.py
+  failure_map, stability  bench/results/failure_map.csv (docs/studies/failure_map.md,
+                       docs/studies/stability_cases.md), by scripts/failure_tables.py
   search_compare       bench/results/search_compare.csv (CHANGELOG.md, "Before and after")
   amplitude_objective  bench/results/amplitude_objective.csv (docs/studies/colour.md, "The objective")
   converge_refine      bench/results/converge_refine/satin_refine_{l1,none}_tail.csv (CHANGELOG.md,

@@ -1,5 +1,5 @@
-"""The failure map's tables (docs/studies/failure_map.md, docs/stability.md
-"Measured") from bench/results/failure_map.csv, the CSV of `scripts/failure_map.py`
+"""The failure map's tables (docs/studies/failure_map.md, docs/studies/stability_cases.md)
+from bench/results/failure_map.csv, the CSV of `scripts/failure_map.py`
 (scripts/doc_tables.py writes them between their markers)."""
 import csv
 import os
