@@ -113,7 +113,7 @@ with open(path, newline="") as f:
 keep = [r for r in rows if not fnmatch.fnmatch(done, r["file"])]
 if len(keep) != len(rows):
     with open(path + ".tmp", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["file", "why"])
+        w = csv.DictWriter(f, fieldnames=["file", "why"], lineterminator="\n")
         w.writeheader()
         w.writerows(keep)
     os.replace(path + ".tmp", path)

@@ -42,6 +42,8 @@ def room_rows():
 
 
 def peer_ratios():
+    """Per RGL material under constant light: mis_tab's (the mixture with its earned share) variance per sample
+    over the file's own sampler's, median over the views."""
     by = {}
     for r in rows("sampling_peers.csv"):  # the RGL materials under constant light
         if r.get("lighting", "constant") == "constant":
@@ -49,7 +51,7 @@ def peer_ratios():
     by = {m: v for m, v in by.items() if all("rgl" in x for x in v.values())}
     out = {}
     for mat, views in by.items():
-        x = sorted(float(v["is_mixture"]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
+        x = sorted(float(v["mis_mixture"]["relvar"]) / float(v["rgl"]["relvar"]) for v in views.values())
         out[mat] = x[len(x) // 2] if len(x) % 2 else 0.5 * (x[len(x) // 2 - 1] + x[len(x) // 2])
     return out
 
@@ -113,10 +115,12 @@ def choice():
             span(gmm), span(prod)),
         "| Indirect light (the room) | `mis_light_gmm` | %s `mis_light_cdf`'s error at equal time; guided %s "
         "| [render/](../bench/results/render/) |" % (span(room_gmm), span(guided)),
-        "| RGL file at hand, BSDF only | the file's own sampler, or the mixture of a resolved grid | at the default grid it wins on %s; the mixture "
-        "alone wins on %s (%sx its variance); on resolved grids fitted to 2 %% L1 the mixture has %s its variance "
+        "| RGL file at hand, BSDF only | `mis_tab` where it wins, else the file's own sampler or the mixture of a "
+        "resolved grid | at the default grid the file's sampler wins on %s; `mis_tab` wins on %s; on resolved grids "
+        "fitted to 2 %% L1 the mixture has %s its variance "
         "| [sampling_peers.csv](../bench/results/sampling_peers.csv), [rgl_resolve.csv](../bench/results/rgl_resolve.csv) |" % (
-            ", ".join(file_wins), ", ".join(mix_wins), ", ".join(times(peers[m]) for m in mix_wins),
+            ", ".join("%s (%sx)" % (m, times(peers[m])) for m in file_wins) or "-",
+            ", ".join("%s (%sx)" % (m, times(peers[m])) for m in mix_wins) or "-",
             ", ".join("%sx (%s)" % (times(v), m) for m, v in sorted(resolved.items())) or "-"),
         "| RGL file at hand, with lights | `mis_product` | %s `mis_light_rgl`'s variance (light sampling with the "
         "file's sampler), median over views under the sky | [sampling_peers.csv](../bench/results/sampling_peers.csv) |" % (
