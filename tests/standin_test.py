@@ -9,6 +9,7 @@
 - an impossible target exits 1 naming the closest candidate, and writes no stand-in;
 - a byte budget is respected, and one below every candidate exits 1;
 - a rerun reuses the fits; --extra-caps fits one cap past the first meeting the target;
+- with fit.map auto on a hemisphere table, the first K cap's probe chooses the map of every cap;
 - an RGL file is refused with the import command.
 """
 import argparse
@@ -24,6 +25,7 @@ import h5py
 import numpy as np
 
 CAPS, STRIDES = "2,4", "1,2,3"
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def run(bsdfmix, *args, expect=0):
@@ -155,6 +157,23 @@ def main():
     smallest = min(int(x["bytes"]) for x in rows)
     r = stand_in(b, table, os.path.join(work, "tiny.h5"), 99, "--max-bytes", str(smallest - 1), expect=1)
     check("within %d bytes" % (smallest - 1) in r.stderr, "a budget below every candidate exits 1")
+
+    # fit.map auto on a hemisphere table: the first cap's probe chooses the map of every cap
+    paper = os.path.join(work, "paper.h5")
+    if not os.path.exists(paper):
+        run(b, "import", "rgl", os.path.join(ROOT, "data", "rgl", "paper_white_rgb.bsdf"), "--theta-o", "12",
+            "--theta-i", "16", "--phi-i", "32", "-o", paper, "--quiet")
+    r = run(b, "standin", paper, "--target", "99", "-o", os.path.join(work, "paper_s.h5"), "--k-caps", "2,4",
+            "--strides", "1", "--extra-caps", "1")
+    check(r.stderr.count("choosing the map (fit.map auto)") == 1, "one probe for both caps")
+    maps, settings = [], []
+    for cap in ("k2", "k4"):
+        with h5py.File(os.path.join(work, "paper_s.standin", cap + ".h5"), "r") as f:
+            maps.append(f["mixture"].attrs["map"])
+            settings.append(f["mixture"].attrs["fit_settings"])
+    fitted = "equal_area" if maps[0] in (b"disk", "disk") else "theta_phi"
+    check(maps[0] == maps[1] and '"map": "auto"' in str(settings[0]) and ('"map": "%s"' % fitted) in str(settings[1]),
+          "both caps in the first cap's map (%s)" % maps[0])
 
     # an RGL file where a table belongs
     rgl = os.path.join(work, "x.bsdf")

@@ -14,6 +14,7 @@
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 #include "standin/standin_internal.hpp"
+#include "sweep/map_choice.hpp"
 #include "sweep/slice_plan.hpp"
 
 namespace bsdfmix {
@@ -94,8 +95,11 @@ StandinResult choose_stand_in(const StandinOptions& o) {
   const std::vector<int> strides = distinct_strides(o.strides, meta.theta_o.size());
   Progress progress("standin " + o.table, o.k_caps.size(), "K caps");
   int left = -1;  // caps still to fit once every row meets the target
+  StandinOptions fitting = o;  // fit.map auto: the first cap's probe chooses the map of every cap
   for (int cap : o.k_caps) {
-    const CapFit fit = fit_all_rows(o, meta, cap);
+    const CapFit fit = fit_all_rows(fitting, meta, cap);
+    if (map_probed(fitting.fit, meta.domain))
+      fitting.fit.map = fit.mixture.map == mix::Map::ThetaPhi ? "theta_phi" : "equal_area";
     bool all_rows_meet = false;
     for (int s : strides) {
       r.candidates.push_back(measure_candidate(o, meta, fit, s, cap));
