@@ -228,6 +228,33 @@ TEST_CASE("stand-in integral: exact (normal CDFs) equals quadrature", "[converge
   almost.lobes[0].kappa = 1e-6;
   p.light = almost;
   CHECK(stand_in_integral(p) == Approx(exact).epsilon(2e-4));
+  // on the disk the components are not normals in theta and the base has mass too: the
+  // constant-light integral is the quadrature's
+  const TableReader hemi(hemisphere().table);
+  mix::MixtureSet disk;
+  disk.domain = Domain::Hemisphere;
+  disk.map = mix::Map::Disk;
+  disk.grid_theta_o = hemi.meta().theta_o;
+  disk.grid_phi_o = {0.0};
+  for (const double to : disk.grid_theta_o) {
+    mix::SliceMixture sm = mix::make_slice_mixture({1.0}, {0.4, 0.3}, {0.05, 0.0, 0.08});
+    sm.map = mix::Map::Disk;
+    sm.base = 0.6;  // of the slice's mass, beside the Gaussian's 0.4 (prepare normalizes)
+    sm.theta_o = to;
+    sm.scale = 2.0;
+    disk.slices.push_back(sm);
+  }
+  disk.prepare();
+  Problem h = make_problem(hemi, disk, disk.grid_theta_o[1], 0.0, default_lighting(Domain::Hemisphere, 1.0), 0.1);
+  const double closed = stand_in_integral(h);
+  Lighting flat = sky(Domain::Hemisphere);
+  flat.constant = 1.0;
+  flat.lobes[0].radiance = 0;
+  flat.gradient = false;
+  flat.lobes[0].kappa = 1e-6;
+  h.light = flat;
+  CHECK(closed == Approx(stand_in_integral(h)).epsilon(2e-3));
+  CHECK(closed == Approx(2.0).epsilon(0.02));  // scale x the mixture's mass on the hemisphere (nearly all of it)
   // and the table reference with constant L is the sum of f times the exact cell integrals
   Problem q = make_problem(table, set, 0.25, 0.4, default_lighting(Domain::Fiber, 2.0), 0.1);
   double s = 0;

@@ -98,7 +98,7 @@ double table_integral(const Problem& p) {
 double stand_in_integral(const Problem& p) {
   const mix::MixtureSet& set = *p.set;
   const Domain d = p.table.domain;
-  if (p.light.is_constant()) {
+  if (p.light.is_constant() && set.map == mix::Map::ThetaPhi) {  // in closed form: normal CDFs in theta
     const double lo = theta_lo(d), hi = theta_hi(d);
     double s = 0;
     for (int k = 0; k < p.query.blend.count; ++k) {
@@ -112,7 +112,8 @@ double stand_in_integral(const Problem& p) {
     }
     return s * p.light.constant;
   }
-  // Over the whole domain (the stand-in also lives where the table's cells do not reach).
+  // Over the whole domain (the stand-in also lives where the table's cells do not reach);
+  // on an equal-area map always (its components and base are not normals in theta).
   TableSlice grid = p.table;
   const int n = sub_points(std::max(grid.dth, grid.dph), std::min(p.light.finest_feature(), smallest_sigma(p)), 6, 24);
   return cell_quadrature(grid, n, false, [&](double th, double ph, double) {
