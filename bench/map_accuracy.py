@@ -15,7 +15,6 @@ Writes table,map,theta_o_deg,k,l1_rel,energy,fit_seconds (one row per fitted sli
 table's median L1 per map.
 """
 import argparse
-import glob
 import math
 import os
 import statistics
@@ -79,8 +78,7 @@ def main():
     a = ap.parse_args()
     study_io.BIN = a.bsdfmix
     os.makedirs(a.work, exist_ok=True)
-    materials = [m for m in a.materials.split(",") if m] or sorted(
-        os.path.basename(p)[:-len("_rgb.bsdf")] for p in glob.glob(os.path.join(ROOT, "data", "rgl", "*_rgb.bsdf")))
+    materials = study_io.rgl_materials(a.materials)
     rows = []
     for m in materials:
         to, ti, pi = grid(a.rgl_grid)

@@ -12,7 +12,6 @@ are reused (their seconds with them).
         [--materials ...] [--csv bench/results/map_choice.csv]
 """
 import argparse
-import glob
 import json
 import os
 import re
@@ -63,8 +62,7 @@ def main():
     a = ap.parse_args()
     study_io.BIN = a.bsdfmix
     os.makedirs(a.work, exist_ok=True)
-    materials = [m for m in a.materials.split(",") if m] or sorted(
-        os.path.basename(p)[:-len("_rgb.bsdf")] for p in glob.glob(os.path.join(ROOT, "data", "rgl", "*_rgb.bsdf")))
+    materials = study_io.rgl_materials(a.materials)
     out = []
     for m in materials:
         table = os.path.join(a.work, m + "_table.h5")

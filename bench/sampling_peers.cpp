@@ -22,6 +22,7 @@
 #include "io/table.hpp"
 #include "scene/light_mixture.hpp"
 #include "scene/scene.hpp"
+#include "sweep/map_choice.hpp"
 #include "tables/rgl_brdf.hpp"
 
 namespace bsdfmix::bench {
@@ -265,7 +266,7 @@ void bench_sampling(const SamplingPeersOptions& o, const std::string& device, bo
   for (std::size_t l = 1; l < lights.size(); ++l) {
     FitSettings fit;
     fit.k_max = 16;  // as `converge` without a fit section
-    fit.map = set.map == mix::Map::ThetaPhi ? "theta_phi" : "equal_area";  // the product needs one plane
+    fit.map = map_setting(set.map);  // the product needs one plane
     const std::string cache = !o.light_cache.empty() ? o.light_cache
                                                      : (std::filesystem::path(o.csv).parent_path() / "light_mixtures").string();
     light_mix[l] = lighting_mixture(lights[l], table.meta(), fit, cache, device, o.light_engine);

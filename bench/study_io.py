@@ -1,6 +1,7 @@
 """What the studies that drive the CLI share: running build/bsdfmix, reading and writing
 their CSVs, and the per-view ratios of `bsdfmix bench sampling`'s CSV."""
 import csv
+import glob
 import os
 import subprocess
 import sys
@@ -44,6 +45,12 @@ def grid(study, text):
     if len(n) != 3 or min(n) < 1:
         sys.exit(f"{study}: a grid is theta_o,theta_i,phi_i (got {text!r})")
     return n
+
+
+def rgl_materials(text=""):
+    """RGL material names (data/rgl/NAME_rgb.bsdf): those of the comma-separated `text`, else every shipped one."""
+    return [m for m in text.split(",") if m] or sorted(
+        os.path.basename(p)[:-len("_rgb.bsdf")] for p in glob.glob(os.path.join(ROOT, "data", "rgl", "*_rgb.bsdf")))
 
 
 def rows(path):

@@ -17,6 +17,7 @@
 #include "core/format.hpp"
 #include "core/progress.hpp"
 #include "io/mixture_file.hpp"
+#include "sweep/map_choice.hpp"
 #include "tables/rgl_brdf.hpp"
 
 namespace bsdfmix {
@@ -134,7 +135,7 @@ void read_inputs(const StudySpec& spec, StudyInputs& in) {
   in.product = any_estimator(spec, uses_product);
   in.light_mix.resize(spec.scenes.size());
   FitSettings light_fit = spec.light_fit;  // the lighting in the mixtures' own map: the product needs one plane
-  light_fit.map = in.set.map == mix::Map::ThetaPhi ? "theta_phi" : "equal_area";
+  light_fit.map = map_setting(in.set.map);
   if (in.product)
     for (std::size_t s = 0; s < spec.scenes.size(); ++s) {
       Lighting l = spec.scenes[s];

@@ -18,7 +18,9 @@
 namespace bsdfmix {
 
 struct LightMixture {
-  mix::SliceMixture mixture;  // phi in the lighting's frame; scale = the integral of L over (theta, phi), over solid angle on an equal-area map
+  // phi in the lighting's frame; scale = the integral of L over (theta, phi), over solid
+  // angle on an equal-area map
+  mix::SliceMixture mixture;
   std::string path;           // the cached mixture file
   int k = 0;
   double l1_rel = 0;          // the fit's relative L1 error over the grid

@@ -99,7 +99,7 @@ StandinResult choose_stand_in(const StandinOptions& o) {
   for (int cap : o.k_caps) {
     const CapFit fit = fit_all_rows(fitting, meta, cap);
     if (map_probed(fitting.fit, meta.domain))
-      fitting.fit.map = fit.mixture.map == mix::Map::ThetaPhi ? "theta_phi" : "equal_area";
+      fitting.fit.map = map_setting(fit.mixture.map);
     bool all_rows_meet = false;
     for (int s : strides) {
       r.candidates.push_back(measure_candidate(o, meta, fit, s, cap));

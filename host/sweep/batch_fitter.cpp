@@ -222,7 +222,7 @@ BatchFitter::BatchFitter(const SliceSource& source, const FitSettings& fit, EmEn
 
 Map fit_map(const FitSettings& fit, Domain d) {
   if (map_probed(fit, d)) throw std::logic_error("fit_map: fit.map auto is chosen by a probe first (sweep/map_choice.hpp)");
-  return fit.map == "theta_phi" || fit.map == "auto" ? Map::ThetaPhi : mix::equal_area_map(d);
+  return map_without_probe(fit, d) == "theta_phi" ? Map::ThetaPhi : mix::equal_area_map(d);
 }
 
 BatchPart BatchFitter::fit(const std::vector<SliceRef>& refs) {

@@ -51,6 +51,8 @@ std::vector<SliceRef> probe_slices(const std::vector<SliceRef>& plan) {
   return out;
 }
 
+std::string map_setting(Map m) { return m == Map::ThetaPhi ? "theta_phi" : "equal_area"; }
+
 FitSettings with_map(FitSettings fit, const std::string& map) {
   fit.map = map;
   return fit;

@@ -53,6 +53,10 @@ std::vector<SliceRef> probe_slices(const std::vector<SliceRef>& plan);
 MapChoice choose_map(const SliceSource& source, const std::vector<SliceRef>& plan, const FitSettings& fit,
                      const std::vector<Device>& devices, const EngineOptions& engine, const std::string& what);
 
+// The fit.map setting that fits in plane m: theta_phi, or equal_area for the disk and the
+// cylinder (a lighting fitted for a product with a mixture of that plane, say).
+std::string map_setting(Map m);
+
 // `fit` with `map` in force (the fits use it; the file records the settings as given).
 FitSettings with_map(FitSettings fit, const std::string& map);
 

@@ -115,9 +115,12 @@ SweepSummary run_sweep(const std::string& table_path, const FitSettings& fit, co
   // file is written, so that a resumed fit takes it again; the fits use it, the file
   // records the settings as given.
   const std::string choice_path = fit.output + ".map";
-  const std::string as_given = sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices);
-  MapChoice choice = settled_map(source, table_path, plan, fit, devices, options.engine, choice_path,
-                                 Hash64().update(as_given.data(), as_given.size()).hex());
+  std::string key;  // the choice's: the sweep's fingerprint with the settings as given
+  if (map_probed(fit, meta.domain)) {
+    const std::string as_given = sweep_fingerprint(table_path, meta, plan, fit, batch, engine, devices);
+    key = Hash64().update(as_given.data(), as_given.size()).hex();
+  }
+  MapChoice choice = settled_map(source, table_path, plan, fit, devices, options.engine, choice_path, key);
   const FitSettings used = with_map(fit, choice.map);
   Checkpoint checkpoint(fit.output, sweep_fingerprint(table_path, meta, plan, used, batch, engine, devices));
   verify_parts(checkpoint, source, plan);
