@@ -3,7 +3,8 @@
 // its closed form, the product across phi = +-pi and with a rotation, the pointwise
 // identity pdf * mass = a * b for mixtures with broad phi lobes, Pearson chi-square of
 // product samples (pruned and unpruned, a lobe cut by the theta border, both domains),
-// the pdf integrating to the analytic mass inside the theta range, and pruning (`kept`).
+// the pdf integrating to the analytic mass inside the theta range, pruning (`kept`), and a
+// Lambertian base on the disk as its fit of the cosine dome.
 // labels: sample
 #include <catch2/catch.hpp>
 
@@ -473,4 +474,63 @@ TEST_CASE("pruning keeps the heaviest pairs; MixtureSet::product_with is the pro
       CHECK(w < 1e-9);
     }
   }
+}
+
+TEST_CASE("on the disk a base takes part as its 7-Gaussian fit of the cosine dome", "[sample][product]") {
+  // The fit against (1 - |x|^2 / 2) / pi over the plane (its mass past the horizon counts).
+  const std::vector<Gaussian> parts = base_gaussians(0.25);
+  double wsum = 0;
+  for (const Gaussian& g : parts) wsum += g.weight;
+  const double h = 0.01;
+  double l1 = 0, outside = 0;
+  for (double x = -2.8 + h / 2; x < 2.8; x += h)
+    for (double y = -2.8 + h / 2; y < 2.8; y += h) {
+      double q = 0;
+      for (const Gaussian& g : parts) q += g.weight / 0.25 * g.density(x, y);
+      l1 += std::abs(q - lambert_base(x, y)) * h * h;
+      if (x * x + y * y > 2) outside += q * h * h;
+    }
+  std::printf("product_test: the base's fit: %zu Gaussians, weights %.15f of the base, L1 %.4f from the dome, %.4f "
+              "of it past the horizon\n",
+              parts.size(), wsum / 0.25, l1, outside);
+  CHECK(parts.size() == 7);
+  CHECK(std::abs(wsum - 0.25) < 1e-15);
+  CHECK(l1 < 0.08);  // one isotropic Gaussian of sigma 0.75: 0.40
+  CHECK(outside < 0.03);
+
+  // A base and a lobe times a lobe: pdf * mass is (the base's fit + the lobe) * the lobe,
+  // and the product is within a few percent of the true (dome + lobe) * lobe.
+  SliceMixture a = mixture({gaussian(0.4, 0.3, -0.5, 0.2, 0.25, 0.1)});
+  a.map = Map::Disk;
+  a.components[0].weight = 0.4;
+  a.base = 0.6;
+  a.prepare();
+  SliceMixture b = mixture({gaussian(1.0, 0.6, -0.4, 0.35, 0.3, 0.1)});
+  b.map = Map::Disk;
+  b.prepare();
+  double mass = 0, kept = 0;
+  const SliceMixture p = product(a, 0.0, b, ProductOptions{1.0, 1000}, &mass, &kept);
+  double worst = 0, vmax = 0, l1p = 0, norm = 0;
+  std::vector<double> ref, got, exact;
+  for (double x = -1.6 + h / 2; x < 1.6; x += 2 * h)
+    for (double y = -1.6 + h / 2; y < 1.6; y += 2 * h) {
+      double fit = 0;
+      for (const Gaussian& g : base_gaussians(a.base)) fit += g.weight * g.density(x, y);
+      fit += a.components[0].weight * a.components[0].density(x, y);
+      ref.push_back(fit * b.pdf_map(x, y));
+      got.push_back(p.pdf_map(x, y) * mass);
+      exact.push_back(a.pdf_map(x, y) * b.pdf_map(x, y));
+      norm += exact.back() * 4 * h * h;
+      vmax = std::max(vmax, ref.back());
+    }
+  for (std::size_t k = 0; k < ref.size(); ++k) {
+    if (ref[k] > 1e-12 * vmax) worst = std::max(worst, rel(got[k], ref[k]));
+    l1p += std::abs(got[k] / mass - exact[k] / norm) * 4 * h * h;
+  }
+  std::printf("product_test: a base and a lobe times a lobe on the disk: %zu components, identity worst rel error "
+              "%.2e, L1 %.4f from the exact product\n",
+              p.components.size(), worst, l1p);
+  CHECK(p.map == Map::Disk);
+  CHECK(worst < 1e-6);
+  CHECK(l1p < 0.02);  // one Gaussian of sigma 0.75 for the base: 0.042
 }

@@ -468,9 +468,39 @@ inline SliceMixture make_slice_mixture(const std::vector<double>& weight, const 
   return m;
 }
 
-// The standard deviation of the one isotropic Gaussian at the pole that product() puts in
-// a Lambertian base's place (the least-squares fit of the cosine dome on the disk).
-constexpr double kBaseSigma = 0.75;
+// The cosine dome on the disk, (1 - |x|^2 / 2) / pi, as product() takes a Lambertian base:
+// a fixed fit of 7 Gaussians, one at the pole and 6 on a ring (the least L1 over the
+// plane: 7.8%, 2.5% of the mass past the horizon; one isotropic Gaussian of sigma 0.75
+// is 40% and 17%).
+struct BaseFit {
+  static constexpr double kPoleWeight = 0.4501, kPoleSigma = 0.4637;
+  static constexpr double kRingRadius = 0.8276, kRingRadial = 0.2764, kRingTangential = 0.3994;
+  static constexpr int kRing = 6;
+};
+
+// A base of `weight` as BaseFit's Gaussians on the disk (prepared; weights summing to it).
+inline std::vector<Gaussian> base_gaussians(double weight) {
+  std::vector<Gaussian> out;
+  Gaussian pole;
+  pole.weight = weight * BaseFit::kPoleWeight;
+  pole.s_tt = pole.s_pp = BaseFit::kPoleSigma * BaseFit::kPoleSigma;
+  pole.prepare();
+  out.push_back(pole);
+  const double rr = BaseFit::kRingRadial * BaseFit::kRingRadial, tt = BaseFit::kRingTangential * BaseFit::kRingTangential;
+  for (int k = 0; k < BaseFit::kRing; ++k) {
+    const double a = 2 * kPi * k / BaseFit::kRing, c = std::cos(a), s = std::sin(a);
+    Gaussian g;
+    g.weight = weight * (1 - BaseFit::kPoleWeight) / BaseFit::kRing;
+    g.mu_t = BaseFit::kRingRadius * c;
+    g.mu_p = BaseFit::kRingRadius * s;
+    g.s_tt = c * c * rr + s * s * tt;  // R diag(radial^2, tangential^2) R^T
+    g.s_pp = s * s * rr + c * c * tt;
+    g.s_tp = c * s * (rr - tt);
+    g.prepare();
+    out.push_back(g);
+  }
+  return out;
+}
 
 // How product() prunes: the heaviest component pairs are kept until they hold `keep` of
 // the product's mass, and at most `max_components` of them.
@@ -479,7 +509,7 @@ struct ProductOptions {
   std::size_t max_components = 128;
 };
 
-// The product of two periodic mixtures over (theta, phi): `a` shifted by `rotate_a` in
+// The product of two periodic mixtures over one map's (x, y): `a` shifted by `rotate_a` in
 // phi, times `b`, as a mixture (prepared: weights normalized). For components i of a
 // and j of b and a phi image offset d, the product of the two normal densities is
 //   N(x; m_i, S_i) N(x; m_j, S_j) = c N(x; m, S),  m_i = mu_i + (0, rotate_a + 2 pi d),
@@ -506,18 +536,13 @@ inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceM
   };
   std::vector<Term> terms;
   double total = 0;
-  // A Lambertian base takes part as the one Gaussian nearest it, N(0, kBaseSigma^2 I)
-  // (11% L1 from the cosine dome): the product stays a mixture of Gaussians, and its pdf
-  // is exactly what its sample() draws.
+  // A Lambertian base takes part as BaseFit's Gaussians: the product stays a mixture of
+  // Gaussians, and its pdf is exactly what its sample() draws.
   std::vector<Gaussian> parts[2] = {a.components, b.components};
   for (int i = 0; i < 2; ++i) {
     const SliceMixture& m = i == 0 ? a : b;
     if (!(m.base > 0)) continue;
-    Gaussian g;
-    g.weight = m.base;
-    g.s_tt = g.s_pp = kBaseSigma * kBaseSigma;
-    g.prepare();
-    parts[i].push_back(g);
+    for (const Gaussian& g : base_gaussians(m.base)) parts[i].push_back(g);
   }
   for (const Gaussian& x : parts[0])
     for (const Gaussian& y : parts[1]) {
