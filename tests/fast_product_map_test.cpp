@@ -1,11 +1,11 @@
 // The renderer's per-vertex product (host/render/fast_product.hpp) with a stand-in on an
-// equal-area map: Lambert's disk for a surface (hemisphere), the cylinder for a fiber. At
-// random frames: the lighting carried into the map's plane keeps the world mixture's value
-// per direction; the product's samples follow its pdf_omega (Pearson chi-square over
-// equal-area bins of the frame; a density 10 % off is rejected); its density equals that of
-// its own components and the header's product of the stand-in with the lighting carried
-// into the plane; and it stays near the exact product of the stand-in and the world
-// lighting (total variation within the linearization's error).
+// equal-area map: Lambert's disk for a surface (hemisphere, with a Lambertian base), the
+// cylinder for a fiber. At random frames: the lighting carried into the map's plane keeps
+// the world mixture's value per direction; the product's samples follow its pdf_omega
+// (Pearson chi-square over equal-area bins of the frame; a density 10 % off is rejected);
+// its density equals that of its own components and the header's product of the stand-in
+// with the lighting carried into the plane; and it stays near the exact product of the
+// stand-in and the world lighting (total variation within the linearization's error).
 // labels: render sample
 #include <catch2/catch.hpp>
 
@@ -34,7 +34,7 @@ const std::vector<mix::Gaussian> kWorld = {gauss(0.6, 0.5, 0.6, 0.08, 0.1, 0.3),
 double world_value(const Vec3& w) { return test::world_value(kWorld, w); }
 
 // The stand-in of frame k over its domain's equal-area map: a lobe at the specular cone
-// (fiber) or mirror direction (surface) and a broad one.
+// (fiber) or mirror direction (surface) and a broad one; on the disk a Lambertian base too.
 mix::SliceMixture stand_in(std::uint32_t k, Domain d) {
   double u[4];
   mix::uniforms(kSeed, 9, k, u);
@@ -46,6 +46,7 @@ mix::SliceMixture stand_in(std::uint32_t k, Domain d) {
   } else {
     const double r = 2 * std::sin(0.5 * 1.2 * u[0]);  // the mirror direction at phi = pi
     s.components = {gauss(0.6, -r, 0.0, 0.15, 0.2, 0.1), gauss(0.4, 0.2, 0.1, 0.6, 0.6, 0.0)};
+    s.base = 0.3;  // a Lambertian base beside them, as the disk's fits have
   }
   s.prepare();
   return s;
