@@ -3,7 +3,6 @@
 #include "bench/sampler_choice.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/progress.hpp"
+#include "fit/scheduler.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 #include "scene/scene.hpp"
@@ -154,21 +154,14 @@ void measure(SamplerChoice& out, const RglBrdf* brdf, const std::vector<Problem>
       ++i;
     }
   Progress progress("recommend " + what, tasks.size(), "runs");
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t t; (t = next++) < tasks.size();) {
-      const Task& k = tasks[t];
-      const Problem& p = problems[(k.view * nl + k.lighting) * 2 + (k.earned ? 1 : 0)];
-      const WeightStats s = peer_stats(brdf, p, k.peer, o.seed, std::uint32_t(k.view), o.samples);
-      out.figures[k.figure].relvar[k.view] = s.relvar(integral[k.view * nl + k.lighting]);
-      progress.advance();
-    }
-  };
-  std::vector<std::thread> pool;
   const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(tasks.size())));
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+  run_on_workers(tasks.size(), threads, [&](std::size_t, std::size_t t) {  // an error in any is rethrown here
+    const Task& k = tasks[t];
+    const Problem& p = problems[(k.view * nl + k.lighting) * 2 + (k.earned ? 1 : 0)];
+    const WeightStats s = peer_stats(brdf, p, k.peer, o.seed, std::uint32_t(k.view), o.samples);
+    out.figures[k.figure].relvar[k.view] = s.relvar(integral[k.view * nl + k.lighting]);
+    progress.advance();
+  });
   progress.finish();
 }
 

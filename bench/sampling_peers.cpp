@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -18,6 +17,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/progress.hpp"
+#include "fit/scheduler.hpp"
 #include "io/mixture_file.hpp"
 #include "io/table.hpp"
 #include "scene/light_mixture.hpp"
@@ -301,37 +301,31 @@ void bench_sampling(const SamplingPeersOptions& o, const std::string& device, bo
   };
   const std::size_t nl = lights.size();
   std::vector<Cell> cells(views.size() * nl);
-  std::atomic<std::size_t> next{0};
   Progress progress("bench sampling " + material_name(brdf ? o.rgl : o.table), views.size(), "views");
-  auto work = [&] {
-    for (std::size_t d; (d = next++) < views.size();) {
-      std::vector<double> integral(nl);
-      if (brdf) {
-        std::vector<const Lighting*> lp;
-        for (const Lighting& l : lights) lp.push_back(&l);
-        integral = rgl_integrals(*brdf, views[d], lp, o.quadrature);
-      }
-      for (std::size_t l = 0; l < nl; ++l) {
-        Problem p = make_problem(table, set, views[d], 0.0, lights[l], mis, l ? &light_mix[l].mixture : nullptr);
-        if (l) {  // mis_product's fractions chosen per view and lighting, as `converge` does by default
-          const ProductTuning tu = tune_product_fractions(p);
-          p.mis.product_fraction = tu.product_fraction;
-          p.mis.product_light = tu.product_light;
-        }
-        Cell& c = cells[d * nl + l];
-        c.integral = brdf ? integral[l] : table_integral(p);
-        for (int k = 0; k < kPeers; ++k)
-          if (peer_studied(Peer(k), bool(brdf), l > 0))
-            c.stats[k] = peer_stats(brdf.get(), p, Peer(k), o.seed, std::uint32_t(d), o.samples);
-      }
-      progress.advance();
-    }
-  };
-  std::vector<std::thread> pool;
+  // one view a job; an error in any (a product with no overlap, say) is rethrown here
   const unsigned threads = std::max(1u, std::min(std::thread::hardware_concurrency(), unsigned(views.size())));
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+  run_on_workers(views.size(), threads, [&](std::size_t, std::size_t d) {
+    std::vector<double> integral(nl);
+    if (brdf) {
+      std::vector<const Lighting*> lp;
+      for (const Lighting& l : lights) lp.push_back(&l);
+      integral = rgl_integrals(*brdf, views[d], lp, o.quadrature);
+    }
+    for (std::size_t l = 0; l < nl; ++l) {
+      Problem p = make_problem(table, set, views[d], 0.0, lights[l], mis, l ? &light_mix[l].mixture : nullptr);
+      if (l) {  // mis_product's fractions chosen per view and lighting, as `converge` does by default
+        const ProductTuning tu = tune_product_fractions(p);
+        p.mis.product_fraction = tu.product_fraction;
+        p.mis.product_light = tu.product_light;
+      }
+      Cell& c = cells[d * nl + l];
+      c.integral = brdf ? integral[l] : table_integral(p);
+      for (int k = 0; k < kPeers; ++k)
+        if (peer_studied(Peer(k), bool(brdf), l > 0))
+          c.stats[k] = peer_stats(brdf.get(), p, Peer(k), o.seed, std::uint32_t(d), o.samples);
+    }
+    progress.advance();
+  });
   progress.finish();
 
   const std::string material = material_name(brdf ? o.rgl : o.table);
