@@ -12,7 +12,9 @@ noise around zero, whose negative cells hold more than 0.5% of its absolute sum)
 
 Per slice: the luminance L1 error, the RGB error and the RGB error less its part in cells
 whose measured channel is negative, as the fit report defines them (docs/formats.md), and
-the seconds of each. Reads the tables and mixture files that bench/rgb_stand_in.py made.
+the seconds of each. Reads the tables and mixture files that bench/rgb_stand_in.py made; on
+a disk file the Lambertian base is held as the file has it, like the Gaussians, and the
+amplitudes fit what it leaves.
 
     bench/amplitude_objective.py [--work out/bench_rgb] [--tables satin,paper,sunflower]
                                  [--slices 3,39,75] [--csv bench/results/amplitude_objective.csv]
@@ -20,7 +22,6 @@ the seconds of each. Reads the tables and mixture files that bench/rgb_stand_in.
 import argparse
 import csv
 import importlib.util
-import math
 import os
 import statistics
 import time
@@ -92,32 +93,40 @@ def main():
         m = h5py.File(os.path.join(args.work, name + "_mixture.h5"), "r")["mixture"]
         theta, phi_i = t["theta_i"][:], t["phi_i"][:]
         dth, dph = theta[1] - theta[0], phi_i[1] - phi_i[0]
-        area = dth * dph
         tt, pp = np.meshgrid(theta, phi_i, indexing="ij")
-        jac = (np.cos(tt) * np.sin(tt) * area).ravel()
+        jac = (np.cos(tt) * np.sin(tt) * dth * dph).ravel()
+        plane = rgb_stand_in.Plane(m, theta, phi_i, "hemisphere")
         for s in [int(x) for x in args.slices.split(",")]:
             k = int(m["k"][s])
             basis, z = [], []
             for j in range(k):
                 a, b, c = (float(x) for x in m["covariances"][s, j])
                 mt, mp = (float(x) for x in m["means"][s, j])
-                basis.append(rgb_stand_in.component_mass(tt, pp, mt, mp, a, b, c, dth, dph, area).ravel())
-                z.append(rgb_stand_in.erf_mass(mt, a, 0.0, math.pi / 2))
+                basis.append(plane.mass(mt, mp, a, b, c).ravel())
+                z.append(plane.in_domain(mt, mp, a, b, c))
             basis, z = np.array(basis).T, np.array(z)
             w_y = t["values"][s, 0].ravel().astype(np.float64) * jac
             w_c = t["rgb"][s, 0].reshape(-1, 3).astype(np.float64) * jac[:, None]
-            totals = [None if -w_c[:, c][w_c[:, c] < 0].sum() > 0.005 * np.abs(w_c[:, c]).sum() else w_c[:, c].sum()
-                      for c in range(3)]
+            # a Lambertian base (map disk) held as the file has it, like the Gaussians: the
+            # amplitudes fit what it leaves, the errors are of the whole
+            weights = m["weights"][s, :k].astype(np.float64)
+            base = float(m["base"][s]) if "base" in m else 0.0
+            base /= weights.sum() + base
+            dome = (plane.base_density * plane.area).ravel()
+            b_y = float(m["scale"][s]) * base * dome
+            b_c = dome[:, None] * (m["base_rgb"][s].astype(np.float64) if base > 0 and "base_rgb" in m else np.zeros(3))
+            totals = [None if -w_c[:, c][w_c[:, c] < 0].sum() > 0.005 * np.abs(w_c[:, c]).sum()
+                      else w_c[:, c].sum() - b_c[:, c].sum() for c in range(3)]
             negative = w_c < 0
             for method, solve in (("ls", solve_ls), ("irls", solve_irls), ("lp", solve_lp)):
                 start = time.monotonic()
-                a_y = solve(basis, w_y, z, w_y.sum())
-                a_c = np.array([solve(basis, w_c[:, c], z, totals[c]) for c in range(3)]).T
+                a_y = solve(basis, w_y - b_y, z, w_y.sum() - b_y.sum())
+                a_c = np.array([solve(basis, w_c[:, c] - b_c[:, c], z, totals[c]) for c in range(3)]).T
                 seconds = time.monotonic() - start
-                err = np.abs(w_c - basis @ a_c)
+                err = np.abs(w_c - b_c - basis @ a_c)
                 den = np.abs(w_c).sum()
                 row = {"table": name, "slice": s, "method": method, "k": k,
-                       "l1_rel": np.abs(w_y - basis @ a_y).sum() / w_y.sum(), "rgb_l1_rel": err.sum() / den,
+                       "l1_rel": np.abs(w_y - b_y - basis @ a_y).sum() / w_y.sum(), "rgb_l1_rel": err.sum() / den,
                        "rgb_less_negative": (err.sum() - err[negative].sum()) / den, "seconds": seconds}
                 rows.append(row)
                 print(f"{name:10s} slice {s:2d} {method:4s}: L1 {100 * row['l1_rel']:.3f}%, RGB {100 * row['rgb_l1_rel']:.3f}%, "

@@ -10,8 +10,9 @@ default settings, and reads the fit report and the files back:
 - recomputed here, independently of the program, from the table and the mixture file with
   h5py and numpy, the stand-in exactly as the header evaluates it (include/bsdfmix/
   mixture.hpp: every phi image within 9 sigma; each component's cell mass its density at
-  the cell center times the area, or its mean over 3 x 3 points of the cell where it is
-  narrower than half a cell, docs/formats.md): the largest difference between the reported
+  the cell center's point of the file's map times the cell's area there, or in (theta, phi)
+  its mean over 3 x 3 points of the cell where it is narrower than half a cell; a
+  Lambertian base on the disk, docs/formats.md): the largest difference between the reported
   and the recomputed l1_rel, rgb_l1_rel and rgb_negative, in points (target: 0.2);
 - the stand-in's energy per channel (luminance, R, G, B): its in-domain integral (each
   component's closed-form in-domain mass times its amplitude) against the table's (the sum
@@ -66,8 +67,11 @@ def erf_mass(mu, s_tt, lo, hi):
     return 0.5 * (math.erf((hi - mu) / sd) - math.erf((lo - mu) / sd))
 
 
-def component_mass(tt, pp, mu_t, mu_p, a, b, c, dth, dph, area):
-    """A component's mass in every cell, as the header evaluates its density."""
+def component_mass(tt, pp, mu_t, mu_p, a, b, c, dth, dph, area, sub_cells=True):
+    """A component's mass in every cell, as the header evaluates its density: at the cell
+    points (tt, pp) of the mixture's plane times the cells' area there (an array on an
+    equal-area map); in (theta, phi) (sub_cells) one narrower than half a cell takes its mean
+    over 3 x 3 points of the cell."""
     det = a * c - b * b
     i_tt, i_tp, i_pp = c / det, -b / det, a / det
     norm = 1.0 / (2 * math.pi * math.sqrt(det))
@@ -76,7 +80,8 @@ def component_mass(tt, pp, mu_t, mu_p, a, b, c, dth, dph, area):
     half_tr = 0.5 * (a + c)
     lmin = half_tr - math.sqrt(0.25 * (a - c) ** 2 + b * b)
     wide = 0.5 * min(dth, dph)
-    offsets = [(0.0, 0.0)] if lmin >= wide * wide else [(x * dth / 3, y * dph / 3) for x in (-1, 0, 1) for y in (-1, 0, 1)]
+    narrow = sub_cells and lmin < wide * wide
+    offsets = [(x * dth / 3, y * dph / 3) for x in (-1, 0, 1) for y in (-1, 0, 1)] if narrow else [(0.0, 0.0)]
     out = np.zeros_like(tt)
     for ot, op in offsets:
         t = tt + ot
@@ -88,6 +93,47 @@ def component_mass(tt, pp, mu_t, mu_p, a, b, c, dth, dph, area):
             q = i_tt * dt * dt + 2 * i_tp * dt * dp + i_pp * dp * dp
             out += np.where((np.abs(dp) <= cut) & (q < 1500), np.exp(-0.5 * np.minimum(q, 1500)), 0.0)
     return out * norm / len(offsets) * area
+
+
+class Plane:
+    """A mixture file's plane (docs/formats.md, "Maps") at a table's cells: each cell at the
+    map point of its center, with its solid angle as its area; the components' in-domain
+    masses; the Lambertian base's density (map disk)."""
+
+    def __init__(self, mixture, theta, phi, domain):
+        name = mixture.attrs.get("map", b"theta_phi")
+        self.map = name.decode() if isinstance(name, bytes) else str(name)
+        self.domain = domain
+        self.dth, self.dph = theta[1] - theta[0], phi[1] - phi[0]
+        tt, pp = np.meshgrid(theta, phi, indexing="ij")
+        area = self.dth * self.dph
+        if self.map == "disk":
+            r = 2 * np.sin(tt / 2)
+            self.x, self.y, self.area = r * np.cos(pp), r * np.sin(pp), np.sin(tt) * area
+        elif self.map == "cylinder":
+            self.x, self.y, self.area = np.sin(tt), pp, np.cos(tt) * area
+        else:
+            self.x, self.y, self.area = tt, pp, area
+        self.base_density = np.maximum(1 - 0.5 * (self.x ** 2 + self.y ** 2), 0.0) / math.pi
+
+    def mass(self, mu_t, mu_p, a, b, c):
+        return component_mass(self.x, self.y, mu_t, mu_p, a, b, c, self.dth, self.dph, self.area,
+                              sub_cells=self.map == "theta_phi")
+
+    def in_domain(self, mu_t, mu_p, a, b, c):
+        """The component's mass inside the domain: the first axis within its range, or on the
+        disk within radius sqrt 2 (polar midpoints, 64 rings x 256 angles)."""
+        if self.map != "disk":
+            lo, hi = ((-1.0, 1.0) if self.map == "cylinder" else
+                      (-math.pi / 2, math.pi / 2) if self.domain == "fiber" else (0.0, math.pi / 2))
+            return erf_mass(mu_t, a, lo, hi)
+        nr, na = 64, 256
+        dr, da = math.sqrt(2.0) / nr, 2 * math.pi / na
+        r = (np.arange(nr) + 0.5) * dr
+        ang = np.arange(na) * da
+        rr, aa = np.meshgrid(r, ang, indexing="ij")
+        d = component_mass(rr * np.cos(aa), rr * np.sin(aa), mu_t, mu_p, a, b, c, 1.0, 1.0, rr * dr * da, False)
+        return min(float(d.sum()), 1.0)
 
 
 def abs_rgb_of(flat):
@@ -105,10 +151,9 @@ def recompute(table_path, mixture_path):
     domain = domain.decode() if isinstance(domain, bytes) else str(domain)
     if domain == "fiber":  # f J dtheta dphi, J = cos(theta_i), theta_i in [-pi/2, pi/2]
         jac = np.cos(tt) * area
-        lo, hi = -math.pi / 2, math.pi / 2
     else:  # hemisphere: f cos(theta_i) J dtheta dphi, J = sin(theta_i)
         jac = np.cos(tt) * np.sin(tt) * area
-        lo, hi = 0.0, math.pi / 2
+    plane = Plane(m, theta, phi, domain)
     has_rgb = "rgb_scale" in m
     # colour copies: the rows of the slices that have them, slice s's at copies_offset[s] (-1: none)
     copies = m["rgb_copies"][:] if "rgb_copies" in m else None
@@ -119,20 +164,24 @@ def recompute(table_path, mixture_path):
         w_y = t["values"][s, 0].astype(np.float64) * jac
         w_c = t["rgb"][s, 0].astype(np.float64) * jac[..., None]
         weights = m["weights"][s, :k].astype(np.float64)
-        weights = weights / weights.sum()  # as the header's prepare()
+        base = float(m["base"][s]) if "base" in m else 0.0
+        base, weights = base / (weights.sum() + base), weights / (weights.sum() + base)  # as the header's prepare()
         scale = float(m["scale"][s])
         rgb_amp = m["rgb_scale"][s, :k].astype(np.float64) if has_rgb else np.outer(scale * weights, np.ones(3))
-        y = np.zeros_like(tt)
-        c = np.zeros(tt.shape + (3,))
+        y = scale * base * plane.base_density * plane.area
         energy = np.zeros(4)
+        energy[0] = scale * base  # the base lies inside the domain
+        base_rgb = m["base_rgb"][s].astype(np.float64) if base > 0 and "base_rgb" in m else np.zeros(3)
+        c = (plane.base_density * plane.area)[..., None] * base_rgb
+        energy[1:] = base_rgb
         copied = copies is not None and int(copies_offset[s]) >= 0
         copy_amp = copies[int(copies_offset[s]):int(copies_offset[s]) + k].astype(np.float64) if copied else None
         for j in range(k):
             a, b, cc = (float(x) for x in m["covariances"][s, j])
             mt, mp = (float(x) for x in m["means"][s, j])
-            mass = component_mass(tt, pp, mt, mp, a, b, cc, dth, dph, area)
+            mass = plane.mass(mt, mp, a, b, cc)
             y += scale * weights[j] * mass
-            z = erf_mass(mt, a, lo, hi)
+            z = plane.in_domain(mt, mp, a, b, cc)
             energy[0] += scale * weights[j] * z
             if not copied:
                 c += mass[..., None] * rgb_amp[j]
@@ -147,9 +196,9 @@ def recompute(table_path, mixture_path):
                 sign = 1.0 if i % 2 else -1.0
                 ct = mt + (0.5 * sign * l_tt if i < 2 else 0.0)
                 cp = mp + 0.5 * sign * (l_pt if i < 2 else l_pp)
-                mass_i = component_mass(tt, pp, ct, cp, 0.875 * a, 0.875 * b, 0.875 * cc, dth, dph, area)
+                mass_i = plane.mass(ct, cp, 0.875 * a, 0.875 * b, 0.875 * cc)
                 c += mass_i[..., None] * copy_amp[j, i]
-                energy[1:] += copy_amp[j, i] * erf_mass(ct, 0.875 * a, lo, hi)
+                energy[1:] += copy_amp[j, i] * plane.in_domain(ct, cp, 0.875 * a, 0.875 * b, 0.875 * cc)
         table_energy = np.concatenate([[w_y.sum()], w_c.reshape(-1, 3).sum(axis=0)])
         flat = w_c.reshape(-1, 3)
         noise = [False] + [bool(-flat[:, ch][flat[:, ch] < 0].sum() > 0.005 * np.abs(flat[:, ch]).sum())
