@@ -82,10 +82,7 @@ void pair_weights(const ProductFactor& a, std::size_t nb, float lt, float lp, fl
 void ProductFactor::assign(const mix::SliceMixture& s) {
   for (auto* v : {&w, &mt, &mp, &stt, &stp, &spp, &itt, &itp, &ipp}) v->clear();
   map = s.map;
-  std::vector<mix::Gaussian> parts = s.components;  // a base as the header's product takes it
-  if (s.base > 0)
-    for (const mix::Gaussian& g : mix::base_gaussians(s.base)) parts.push_back(g);
-  for (const mix::Gaussian& g : parts) {
+  for (const mix::Gaussian& g : mix::product_parts(s)) {  // a base as the header's product takes it
     w.push_back(float(g.weight));
     mt.push_back(float(g.mu_t));
     mp.push_back(float(wrap_phi(g.mu_p)));

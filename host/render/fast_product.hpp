@@ -32,7 +32,7 @@ namespace render {
 
 // A prepared slice mixture as the pairs read it: weights, means (phi wrapped into
 // [-pi, pi)), covariances and precisions, one float array each, and the map of its plane.
-// A Lambertian base takes part as mix::product takes it (mix::base_gaussians).
+// A Lambertian base takes part as mix::product takes it (mix::product_parts).
 struct ProductFactor {
   std::vector<float> w, mt, mp, stt, stp, spp, itt, itp, ipp;
   mix::Map map = mix::Map::ThetaPhi;

@@ -502,6 +502,16 @@ inline std::vector<Gaussian> base_gaussians(double weight) {
   return out;
 }
 
+// What a slice brings to a product: its Gaussians and, where it has a Lambertian base,
+// BaseFit's Gaussians for it. The product stays a mixture of Gaussians, and its pdf is
+// exactly what its sample() draws.
+inline std::vector<Gaussian> product_parts(const SliceMixture& m) {
+  std::vector<Gaussian> parts = m.components;
+  if (m.base > 0)
+    for (const Gaussian& g : base_gaussians(m.base)) parts.push_back(g);
+  return parts;
+}
+
 // How product() prunes: the heaviest component pairs are kept until they hold `keep` of
 // the product's mass, and at most `max_components` of them.
 struct ProductOptions {
@@ -536,14 +546,7 @@ inline SliceMixture product(const SliceMixture& a, double rotate_a, const SliceM
   };
   std::vector<Term> terms;
   double total = 0;
-  // A Lambertian base takes part as BaseFit's Gaussians: the product stays a mixture of
-  // Gaussians, and its pdf is exactly what its sample() draws.
-  std::vector<Gaussian> parts[2] = {a.components, b.components};
-  for (int i = 0; i < 2; ++i) {
-    const SliceMixture& m = i == 0 ? a : b;
-    if (!(m.base > 0)) continue;
-    for (const Gaussian& g : base_gaussians(m.base)) parts[i].push_back(g);
-  }
+  const std::vector<Gaussian> parts[2] = {product_parts(a), product_parts(b)};
   for (const Gaussian& x : parts[0])
     for (const Gaussian& y : parts[1]) {
       const double st = x.s_tt + y.s_tt, sp = x.s_pp + y.s_pp, sx = x.s_tp + y.s_tp;
