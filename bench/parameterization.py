@@ -26,9 +26,11 @@ differences.
 EM is the plain weighted EM (k-means++ seeds, a covariance floor of a quarter cell),
 without the project's split-and-merge or L1 refinement, the same for the three maps: the
 comparison is between parameterizations, not against the project's fits. Numpy only.
-With --bsdfmix the project's own fits of the same slices are added for scale: `project`,
-the search pinned at each K (k-means++, split-and-merge, L1 refinement, colour
-amplitudes), and `project_default`, the default search's chosen K (in `k`).
+With --bsdfmix the project's own fits of the same slices are added, in each of the maps it
+builds (--project-maps, `fit.map`): `project` in (theta, phi) and `project_disk` on the
+equal-area disk with its Lambertian base, the search pinned at each K (k-means++,
+split-and-merge, L1 refinement, colour amplitudes), and `project_default` /
+`project_default_disk`, the default search's chosen K (in `k`).
 
     /usr/bin/python3 bench/parameterization.py --table T.h5 --name satin --rows 0,3,6,80,84,88 \
         --k 4,8,16 --csv bench/results/parameterization.csv [--append] [--bsdfmix build/bsdfmix]
@@ -161,20 +163,28 @@ def fit_rows(bsdfmix, table, theta_o, rows, k, work, extra=""):
     return os.path.join(work, tag + ".csv"), os.path.join(work, tag + ".h5"), time.time() - t0
 
 
+PROJECT_MAPS = {"theta_phi": "", "equal_area": "_disk"}  # fit.map: the label's suffix
+
+
 def project_fits(a, theta_o, rows, ks):
-    """The project's fits of the rows: pinned at each K, and the default search."""
+    """The project's fits of the rows in each of --project-maps: pinned at each K, and the
+    default search."""
     out = []
     with tempfile.TemporaryDirectory() as work:
-        for k in ks + [None]:
-            report, _, seconds = fit_rows(a.bsdfmix, a.table, theta_o, rows, k, work, "  seed: 1\n")
-            seconds /= len(rows)
-            with open(report) as f:
-                for rec in csv.DictReader(f):
-                    r = int(rec["slice"])
-                    if r in rows:
-                        out.append([a.name, r, f"{theta_o[r]:.6f}", "project" if k else "project_default",
-                                    rec["k"], f"{float(rec['l1_rel']):.6f}", f"{seconds:.2f}"])
-                        print(",".join(str(x) for x in out[-1]), flush=True)
+        for fit_map in a.project_maps.split(","):
+            suffix = PROJECT_MAPS[fit_map]
+            for k in ks + [None]:
+                report, _, seconds = fit_rows(a.bsdfmix, a.table, theta_o, rows, k, work,
+                                              f"  seed: 1\n  map: {fit_map}\n")
+                seconds /= len(rows)
+                with open(report) as f:
+                    for rec in csv.DictReader(f):
+                        r = int(rec["slice"])
+                        if r in rows:
+                            label = ("project" if k else "project_default") + suffix
+                            out.append([a.name, r, f"{theta_o[r]:.6f}", label,
+                                        rec["k"], f"{float(rec['l1_rel']):.6f}", f"{seconds:.2f}"])
+                            print(",".join(str(x) for x in out[-1]), flush=True)
     return out
 
 
@@ -191,7 +201,12 @@ def main():
     ap.add_argument("--csv", required=True)
     ap.add_argument("--append", action="store_true")
     ap.add_argument("--bsdfmix", help="also fit the slices with this build (pinned K and default)")
+    ap.add_argument("--project-maps", default="theta_phi,equal_area",
+                    help="the fit.map values the project's fits are made in (of theta_phi, equal_area)")
     a = ap.parse_args()
+    for m in a.project_maps.split(","):
+        if m not in PROJECT_MAPS:
+            sys.exit(f"parameterization: --project-maps: '{m}' is not one of {', '.join(PROJECT_MAPS)}")
 
     with h5py.File(a.table, "r") as h:
         f = h["table"]

@@ -224,18 +224,24 @@ def tails():
 
 
 def parameterization():
-    """Per table and row: plain EM's L1 in each map at K 4 / 8 / 16, the project's fits beside."""
+    """Per table and row: plain EM's L1 in each map at K 4 / 8 / 16, the project's fits in
+    (theta, phi) and on the disk beside."""
     out = ["| table | theta_o | plain EM, (theta, phi) | plain EM, equal-area disk | plain EM, half vector | "
-           "the project's fit pinned at K | the project's default (K) |", "|---|---|---|---|---|---|---|"]
+           "the project's fit pinned at K, (theta, phi) | the project's fit pinned at K, disk | "
+           "the project's default (K), (theta, phi) / disk |", "|---|---|---|---|---|---|---|---|"]
     by = {}
     for r in rows("parameterization.csv"):
         by.setdefault((r["table"], int(r["row"])), {}).setdefault(r["map"], []).append(r)
+
+    def default(maps, label):
+        d = maps.get(label, [{}])[0]
+        return "%s (%s)" % (pct(d["l1_rel"], 1), d["k"]) if d else "-"
+
     for (table, row), maps in by.items():
-        d = maps.get("project_default", [{}])[0]
-        out.append("| %s | %.1f deg | %s | %s | %s | %s | %s |" % (
+        out.append("| %s | %.1f deg | %s | %s | %s | %s | %s | %s / %s |" % (
             table, math.degrees(float(maps[next(iter(maps))][0]["theta_o"])), k_cells(maps.get("native")),
             k_cells(maps.get("disk")), k_cells(maps.get("half")), k_cells(maps.get("project")),
-            "%s (%s)" % (pct(d["l1_rel"], 1), d["k"]) if d else "-"))
+            k_cells(maps.get("project_disk")), default(maps, "project_default"), default(maps, "project_default_disk")))
     return out
 
 
