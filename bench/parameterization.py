@@ -37,6 +37,7 @@ split-and-merge, L1 refinement, colour amplitudes), and `project_default` /
 """
 import argparse
 import csv
+import itertools
 import os
 import subprocess
 import sys
@@ -168,23 +169,22 @@ PROJECT_MAPS = {"theta_phi": "", "equal_area": "_disk"}  # fit.map: the label's 
 
 def project_fits(a, theta_o, rows, ks):
     """The project's fits of the rows in each of --project-maps: pinned at each K, and the
-    default search."""
+    default search. Each map's fits have a work folder of their own."""
     out = []
     with tempfile.TemporaryDirectory() as work:
-        for fit_map in a.project_maps.split(","):
-            suffix = PROJECT_MAPS[fit_map]
-            for k in ks + [None]:
-                report, _, seconds = fit_rows(a.bsdfmix, a.table, theta_o, rows, k, work,
-                                              f"  seed: 1\n  map: {fit_map}\n")
-                seconds /= len(rows)
-                with open(report) as f:
-                    for rec in csv.DictReader(f):
-                        r = int(rec["slice"])
-                        if r in rows:
-                            label = ("project" if k else "project_default") + suffix
-                            out.append([a.name, r, f"{theta_o[r]:.6f}", label,
-                                        rec["k"], f"{float(rec['l1_rel']):.6f}", f"{seconds:.2f}"])
-                            print(",".join(str(x) for x in out[-1]), flush=True)
+        for fit_map, k in itertools.product(a.project_maps.split(","), ks + [None]):
+            map_work = os.path.join(work, fit_map)
+            os.makedirs(map_work, exist_ok=True)
+            report, _, seconds = fit_rows(a.bsdfmix, a.table, theta_o, rows, k, map_work,
+                                          f"  seed: 1\n  map: {fit_map}\n")
+            label = ("project" if k else "project_default") + PROJECT_MAPS[fit_map]
+            with open(report) as f:
+                fitted = [rec for rec in csv.DictReader(f) if int(rec["slice"]) in rows]
+            for rec in fitted:
+                r = int(rec["slice"])
+                out.append([a.name, r, f"{theta_o[r]:.6f}", label,
+                            rec["k"], f"{float(rec['l1_rel']):.6f}", f"{seconds / len(rows):.2f}"])
+                print(",".join(str(x) for x in out[-1]), flush=True)
     return out
 
 
